@@ -1,0 +1,138 @@
+"""Scene -> compiled core: derive, generate C, compile with Cython (abi3), cache by hash.
+
+The cache key covers the scene's structure and the generator's own sources, so a
+rebuild of the same scene only loads the cached extension.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.machinery
+import importlib.util
+import json
+import os
+import shutil
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .scene import Scene
+
+HERE = Path(__file__).parent
+CSRC = HERE / "csrc"
+GENERATOR_SOURCES = [HERE / "model.py", HERE / "kane_reference.py", HERE / "codegen.py",
+                     HERE / "compiler.py", *sorted(CSRC.glob("*.[chp]*"))]
+LIMITED_API = "0x030B0000"  # CPython 3.11: one compiled file serves 3.11 and newer
+
+
+def cache_root() -> Path:
+    root = os.environ.get("CONICAL_PENDULUM_CACHE")
+    if root:
+        return Path(root)
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "conical_pendulum"
+
+
+def generator_version() -> str:
+    digest = hashlib.sha256()
+    for path in GENERATOR_SOURCES:
+        digest.update(path.name.encode() + path.read_bytes())
+    return digest.hexdigest()
+
+
+@dataclass
+class CoreBuild:
+    """Where a scene's compiled core is, and what building it cost."""
+
+    scene: Scene
+    directory: Path
+    module_name: str
+    cached: bool
+    seconds: dict = field(default_factory=dict)
+
+    @property
+    def library(self) -> Path:
+        return next(self.directory.glob(f"{self.module_name}.*.so"))
+
+    def load(self):
+        return load_module(self.module_name, self.library)
+
+
+def load_module(name: str, path: Path):
+    """Import an extension module from a file (no sys.path change)."""
+    if name in sys.modules:
+        return sys.modules[name]
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, path, loader=loader)
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    sys.modules[name] = module
+    return module
+
+
+def build_core(scene: Scene, cache: Path | None = None) -> CoreBuild:
+    key = scene.key(generator_version())
+    name = f"cp_core_{key[:16]}"
+    directory = (cache or cache_root()) / name
+    if (directory / "build.json").exists():
+        return CoreBuild(scene, directory, name, cached=True)
+    directory.parent.mkdir(parents=True, exist_ok=True)
+    seconds = {}
+    with tempfile.TemporaryDirectory(dir=directory.parent, prefix=f".{name}.") as tmp:
+        work = Path(tmp)
+        start = time.perf_counter()
+        from .model import derive  # sympy: build time only
+        eqs = derive(scene)
+        seconds["derive"] = time.perf_counter() - start
+
+        start = time.perf_counter()
+        from .codegen import generate
+        for filename, text in generate(eqs).items():
+            (work / filename).write_text(text)
+        seconds["codegen"] = time.perf_counter() - start
+
+        start = time.perf_counter()
+        for source in CSRC.iterdir():
+            if source.suffix in (".c", ".h"):
+                shutil.copy2(source, work / source.name)
+        shutil.copy2(CSRC / "core.pyx", work / f"{name}.pyx")
+        _compile(name, work)
+        seconds["compile"] = time.perf_counter() - start
+        (work / "build.json").write_text(json.dumps(
+            {"scene": scene.to_dict(), "seconds": seconds}, indent=1))
+        try:
+            work.rename(directory)
+        except OSError:
+            if not (directory / "build.json").exists():  # not a concurrent build of the same key
+                raise
+    return CoreBuild(scene, directory, name, cached=False, seconds=seconds)
+
+
+def _compile(name: str, work: Path) -> None:
+    from Cython.Build import cythonize
+    from setuptools import Distribution, Extension
+
+    sources = [f"{name}.pyx", "model.c", "dynamics.c", "solvers.c"]
+    extension = Extension(
+        name, [str(work / s) for s in sources], include_dirs=[str(work)],
+        define_macros=[("Py_LIMITED_API", LIMITED_API), ("CYTHON_LIMITED_API", "1")],
+        py_limited_api=True, extra_compile_args=["-O2", "-g0"])
+    cwd = os.getcwd()
+    os.chdir(work)
+    try:
+        modules = cythonize([extension], quiet=True, language_level=3)
+        dist = Distribution({"ext_modules": modules, "script_name": "build", "verbose": 0})
+        command = dist.get_command_obj("build_ext")
+        command.build_lib = str(work)
+        command.build_temp = str(work / "obj")
+        command.ensure_finalized()
+        command.run()
+    finally:
+        os.chdir(cwd)
+    shutil.rmtree(work / "obj", ignore_errors=True)
+    (work / f"{name}.c").unlink(missing_ok=True)  # Cython's output: large, regenerated from the .pyx
+
+
+def load_core(scene: Scene, cache: Path | None = None):
+    """The compiled core of a scene, built on first use."""
+    return build_core(scene, cache).load()

@@ -1,0 +1,204 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
+"""Compiled core of one scene: right-hand side, outputs and solvers, all in C.
+
+Copied to a module name unique to the scene and compiled against the limited API
+(abi3). Imports numpy only.
+"""
+import numpy as np
+
+cdef extern from "solvers.h":
+    ctypedef int (*cp_rhs_fn)(void *ctx, const double *x, double *dx) noexcept nogil
+    ctypedef struct cp_system:
+        int dim
+        cp_rhs_fn rhs
+        void *ctx
+    ctypedef struct cp_stats:
+        long nfev, naccept, nreject
+    int CP_OK, CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_RK4, CP_RK45, CP_DOP853
+    int CP_WORK_SIZE(int dim)
+    int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
+                     double rtol, double atol, double max_step, long max_steps,
+                     double *h, double *work, cp_stats *stats) noexcept nogil
+
+cdef extern from "dynamics.h":
+    int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NOUTPUT, CP_SINGULAR, CP_NONFINITE
+    const char *CP_STATE_NAMES
+    const char *CP_PARAMETER_NAMES
+    const char *CP_OUTPUT_NAMES
+    double CP_SINGULAR_RATIO
+    ctypedef struct cp_model:
+        const double *p
+        double pivot_ratio
+        int bad_dof
+    int cp_rhs(void *ctx, const double *x, double *dx) noexcept nogil
+    void cp_mass_forcing(const double *x, const double *p, double *M, double *F) noexcept nogil
+    void cp_outputs(const double *x, const double *p, double *y) noexcept nogil
+
+cdef extern from "<time.h>" nogil:
+    cdef struct timespec:
+        long tv_sec
+        long tv_nsec
+    int clock_gettime(int clk, timespec *ts)
+    int CLOCK_MONOTONIC
+
+NDOF = CP_NDOF
+NSTATE = CP_NSTATE
+NPARAM = CP_NPARAM
+NOUTPUT = CP_NOUTPUT
+SINGULAR_RATIO = CP_SINGULAR_RATIO
+STATE_NAMES = tuple(CP_STATE_NAMES.decode().split())
+PARAMETER_NAMES = tuple(CP_PARAMETER_NAMES.decode().split())
+OUTPUT_NAMES = tuple(CP_OUTPUT_NAMES.decode().split())
+METHODS = {"rk4": CP_RK4, "rk45": CP_RK45, "dop853": CP_DOP853}
+STATUS = {CP_OK: "ok", CP_TOO_MANY_STEPS: "too many steps", CP_STEP_UNDERFLOW: "step size underflow",
+          CP_SINGULAR: "singular mass matrix", CP_NONFINITE: "non-finite acceleration"}
+
+
+class CoreError(RuntimeError):
+    """The right-hand side failed: singular mass matrix or non-finite result."""
+
+    def __init__(self, status, dof, pivot_ratio):
+        self.status, self.dof, self.pivot_ratio = status, dof, pivot_ratio
+        super().__init__(f"{STATUS.get(status, status)} at generalized speed {dof} "
+                         f"(pivot ratio {pivot_ratio:.3g})")
+
+
+class BadValue(ValueError):
+    """A parameter or start value the model cannot take; the message names it."""
+
+
+def check_value(str name, value):
+    """value as a float, or BadValue naming the variable, its value and the rule."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise BadValue(f"{name}: expected a number, got {value!r}")
+    value = float(value)
+    if value != value or value in (float("inf"), float("-inf")):
+        raise BadValue(f"{name} = {value!r}: must be finite")
+    kind = name.rstrip("0123456789")
+    if kind in ("l", "m", "M") and value <= 0:
+        what = {"l": "a length", "m": "a bob mass", "M": "a link mass"}[kind]
+        raise BadValue(f"{name} = {value!r}: {what} must be positive")
+    if kind in ("Ixx", "Iyy", "Izz") and value < 0:
+        raise BadValue(f"{name} = {value!r}: a moment of inertia cannot be negative")
+    return value
+
+
+cdef void _check(const double[::1] a, int size, str what) except *:
+    if a.shape[0] != size:
+        raise ValueError(f"{what}: expected {size} values, got {a.shape[0]}")
+
+
+def rhs(const double[::1] x, const double[::1] p):
+    """x' = f(x, p) as a new array; raises CoreError where M is singular."""
+    _check(x, CP_NSTATE, "state")
+    _check(p, CP_NPARAM, "parameters")
+    out = np.empty(CP_NSTATE)
+    cdef double[::1] dx = out
+    cdef cp_model model
+    model.p = &p[0]
+    cdef int status
+    with nogil:
+        status = cp_rhs(&model, &x[0], &dx[0])
+    if status:
+        raise CoreError(status, model.bad_dof, model.pivot_ratio)
+    return out
+
+
+def mass_forcing(const double[::1] x, const double[::1] p):
+    """(M, F) with M u' = F at state x."""
+    _check(x, CP_NSTATE, "state")
+    _check(p, CP_NPARAM, "parameters")
+    M = np.empty((CP_NDOF, CP_NDOF))
+    F = np.empty(CP_NDOF)
+    cdef double[:, ::1] m = M
+    cdef double[::1] f = F
+    with nogil:
+        cp_mass_forcing(&x[0], &p[0], &m[0, 0], &f[0])
+    return M, F
+
+
+def outputs(const double[::1] x, const double[::1] p):
+    """The scene's calculated outputs at state x."""
+    _check(x, CP_NSTATE, "state")
+    _check(p, CP_NPARAM, "parameters")
+    out = np.empty(CP_NOUTPUT)
+    cdef double[::1] y = out
+    if CP_NOUTPUT:
+        with nogil:
+            cp_outputs(&x[0], &p[0], &y[0])
+    return out
+
+
+def rhs_seconds(const double[::1] x, const double[::1] p, long calls):
+    """Seconds per call of the C right-hand side, timed in a C loop."""
+    _check(x, CP_NSTATE, "state")
+    _check(p, CP_NPARAM, "parameters")
+    cdef double dx[256]
+    cdef cp_model model
+    model.p = &p[0]
+    cdef timespec start, stop
+    cdef long i
+    with nogil:
+        clock_gettime(CLOCK_MONOTONIC, &start)
+        for i in range(calls):
+            cp_rhs(&model, &x[0], dx)
+        clock_gettime(CLOCK_MONOTONIC, &stop)
+    return ((stop.tv_sec - start.tv_sec) + 1e-9 * (stop.tv_nsec - start.tv_nsec)) / calls
+
+
+cdef class Stepper:
+    """State, parameters and solver memory of one simulation, advanced in C.
+
+    `values` holds the state followed by the outputs, so an FMU answers get_real
+    from one array. A failed step leaves the state as it was.
+    """
+    cdef public object values, params
+    cdef double[::1] _values, _params, _work
+    cdef public double h
+    cdef public long nfev, naccept, nreject
+    cdef public int bad_dof
+    cdef public double pivot_ratio
+
+    def __init__(self, params, state):
+        self.values = np.zeros(CP_NSTATE + CP_NOUTPUT)
+        self.params = np.array(params, dtype=float)
+        self._values = self.values
+        self._params = self.params
+        _check(self._params, CP_NPARAM, "parameters")
+        self._work = np.zeros(CP_WORK_SIZE(CP_NSTATE))
+        self.values[:CP_NSTATE] = state
+        self.h = 0.0
+        self.nfev = self.naccept = self.nreject = 0
+        self.bad_dof = -1
+        self.pivot_ratio = 1.0
+
+    def update_outputs(self):
+        if CP_NOUTPUT:
+            with nogil:
+                cp_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
+
+    def step(self, int method, double t, double dt, double rtol, double atol, double max_step,
+             long max_steps):
+        """Advance by dt; returns a status code (0: ok; see STATUS)."""
+        cdef cp_model model
+        model.p = &self._params[0]
+        model.bad_dof = -1
+        model.pivot_ratio = 1.0
+        cdef cp_system system
+        system.dim = CP_NSTATE
+        system.rhs = cp_rhs
+        system.ctx = &model
+        cdef cp_stats stats
+        stats.nfev = stats.naccept = stats.nreject = 0
+        cdef int status
+        with nogil:
+            status = cp_integrate(method, &system, t, &self._values[0], dt, rtol, atol, max_step,
+                                  max_steps, &self.h, &self._work[0], &stats)
+            if status == CP_OK and CP_NOUTPUT:
+                cp_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
+        self.nfev += stats.nfev
+        self.naccept += stats.naccept
+        self.nreject += stats.nreject
+        self.bad_dof = model.bad_dof
+        self.pivot_ratio = model.pivot_ratio
+        return status

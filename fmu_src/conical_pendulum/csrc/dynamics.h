@@ -1,0 +1,21 @@
+/* The model's right-hand side x' = f(x, p): generated mass matrix and forcing, dense LU. */
+#ifndef CP_DYNAMICS_H
+#define CP_DYNAMICS_H
+
+#include "model.h"
+
+/* Pivot ratio (smallest over largest |pivot| of the LU) below which M counts as singular. */
+#define CP_SINGULAR_RATIO 1e-13
+
+enum { CP_SINGULAR = 10, CP_NONFINITE = 11 };
+
+typedef struct {
+    const double *p;       /* parameters, in the order of the scene's parameter names */
+    double pivot_ratio;    /* of the last factorization: a cheap inverse condition estimate */
+    int bad_dof;           /* generalized speed (column of M) where the last failure showed */
+} cp_model;
+
+/* x = (alpha, beta, omega, delta); dx = (omega, delta, M^-1 F). ctx is a cp_model. */
+int cp_rhs(void *ctx, const double *x, double *dx);
+
+#endif

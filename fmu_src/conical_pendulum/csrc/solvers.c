@@ -1,0 +1,195 @@
+#include "solvers.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "tableaus.h"
+
+#define SAFETY 0.9
+#define MIN_FACTOR 0.2
+#define MAX_FACTOR 10.0
+
+typedef struct {
+    int stages, order;          /* order of the error estimator */
+    const double *c, *a, *b;    /* a: stages x a_stride, row s uses entries 0..s-1 */
+    int a_stride;
+    const double *e, *e3;       /* e (or e5 with e3 for DOP853): stages + 1 weights */
+} tableau;
+
+static const tableau RK45_TABLEAU = {6, 4, RK45_C, &RK45_A[0][0], RK45_B, 5, RK45_E, 0};
+static const tableau DOP853_TABLEAU = {DOP853_STAGES, 7, DOP853_C, &DOP853_A[0][0], DOP853_B,
+                                       DOP853_STAGES, DOP853_E5, DOP853_E3};
+
+static int eval(const cp_system *sys, const double *x, double *dx, cp_stats *stats)
+{
+    stats->nfev++;
+    return sys->rhs(sys->ctx, x, dx);
+}
+
+static double rms(int n, const double *v, const double *scale)
+{
+    double s = 0.0;
+    for (int i = 0; i < n; i++) {
+        double r = v[i] / scale[i];
+        s += r * r;
+    }
+    return sqrt(s / n);
+}
+
+static int rk4(const cp_system *sys, double *x, double dt, double max_step, double *work,
+               cp_stats *stats)
+{
+    int n = sys->dim, status;
+    long steps = 1;
+    if (max_step > 0 && isfinite(max_step) && dt > max_step)
+        steps = (long)ceil(dt / max_step);
+    double h = dt / steps;
+    double *y = work, *k1 = y + n, *k2 = k1 + n, *k3 = k2 + n, *k4 = k3 + n, *tmp = k4 + n;
+    memcpy(y, x, n * sizeof(double));
+    for (long s = 0; s < steps; s++) {
+        if ((status = eval(sys, y, k1, stats))) return status;
+        for (int i = 0; i < n; i++) tmp[i] = y[i] + 0.5 * h * k1[i];
+        if ((status = eval(sys, tmp, k2, stats))) return status;
+        for (int i = 0; i < n; i++) tmp[i] = y[i] + 0.5 * h * k2[i];
+        if ((status = eval(sys, tmp, k3, stats))) return status;
+        for (int i = 0; i < n; i++) tmp[i] = y[i] + h * k3[i];
+        if ((status = eval(sys, tmp, k4, stats))) return status;
+        for (int i = 0; i < n; i++) y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        stats->naccept++;
+    }
+    memcpy(x, y, n * sizeof(double));
+    return CP_OK;
+}
+
+/* scipy.integrate._ivp.common.select_initial_step */
+static int initial_step(const cp_system *sys, const double *y, const double *f, double interval,
+                        double rtol, double atol, double max_step, int order, double *tmp,
+                        double *f1, double *scale, cp_stats *stats, double *h)
+{
+    int n = sys->dim, status;
+    for (int i = 0; i < n; i++) scale[i] = atol + fabs(y[i]) * rtol;
+    double d0 = rms(n, y, scale), d1 = rms(n, f, scale);
+    double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+    if (h0 > interval) h0 = interval;
+    for (int i = 0; i < n; i++) tmp[i] = y[i] + h0 * f[i];
+    if ((status = eval(sys, tmp, f1, stats))) return status;
+    for (int i = 0; i < n; i++) tmp[i] = f1[i] - f[i];
+    double d2 = rms(n, tmp, scale) / h0;
+    double h1 = (d1 <= 1e-15 && d2 <= 1e-15) ? fmax(1e-6, h0 * 1e-3)
+                                             : pow(0.01 / fmax(d1, d2), 1.0 / (order + 1));
+    *h = fmin(fmin(100 * h0, h1), fmin(interval, max_step));
+    return CP_OK;
+}
+
+static double error_norm(const tableau *tb, int n, const double *K, double h, const double *scale,
+                         double *err)
+{
+    int rows = tb->stages + 1;
+    if (!tb->e3) {
+        for (int i = 0; i < n; i++) {
+            double s = 0.0;
+            for (int j = 0; j < rows; j++) s += K[j * n + i] * tb->e[j];
+            err[i] = s * h;
+        }
+        return rms(n, err, scale);
+    }
+    double e5 = 0.0, e3 = 0.0;   /* DOP853: the 5th- and 3rd-order estimates combined */
+    for (int i = 0; i < n; i++) {
+        double s5 = 0.0, s3 = 0.0;
+        for (int j = 0; j < rows; j++) {
+            s5 += K[j * n + i] * tb->e[j];
+            s3 += K[j * n + i] * tb->e3[j];
+        }
+        s5 /= scale[i];
+        s3 /= scale[i];
+        e5 += s5 * s5;
+        e3 += s3 * s3;
+    }
+    if (e5 == 0.0 && e3 == 0.0) return 0.0;
+    return fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * n);
+}
+
+static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x, double dt,
+                    double rtol, double atol, double max_step, long max_steps, double *h_io,
+                    double *work, cp_stats *stats)
+{
+    int n = sys->dim, status;
+    double *K = work, *y = K + (tb->stages + 1) * n, *y_new = y + n, *tmp = y_new + n;
+    double *scale = tmp + n, *err = scale + n;
+    double t_end = t + dt, exponent = -1.0 / (tb->order + 1);
+    long attempts = 0;
+    if (!(max_step > 0)) max_step = INFINITY;
+    memcpy(y, x, n * sizeof(double));
+    if ((status = eval(sys, y, K, stats))) return status;
+    double h_abs = *h_io;
+    if (!(h_abs > 0) || !isfinite(h_abs)) {
+        status = initial_step(sys, y, K, dt, rtol, atol, max_step, tb->order, tmp, err, scale,
+                              stats, &h_abs);
+        if (status) return status;
+    }
+    while (t < t_end) {
+        double min_step = 10 * fabs(nextafter(t, INFINITY) - t);
+        if (h_abs > max_step) h_abs = max_step;
+        else if (h_abs < min_step) h_abs = min_step;
+        int rejected = 0;
+        for (;;) {
+            if (h_abs < min_step) return CP_STEP_UNDERFLOW;
+            if (++attempts > max_steps) return CP_TOO_MANY_STEPS;
+            double t_new = t + h_abs;
+            if (t_new > t_end) t_new = t_end;
+            double h = t_new - t;
+            h_abs = fabs(h);
+            for (int s = 1; s < tb->stages; s++) {
+                const double *a = tb->a + s * tb->a_stride;
+                for (int i = 0; i < n; i++) {
+                    double dy = 0.0;
+                    for (int j = 0; j < s; j++) dy += K[j * n + i] * a[j];
+                    tmp[i] = y[i] + dy * h;
+                }
+                if ((status = eval(sys, tmp, K + s * n, stats))) return status;
+            }
+            for (int i = 0; i < n; i++) {
+                double dy = 0.0;
+                for (int j = 0; j < tb->stages; j++) dy += K[j * n + i] * tb->b[j];
+                y_new[i] = y[i] + h * dy;
+            }
+            double *f_new = K + tb->stages * n;
+            if ((status = eval(sys, y_new, f_new, stats))) return status;
+            for (int i = 0; i < n; i++) scale[i] = atol + fmax(fabs(y[i]), fabs(y_new[i])) * rtol;
+            double norm = error_norm(tb, n, K, h, scale, err);
+            if (norm < 1) {
+                double factor = norm == 0 ? MAX_FACTOR : fmin(MAX_FACTOR, SAFETY * pow(norm, exponent));
+                if (rejected && factor > 1) factor = 1;
+                h_abs *= factor;
+                stats->naccept++;
+                t = t_new;
+                memcpy(y, y_new, n * sizeof(double));
+                memcpy(K, f_new, n * sizeof(double));   /* first same as last */
+                break;
+            }
+            /* a NaN norm (non-finite stage) counts as a failed step */
+            double factor = isnan(norm) ? MIN_FACTOR : fmax(MIN_FACTOR, SAFETY * pow(norm, exponent));
+            h_abs *= factor;
+            rejected = 1;
+            stats->nreject++;
+        }
+    }
+    *h_io = h_abs;
+    memcpy(x, y, n * sizeof(double));
+    return CP_OK;
+}
+
+int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
+                 double rtol, double atol, double max_step, long max_steps,
+                 double *h, double *work, cp_stats *stats)
+{
+    if (dt <= 0) return CP_OK;
+    switch (method) {
+    case CP_RK4:
+        return rk4(sys, x, dt, max_step, work, stats);
+    case CP_RK45:
+        return adaptive(&RK45_TABLEAU, sys, t, x, dt, rtol, atol, max_step, max_steps, h, work, stats);
+    default:
+        return adaptive(&DOP853_TABLEAU, sys, t, x, dt, rtol, atol, max_step, max_steps, h, work, stats);
+    }
+}

@@ -1,0 +1,33 @@
+/* Generic explicit ODE solvers over one communication step: no model knowledge, no Python. */
+#ifndef CP_SOLVERS_H
+#define CP_SOLVERS_H
+
+typedef int (*cp_rhs_fn)(void *ctx, const double *x, double *dx);
+
+typedef struct {
+    int dim;
+    cp_rhs_fn rhs;   /* returns 0, or a code >= 10 that stops the integration */
+    void *ctx;
+} cp_system;
+
+typedef struct {
+    long nfev, naccept, nreject;
+} cp_stats;
+
+/* cp_integrate's results; a nonzero code from rhs is passed on as it is. */
+enum { CP_OK = 0, CP_TOO_MANY_STEPS = 1, CP_STEP_UNDERFLOW = 2 };
+enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2 };
+
+/* Doubles of scratch memory cp_integrate needs for a system of size dim. */
+#define CP_WORK_SIZE(dim) (20 * (dim))
+
+/* Advance x from t to t + dt. RK4 splits dt evenly into steps of at most max_step.
+ * RK45 and DOP853 control the error as scipy's solvers do (RMS norm of the error over
+ * atol + rtol * max(|x|, |x_new|), same safety factor and limits); *h carries the
+ * proposed step from one call to the next (<= 0: choose one as scipy does). At most
+ * max_steps steps are attempted. On failure x is left as it was at t. */
+int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
+                 double rtol, double atol, double max_step, long max_steps,
+                 double *h, double *work, cp_stats *stats);
+
+#endif

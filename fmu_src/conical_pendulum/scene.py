@@ -1,0 +1,164 @@
+"""What a user wants simulated: links, bobs, outputs, kinematics.
+
+The scene is the single input of the build pipeline. Its structure (which bodies
+exist, which outputs are wanted, which kinematics) decides the generated code;
+its numbers (lengths, masses, radii) are only start values of FMU parameters.
+This module imports no sympy: the FMU and the native simulation use it too.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import asdict, dataclass, field
+
+KINEMATICS = ("consistent", "pydy-example")
+OUTPUT_GROUPS = ("bobs", "poses", "energy")
+MAX_LINKS = 20
+MAX_PUBLISHED_LINKS = 4  # the published derivation grows exponentially with n
+SEED_ANGLE = math.radians(10.0)
+
+
+class SceneError(ValueError):
+    """A scene that cannot be built; the message names the field and its value."""
+
+
+@dataclass(frozen=True)
+class Link:
+    """One cylindrical link and the bob at its lower end (the seed's numbers by default)."""
+
+    has_mass: bool = True
+    has_bob: bool = True
+    length: float = 10.0
+    mass: float = 10.0
+    radius: float = 0.5
+    bob_mass: float = 5.0
+
+    def inertia(self) -> tuple[float, float, float]:
+        """Central inertia (Ixx, Iyy, Izz) of a solid cylinder along the link's y axis."""
+        transverse = self.mass * (3.0 * self.radius**2 + self.length**2) / 12.0
+        return transverse, self.mass * self.radius**2, transverse
+
+
+@dataclass(frozen=True)
+class Scene:
+    links: tuple[Link, ...] = field(default_factory=lambda: (Link(),) * 3)
+    outputs: tuple[str, ...] = OUTPUT_GROUPS
+    kinematics: str = "consistent"
+    gravity: float = 9.8
+
+    def __post_init__(self):
+        object.__setattr__(self, "links", tuple(self.links))
+        object.__setattr__(self, "outputs", tuple(g for g in OUTPUT_GROUPS if g in self.outputs))
+        self.validate()
+
+    @classmethod
+    def uniform(cls, n_links: int = 3, *, massless_links: bool = False, bobs: bool = True,
+                **kwargs) -> "Scene":
+        """The seed's chain generalized to n identical links."""
+        if isinstance(n_links, bool) or not isinstance(n_links, int):
+            raise SceneError(f"links: expected a whole number of links, got {n_links!r}")
+        if not 1 <= n_links <= MAX_LINKS:
+            raise SceneError(f"links: {n_links} is out of range; a chain has 1 to {MAX_LINKS} links")
+        link = Link(has_mass=not massless_links, has_bob=bobs)
+        return cls(links=(link,) * n_links, **kwargs)
+
+    @property
+    def n(self) -> int:
+        return len(self.links)
+
+    def validate(self) -> None:
+        if not 1 <= self.n <= MAX_LINKS:
+            raise SceneError(f"links: a chain has 1 to {MAX_LINKS} links, got {self.n}")
+        if self.kinematics not in KINEMATICS:
+            raise SceneError(f"kinematics: {self.kinematics!r} is not one of {KINEMATICS}")
+        if self.kinematics == "pydy-example" and self.n > MAX_PUBLISHED_LINKS:
+            raise SceneError(
+                f"links: {self.n} with kinematics 'pydy-example'; the published derivation is "
+                f"only reproduced up to {MAX_PUBLISHED_LINKS} links (its size grows exponentially)")
+        for i, link in enumerate(self.links):
+            for name in ("length", "mass", "radius", "bob_mass"):
+                value = getattr(link, name)
+                if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                    raise SceneError(f"link {i}: {name} must be a positive finite number, got {value!r}")
+        if not math.isfinite(self.gravity):
+            raise SceneError(f"gravity: must be finite, got {self.gravity!r}")
+        # A joint whose angles move no mass has an undetermined acceleration.
+        for i in range(self.n):
+            if not any(link.has_mass or link.has_bob for link in self.links[i:]):
+                if i == 0:
+                    raise SceneError("scene has no mass: give at least one link mass or a bob")
+                raise SceneError(
+                    f"links {i}..{self.n - 1} carry no mass (no link mass, no bob): their angles "
+                    "would be undetermined; give one of them mass or a bob, or drop them")
+
+    def structure(self) -> dict:
+        """What the generated code depends on, and nothing else."""
+        return {"links": [[link.has_mass, link.has_bob] for link in self.links],
+                "outputs": list(self.outputs), "kinematics": self.kinematics}
+
+    def key(self, salt: str = "") -> str:
+        text = json.dumps(self.structure(), sort_keys=True) + salt
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    # --- names: the FMU's contract, in the order of the compiled core's arrays ---
+
+    def parameter_names(self) -> list[str]:
+        """Parameters in the seed's order: l, m (bobs), M (links), Ixx, Iyy, Izz, g."""
+        n = range(self.n)
+        massive = [i for i in n if self.links[i].has_mass]
+        bobs = [i for i in n if self.links[i].has_bob]
+        return ([f"l{i}" for i in n] + [f"m{i}" for i in bobs] + [f"M{i}" for i in massive]
+                + [f"{axis}{i}" for axis in ("Ixx", "Iyy", "Izz") for i in massive] + ["g"])
+
+    def parameter_defaults(self) -> list[float]:
+        values = {}
+        for i, link in enumerate(self.links):
+            values[f"l{i}"] = link.length
+            values[f"m{i}"] = link.bob_mass
+            values[f"M{i}"] = link.mass
+            values[f"Ixx{i}"], values[f"Iyy{i}"], values[f"Izz{i}"] = link.inertia()
+        values["g"] = self.gravity
+        return [float(values[name]) for name in self.parameter_names()]
+
+    def state_names(self) -> list[str]:
+        """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order."""
+        return [f"{s}{i}" for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)]
+
+    def state_defaults(self) -> list[float]:
+        return [SEED_ANGLE] * (2 * self.n) + [0.0] * (2 * self.n)
+
+    def output_names(self) -> list[str]:
+        """Calculated outputs besides the state, in the compiled core's order."""
+        names = []
+        if "bobs" in self.outputs:
+            names += [f"bob{i}_{c}" for i, link in enumerate(self.links) if link.has_bob
+                      for c in "xyz"]
+        if "poses" in self.outputs:
+            names += [f"link{i}_{c}" for i in range(self.n)
+                      for c in ("x", "y", "z", "qw", "qx", "qy", "qz")]
+        if "energy" in self.outputs:
+            names.append("energy")
+        return names
+
+    def parameters(self, overrides: dict | None = None) -> list[float]:
+        """Parameter values in core order: the scene's numbers, some replaced by name.
+
+        Values are checked where they are used (the compiled core's check_value)."""
+        return _merge(self.parameter_names(), self.parameter_defaults(), overrides, "parameter")
+
+    def initial_state(self, overrides: dict | None = None) -> list[float]:
+        """State in core order: the seed's start values, some replaced by name."""
+        return _merge(self.state_names(), self.state_defaults(), overrides, "state")
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def _merge(names, defaults, overrides, what):
+    values = dict(zip(names, defaults))
+    for name, value in (overrides or {}).items():
+        if name not in values:
+            raise SceneError(f"unknown {what} {name!r}; this scene has {', '.join(names)}")
+        values[name] = value
+    return [values[name] for name in names]
