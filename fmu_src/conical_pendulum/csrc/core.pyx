@@ -49,6 +49,8 @@ SINGULAR_RATIO = CP_SINGULAR_RATIO
 STATE_NAMES = tuple(CP_STATE_NAMES.decode().split())
 PARAMETER_NAMES = tuple(CP_PARAMETER_NAMES.decode().split())
 OUTPUT_NAMES = tuple(CP_OUTPUT_NAMES.decode().split())
+TOO_MANY_STEPS, STEP_UNDERFLOW = CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW
+SINGULAR, NONFINITE = CP_SINGULAR, CP_NONFINITE
 METHODS = {"rk4": CP_RK4, "rk45": CP_RK45, "dop853": CP_DOP853}
 STATUS = {CP_OK: "ok", CP_TOO_MANY_STEPS: "too many steps", CP_STEP_UNDERFLOW: "step size underflow",
           CP_SINGULAR: "singular mass matrix", CP_NONFINITE: "non-finite acceleration"}
@@ -150,7 +152,11 @@ cdef class Stepper:
     """State, parameters and solver memory of one simulation, advanced in C.
 
     `values` holds the state followed by the outputs, so an FMU answers get_real
-    from one array. A failed step leaves the state as it was.
+    from one array. A failed step leaves the state as it was. max_steps bounds the
+    internal steps of one call, so a step always returns.
+
+    Stepper(params, values): float64 arrays of NPARAM and NSTATE + NOUTPUT values (the
+    state first), used in place, so whoever owns them sees every step.
     """
     cdef public object values, params
     cdef double[::1] _values, _params, _work
@@ -159,14 +165,13 @@ cdef class Stepper:
     cdef public int bad_dof
     cdef public double pivot_ratio
 
-    def __init__(self, params, state):
-        self.values = np.zeros(CP_NSTATE + CP_NOUTPUT)
-        self.params = np.array(params, dtype=float)
-        self._values = self.values
-        self._params = self.params
+    def __init__(self, params, values):
+        self.params, self.values = params, values
+        self._params = params
+        self._values = values
         _check(self._params, CP_NPARAM, "parameters")
+        _check(self._values, CP_NSTATE + CP_NOUTPUT, "state and outputs")
         self._work = np.zeros(CP_WORK_SIZE(CP_NSTATE))
-        self.values[:CP_NSTATE] = state
         self.h = 0.0
         self.nfev = self.naccept = self.nreject = 0
         self.bad_dof = -1

@@ -1,0 +1,137 @@
+"""Scene -> ConicalPendulum.fmu: compiled core plus a rendered pythonfmu slave.
+
+pythonfmu writes the archive; this module then completes its modelDescription
+(InitialUnknowns for the calculated outputs, which pythonfmu leaves out) and moves
+the FMU into place only when everything succeeded.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from .compiler import CoreBuild, build_core
+from .scene import Scene
+
+HERE = Path(__file__).parent
+TEMPLATE = HERE / "slave_template.py"
+MODEL_NAME = "ConicalPendulum"
+DEFAULT_SETTINGS = {"rtol": 1e-8, "atol": 1e-8, "max_step": 0.0, "solver": 2, "max_steps": 100_000}
+
+
+@dataclass
+class FmuBuild:
+    path: Path
+    core: CoreBuild
+    module_name: str
+    seconds: float
+
+
+def render_slave(scene: Scene, core: CoreBuild, settings: dict) -> tuple[str, str]:
+    """(module name, source) of the slave: the template with this scene's values."""
+    values = {
+        "CORE_MODULE": core.module_name,
+        "CORE_FILE": core.library.name,
+        "PARAMETER_START": dict(zip(scene.parameter_names(), scene.parameter_defaults())),
+        "STATE_START": dict(zip(scene.state_names(), scene.state_defaults())),
+        "DESCRIPTION": _description(scene),
+        "SETTINGS_START": settings,
+    }
+    template = TEMPLATE.read_text()
+    start = template.index("# --- rendered by conical_pendulum.fmu ---\n")
+    end = template.index("# --- end of rendered values ---\n")
+    block = "".join(f"{name} = {value!r}\n" for name, value in values.items())
+    source = template[:start] + "# --- rendered by conical_pendulum.fmu ---\n" + block + template[end:]
+    digest = hashlib.sha256(source.encode()).hexdigest()[:16]
+    return f"conical_pendulum_{digest}", source
+
+
+def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.fmu",
+              settings: dict | None = None, cache: Path | None = None) -> FmuBuild:
+    from pythonfmu import FmuBuilder  # build time only
+
+    start = time.perf_counter()
+    output = Path(output)
+    if output.suffix != ".fmu":
+        raise ValueError(f"output: {str(output)!r} must end in .fmu")
+    unknown = set(settings or {}) - set(DEFAULT_SETTINGS)
+    if unknown:
+        raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(DEFAULT_SETTINGS)}")
+    core = build_core(scene, cache)
+    settings = {**DEFAULT_SETTINGS, **(settings or {})}
+    module_name, source = render_slave(scene, core, settings)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="conical_pendulum_fmu_") as tmp:
+        tmp = Path(tmp)
+        script = tmp / "src" / f"{module_name}.py"
+        script.parent.mkdir()
+        script.write_text(source)
+        staged = tmp / f"{MODEL_NAME}.fmu"
+        saved_path, saved_modules = list(sys.path), set(sys.modules)
+        try:
+            FmuBuilder.build_FMU(script, dest=staged, project_files=[core.library],
+                                 canHandleVariableCommunicationStepSize=True,
+                                 canGetAndSetFMUstate=True, canSerializeFMUstate=True)
+        finally:  # pythonfmu leaves its import of the slave behind
+            sys.path[:] = saved_path
+            for name in set(sys.modules) - saved_modules:
+                if name == module_name:
+                    del sys.modules[name]
+        starts = {**dict(zip(scene.parameter_names(), scene.parameter_defaults())),
+                  **dict(zip(scene.state_names(), scene.state_defaults())), **settings}
+        _finish(staged, starts)
+        os.replace(staged, output)
+    return FmuBuild(output, core, module_name, time.perf_counter() - start)
+
+
+def _finish(fmu: Path, starts: dict) -> None:
+    """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only.
+
+    pythonfmu lists no InitialUnknowns, writes Real starts with 16 digits (a double
+    needs 17 to round-trip), and packs binaries for every platform it has, while the
+    compiled core runs only on the platform that built it.
+    """
+    from pythonfmu.osutil import get_platform
+
+    platform = f"binaries/{get_platform()}/"
+    with zipfile.ZipFile(fmu) as archive:
+        entries = {info.filename: archive.read(info) for info in archive.infolist()
+                   if not info.filename.startswith("binaries/") or info.filename.startswith(platform)}
+    root = ET.fromstring(entries["modelDescription.xml"])
+    variables = root.find("ModelVariables").findall("ScalarVariable")
+    structure = root.find("ModelStructure")
+    for child in list(structure):
+        structure.remove(child)
+    outputs = ET.SubElement(structure, "Outputs")
+    initial = ET.SubElement(structure, "InitialUnknowns")
+    for index, var in enumerate(variables, start=1):
+        real = var.find("Real")
+        if real is not None and real.get("start") is not None:
+            real.set("start", repr(float(starts[var.get("name")])))
+        if var.get("causality") == "output":
+            ET.SubElement(outputs, "Unknown", index=str(index))
+            if var.get("initial") in ("calculated", "approx"):
+                ET.SubElement(initial, "Unknown", index=str(index))
+    if not len(initial):
+        structure.remove(initial)
+    ET.indent(root)
+    entries["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    with zipfile.ZipFile(fmu, "w", zipfile.ZIP_DEFLATED) as archive:
+        for name, data in entries.items():
+            archive.writestr(name, data)
+
+
+def _description(scene: Scene) -> str:
+    links = ", ".join(
+        ("cylinder" if link.has_mass else "massless") + ("+bob" if link.has_bob else "")
+        for link in scene.links)
+    kinematics = ("" if scene.kinematics == "consistent"
+                  else "; PUBLISHED pydy-example kinematics (does not conserve energy)")
+    return f"{scene.n}-link conical pendulum ({links}){kinematics}"
+

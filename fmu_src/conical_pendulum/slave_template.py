@@ -1,0 +1,319 @@
+"""ConicalPendulum: FMI 2.0 co-simulation slave, thin glue between FMI variables and the compiled core.
+
+Rendered by conical_pendulum.fmu for one scene under a module name unique to the build.
+At run time it needs numpy and the compiled core in the FMU's resources, nothing else.
+pythonfmu 0.7 re-executes this module's top level at every instantiation, so the top
+level only defines names; files are found through the `resources` argument.
+"""
+import ctypes
+import functools
+import importlib.machinery
+import importlib.util
+import math
+import os
+import sys
+
+import numpy as np
+from pythonfmu import Fmi2Slave, Integer, Real
+from pythonfmu.default_experiment import DefaultExperiment
+from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
+
+# --- rendered by conical_pendulum.fmu ---
+CORE_MODULE = "cp_core"
+CORE_FILE = "cp_core.abi3.so"
+PARAMETER_START = {}
+STATE_START = {}
+DESCRIPTION = ""
+SETTINGS_START = {}
+# --- end of rendered values ---
+
+SOLVERS = ("rk4", "rk45", "dop853")
+REAL_SETTINGS = ("rtol", "atol", "max_step")
+INTEGER_SETTINGS = ("solver", "max_steps")
+STATS = ("n_rhs", "n_steps", "n_rejected")
+
+
+def _load_core(resources):
+    """The compiled core, from this FMU's resources (one copy per process and build)."""
+    if CORE_MODULE in sys.modules:
+        return sys.modules[CORE_MODULE]
+    path = os.path.join(resources, CORE_FILE)
+    loader = importlib.machinery.ExtensionFileLoader(CORE_MODULE, path)
+    spec = importlib.util.spec_from_file_location(CORE_MODULE, path, loader=loader)
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    sys.modules[CORE_MODULE] = module
+    return module
+
+
+def _fmi_call(method):
+    """An FMI entry point whose exceptions the host survives.
+
+    pythonfmu 0.7 turns an exception into fmi2Fatal and releases the Python instance,
+    its class and its log queue once right away and once more in fmi2FreeInstance (the
+    queue left dangling crashed later garbage collections). Taking one extra reference
+    to each before the exception leaves keeps the host's memory intact when it frees
+    the instance, as FMI asks it to.
+    """
+    @functools.wraps(method)
+    def call(self, *args):
+        try:
+            return method(self, *args)
+        except BaseException:
+            for obj in (self, type(self), self.log_queue):
+                ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
+            raise
+    return call
+
+
+class ConicalPendulum(Fmi2Slave):
+    author = "conical-pendulum-fmu"
+    description = DESCRIPTION
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=1.0 / 60.0)
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        # An exception here would crash the host (pythonfmu 0.7): keep it for later calls.
+        self._broken = None
+        try:
+            self._core = _load_core(self.resources)
+        except Exception as exc:  # noqa: BLE001 - reported at the next FMI call
+            self._broken = f"cannot load the compiled core {CORE_FILE} from {self.resources}: {exc!r}"
+            self.log(self._broken, Fmi2Status.fatal)
+            return
+        core = self._core
+        n_param, n_state = len(PARAMETER_START), len(STATE_START)
+        self._n_param, self._n_state = n_param, n_state
+        # One array for every Real variable: parameters, state, outputs, settings.
+        self._reals = np.zeros(n_param + n_state + core.NOUTPUT + len(REAL_SETTINGS))
+        self._reals[:n_param] = list(PARAMETER_START.values())
+        self._reals[n_param:n_param + n_state] = list(STATE_START.values())
+        self._setting_vr = n_param + n_state + core.NOUTPUT
+        self._reals[self._setting_vr:] = [SETTINGS_START[name] for name in REAL_SETTINGS]
+        self._ints = [SETTINGS_START[name] for name in INTEGER_SETTINGS] + [0] * len(STATS)
+        self._stepper = core.Stepper(self._reals[:n_param], self._reals[n_param:self._setting_vr])
+        self._stepper.update_outputs()
+        self._mode = "instantiated"
+        self._time = 0.0
+        self._tolerance = None
+        self._register()
+
+    def _register(self):
+        """Declare the variables in the order of self._reals, then the Integers."""
+        fixed, continuous = Fmi2Variability.fixed, Fmi2Variability.continuous
+        parameter, output = Fmi2Causality.parameter, Fmi2Causality.output
+        for name in PARAMETER_START:
+            self.register_variable(Real(name, causality=parameter, variability=fixed,
+                                        description=_describe(name)))
+        for name in STATE_START:
+            self.register_variable(Real(name, causality=output, variability=continuous,
+                                        initial=Fmi2Initial.exact, description=_describe(name)))
+        for name in self._core.OUTPUT_NAMES:
+            self.register_variable(Real(name, causality=output, variability=continuous,
+                                        initial=Fmi2Initial.calculated, description=_describe(name)))
+        for name in REAL_SETTINGS:
+            self.register_variable(Real(name, causality=parameter, variability=fixed,
+                                        description=_describe(name)))
+        for name in INTEGER_SETTINGS:
+            self.register_variable(Integer(name, causality=parameter, variability=fixed,
+                                           description=_describe(name)))
+        for name in STATS:
+            self.register_variable(Integer(name, causality=output, variability=Fmi2Variability.discrete,
+                                           initial=Fmi2Initial.calculated, description=_describe(name)))
+
+    # --- FMI calls -------------------------------------------------------------------
+
+    def _check_alive(self):
+        if self._broken:
+            raise RuntimeError(self._broken)
+
+    @_fmi_call
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._check_alive()
+        self._time = float(start_time)
+        if tolerance is not None:
+            self._tolerance = self._fail_unless_valid("tolerance (from setupExperiment)", tolerance)
+
+    @_fmi_call
+    def enter_initialization_mode(self):
+        self._check_alive()
+        self._mode = "initialization"
+
+    @_fmi_call
+    def exit_initialization_mode(self):
+        self._check_alive()
+        if self._tolerance is not None:
+            self._reals[self._setting_vr] = self._tolerance
+        self._stepper.update_outputs()
+        self._mode = "step"
+
+    @_fmi_call
+    def do_step(self, current_time, step_size):
+        self._check_alive()
+        if not step_size >= 0 or not math.isfinite(step_size):
+            self.log(f"do_step at t = {current_time!r}: communication step {step_size!r} must be a "
+                     "non-negative finite number", Fmi2Status.error)
+            return False
+        rtol, atol, max_step = self._reals[self._setting_vr:].tolist()
+        solver, max_steps = self._ints[0], self._ints[1]
+        stepper = self._stepper
+        status = stepper.step(solver, current_time, step_size, rtol, atol, max_step, max_steps)
+        self._ints[2:] = [stepper.nfev, stepper.naccept, stepper.nreject]
+        if status:
+            self.log(self._step_failure(status, current_time, step_size), Fmi2Status.discard)
+            return False
+        self._time = current_time + step_size
+        return True
+
+    @_fmi_call
+    def get_real(self, vrs):
+        try:
+            return self._reals[vrs].tolist()
+        except IndexError:
+            raise TypeError(f"value references {vrs} include one that is not a Real variable") from None
+
+    @_fmi_call
+    def set_real(self, vrs, values):
+        for vr, value in zip(vrs, values):
+            if not isinstance(self.vars.get(vr), Real):
+                raise TypeError(f"value reference {vr} is not a Real variable")
+            name = self.vars[vr].name
+            self._check_settable(vr, name)
+            self._reals[vr] = self._fail_unless_valid(name, value)
+        self._stepper.update_outputs()
+
+    @_fmi_call
+    def get_integer(self, vrs):
+        first = len(self._reals)
+        if not all(first <= vr < first + len(self._ints) for vr in vrs):
+            raise TypeError(f"value references {vrs} include one that is not an Integer variable")
+        return [self._ints[vr - first] for vr in vrs]
+
+    @_fmi_call
+    def set_integer(self, vrs, values):
+        first = len(self._reals)
+        for vr, value in zip(vrs, values):
+            if not isinstance(self.vars.get(vr), Integer):
+                raise TypeError(f"value reference {vr} is not an Integer variable")
+            name = self.vars[vr].name
+            self._check_settable(vr, name)
+            value = int(value)
+            if name == "solver" and not 0 <= value < len(SOLVERS):
+                self._fail(f"solver = {value}: choose 0 to {len(SOLVERS) - 1} "
+                           f"({', '.join(f'{k} = {s}' for k, s in enumerate(SOLVERS))})")
+            if name == "max_steps" and value < 1:
+                self._fail(f"max_steps = {value}: must be at least 1")
+            self._ints[vr - first] = value
+
+    get_boolean = _fmi_call(Fmi2Slave.get_boolean)
+    set_boolean = _fmi_call(Fmi2Slave.set_boolean)
+    get_string = _fmi_call(Fmi2Slave.get_string)
+    set_string = _fmi_call(Fmi2Slave.set_string)
+
+    # --- the complete state: variables, solver memory, statistics, mode and time ---
+
+    @_fmi_call
+    def _get_fmu_state(self):
+        stepper = self._stepper
+        return {"reals": self._reals.tolist(), "ints": list(self._ints), "h": stepper.h,
+                "stats": [stepper.nfev, stepper.naccept, stepper.nreject],
+                "mode": self._mode, "time": self._time, "tolerance": self._tolerance}
+
+    @_fmi_call
+    def _set_fmu_state(self, state):
+        self._check_alive()
+        stepper = self._stepper
+        self._reals[:] = state["reals"]
+        self._ints[:] = state["ints"]
+        stepper.h = state["h"]
+        stepper.nfev, stepper.naccept, stepper.nreject = state["stats"]
+        self._mode, self._time, self._tolerance = state["mode"], state["time"], state["tolerance"]
+
+    # --- helpers ----------------------------------------------------------------------
+
+    def _fail(self, message):
+        """Report a bad input through the FMI logger and stop the call (pythonfmu: fmi2Fatal)."""
+        self.log(message, Fmi2Status.error)
+        raise ValueError(message)
+
+    def _fail_unless_valid(self, name, value):
+        try:
+            value = self._core.check_value(name, value)
+        except self._core.BadValue as exc:
+            self._fail(str(exc))
+        if name in ("rtol", "atol") or name.startswith("tolerance"):
+            if value <= 0:
+                self._fail(f"{name} = {value!r}: a tolerance must be positive")
+        if name == "max_step" and value < 0:
+            self._fail(f"max_step = {value!r}: must be positive, or 0 for no limit")
+        return value
+
+    def _check_settable(self, vr, name):
+        var = self.vars[vr]
+        if var.causality == Fmi2Causality.output and var.initial != Fmi2Initial.exact:
+            self._fail(f"{name} is a calculated output: it cannot be set")
+        if self._mode == "step":
+            self._fail(f"{name} cannot be set after initialization (variability fixed); "
+                       "set it before exitInitializationMode, or instantiate again")
+
+    def _step_failure(self, status, t, dt):
+        core, n = self._core, self._n_state // 4
+        stepper = self._stepper
+        what = core.STATUS.get(status, f"status {status}")
+        dof = stepper.bad_dof
+        speed = (f"omega{dof}" if dof < n else f"delta{dof - n}") if 0 <= dof < 2 * n else "?"
+        rtol, atol, max_step = self._reals[self._setting_vr:].tolist()
+        if status == core.TOO_MANY_STEPS:
+            hint = (f"more than max_steps = {self._ints[1]} internal steps were needed; raise "
+                    f"max_steps, loosen rtol = {rtol:g} / atol = {atol:g}, or take shorter "
+                    "communication steps")
+        elif status == core.STEP_UNDERFLOW:
+            hint = (f"the step size fell below what time t can resolve; rtol = {rtol:g} / "
+                    f"atol = {atol:g} cannot be met here: loosen them")
+        elif status == core.SINGULAR:
+            link = dof % n if dof >= 0 else "?"
+            hint = (f"the mass matrix is singular (pivot ratio {stepper.pivot_ratio:.2g}, at "
+                    f"{speed}): link {link}'s two-angle joint cannot represent this orientation "
+                    "(it lies along its parent's x axis, alpha = +-90 degrees) or a link has "
+                    "too little inertia; give the link inertia or start elsewhere")
+        else:
+            hint = f"the acceleration of {speed} is not finite; check parameters and state"
+        return (f"do_step from t = {t:.9g} s by {dt:.3g} s failed: {what}. {hint}. "
+                f"The state is kept at t = {t:.9g} s.")
+
+
+_DESCRIPTIONS = {
+    "l": "length of link {i} [m]", "m": "mass of bob {i} [kg]", "M": "mass of link {i} [kg]",
+    "Ixx": "central inertia of link {i} about its x axis [kg m2]",
+    "Iyy": "central inertia of link {i} about its own (y) axis [kg m2]",
+    "Izz": "central inertia of link {i} about its z axis [kg m2]",
+    "alpha": "angle of joint {i} about the parent's z axis [rad]",
+    "beta": "angle of joint {i} about the parent's x axis [rad]",
+    "omega": "alpha{i}' [rad/s]", "delta": "beta{i}' [rad/s]",
+}
+_FIXED = {
+    "g": "gravitational acceleration along -Y [m/s2]",
+    "energy": "total mechanical energy (kinetic + potential, zero at Y = 0) [J]",
+    "rtol": "relative tolerance of the adaptive solvers (replaced by setupExperiment's tolerance when given)",
+    "atol": "absolute tolerance of the adaptive solvers",
+    "max_step": "largest internal step [s]; RK4 splits each communication step into steps of at most this (0: no limit)",
+    "solver": "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), 2 = DOP853",
+    "max_steps": "most internal steps per do_step: a step needing more is discarded",
+    "n_rhs": "right-hand side evaluations so far",
+    "n_steps": "accepted internal steps so far",
+    "n_rejected": "rejected internal steps so far",
+}
+
+
+def _describe(name):
+    if name in _FIXED:
+        return _FIXED[name]
+    if name.startswith("bob"):
+        return f"bob {name[3:].split('_')[0]} position, inertial {name[-1]} (Y up) [m]"
+    if name.startswith("link"):
+        index, part = name[4:].split("_")
+        if part.startswith("q"):
+            return f"link {index} orientation quaternion, {part[1]} component"
+        return f"link {index} mass-centre position, inertial {part} [m]"
+    kind = name.rstrip("0123456789")
+    return _DESCRIPTIONS[kind].format(i=name[len(kind):])

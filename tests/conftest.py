@@ -1,0 +1,28 @@
+import pytest
+
+from conical_pendulum import Scene
+from conical_pendulum.fmu import build_fmu
+
+
+@pytest.fixture(scope="session")
+def fmu_dir(tmp_path_factory):
+    return tmp_path_factory.mktemp("fmus")
+
+
+@pytest.fixture(scope="session")
+def seed_fmu(fmu_dir):
+    """The seed scene's FMU, as `python build_fmu.py` builds it."""
+    return build_fmu(Scene.uniform(3), fmu_dir / "ConicalPendulum.fmu").path
+
+
+@pytest.fixture(scope="session")
+def chain_fmu(fmu_dir):
+    """FMUs of other uniform chains, by number of links."""
+    built = {}
+
+    def get(n):
+        if n not in built:
+            built[n] = build_fmu(Scene.uniform(n), fmu_dir / f"Chain{n}.fmu").path
+        return built[n]
+
+    return get
