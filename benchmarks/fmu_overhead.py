@@ -1,0 +1,101 @@
+"""What the FMU costs through fmpy, next to the interface's floor.
+
+    python benchmarks/fmu_overhead.py
+
+Builds the seed FMU and a trivial pythonfmu FMU with the same number of outputs
+(constant outputs, pythonfmu's default one-getter-per-variable glue, a do_step that
+does nothing), then times fmpy.simulate_fmu on both: the seed scenario, 10 s with an
+output every 1/60 s (600 communication steps), median of repeats, in one run. Also
+reports the FMU's size, build time cold (fresh core cache) and cached, and the time
+to instantiate.
+"""
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+import fmpy
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+
+from conical_pendulum import Scene
+from conical_pendulum.fmu import build_fmu
+
+TRIVIAL = '''
+from pythonfmu import Fmi2Slave, Real, Fmi2Causality
+
+
+class Trivial(Fmi2Slave):
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        for i in range({count}):
+            setattr(self, f"y{{i}}", float(i))
+            self.register_variable(Real(f"y{{i}}", causality=Fmi2Causality.output))
+
+    def do_step(self, current_time, step_size):
+        return True
+'''
+
+
+def build_trivial(outputs: int, directory: Path) -> Path:
+    from pythonfmu import FmuBuilder
+
+    script = directory / "trivial_slave.py"
+    script.write_text(textwrap.dedent(TRIVIAL.format(count=outputs)))
+    return FmuBuilder.build_FMU(script, dest=directory)
+
+
+def median_seconds(f, repeats=7):
+    f()  # warm: extraction caches, imports
+    runs = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        f()
+        runs.append(time.perf_counter() - start)
+    return float(np.median(runs))
+
+
+def instantiate_seconds(path: Path, repeats=20) -> float:
+    md = read_model_description(str(path))
+    unzipdir = extract(str(path))
+    runs = []
+    for k in range(repeats):
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
+                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName=f"i{k}")
+        start = time.perf_counter()
+        fmu.instantiate()
+        runs.append(time.perf_counter() - start)
+        fmu.freeInstance()
+    return float(np.median(runs))
+
+
+def main():
+    scene = Scene.uniform(3)
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        start = time.perf_counter()
+        cold = build_fmu(scene, tmp / "cold" / "ConicalPendulum.fmu", cache=tmp / "cache")
+        cold_s = time.perf_counter() - start
+        start = time.perf_counter()
+        fmu = build_fmu(scene, tmp / "ConicalPendulum.fmu", cache=tmp / "cache").path
+        cached_s = time.perf_counter() - start
+        outputs = len([v for v in read_model_description(str(fmu)).modelVariables
+                       if v.causality == "output"])
+        trivial = build_trivial(outputs, tmp)
+        print(f"FMU size {fmu.stat().st_size / 1024:.0f} KiB; build cold {cold_s:.1f} s "
+              f"(core compile {cold.core.seconds['compile']:.1f} s), cached {cached_s:.2f} s")
+        print(f"instantiate: ConicalPendulum {instantiate_seconds(fmu) * 1e3:.2f} ms, "
+              f"trivial {instantiate_seconds(trivial) * 1e3:.2f} ms")
+        steps = 600
+        run = dict(stop_time=10.0, output_interval=10.0 / steps)
+        ours = median_seconds(lambda: fmpy.simulate_fmu(str(fmu), **run))
+        floor = median_seconds(lambda: fmpy.simulate_fmu(str(trivial), **run))
+        print(f"fmpy.simulate_fmu, {steps} steps, {outputs} outputs, default settings:")
+        print(f"  ConicalPendulum {ours * 1e3:7.1f} ms ({ours / steps * 1e6:5.1f} us/step)")
+        print(f"  trivial FMU     {floor * 1e3:7.1f} ms ({floor / steps * 1e6:5.1f} us/step)")
+        print(f"  ratio {ours / floor:.2f} (target: at most 1.0)")
+
+
+if __name__ == "__main__":
+    main()
