@@ -70,7 +70,8 @@ def test_rk4_splits_the_communication_step_evenly(core):
 
 @pytest.mark.parametrize("method", ["rk45", "dop853"])
 def test_step_size_carries_over_communication_steps(core, method):
-    """Only the first call chooses an initial step; later calls resume with the last one."""
+    """Only the first call chooses an initial step; later calls resume with the last step
+    size and the derivative the last step ended with (first same as last)."""
     stages = {"rk45": 6, "dop853": 12}[method]
     run, _ = stepper(core)
     run.step(METHODS[method], 0.0, 0.5, 1e-8, 1e-8, 0.0, 10**6)
@@ -80,7 +81,7 @@ def test_step_size_carries_over_communication_steps(core, method):
     before = (run.nfev, run.naccept, run.nreject)
     run.step(METHODS[method], 0.5, 0.5, 1e-8, 1e-8, 0.0, 10**6)
     attempts = run.naccept + run.nreject - before[1] - before[2]
-    assert run.nfev - before[0] == 1 + stages * attempts
+    assert run.nfev - before[0] == stages * attempts
     # and the same trajectory as one call over the whole interval, to the tolerance
     whole, values_whole = stepper(core)
     whole.step(METHODS[method], 0.0, 1.0, 1e-8, 1e-8, 0.0, 10**6)

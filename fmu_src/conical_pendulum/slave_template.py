@@ -84,14 +84,17 @@ class ConicalPendulum(Fmi2Slave):
         core = self._core
         n_param, n_state = len(PARAMETER_START), len(STATE_START)
         self._n_param, self._n_state = n_param, n_state
-        # One array for every Real variable: parameters, state, outputs, settings.
-        self._reals = np.zeros(n_param + n_state + core.NOUTPUT + len(REAL_SETTINGS))
+        # One array for every Real variable: parameters, state, outputs, statistics,
+        # settings; getReal answers from it in one indexing.
+        stats_vr = n_param + n_state + core.NOUTPUT
+        self._setting_vr = stats_vr + len(STATS)
+        self._reals = np.zeros(self._setting_vr + len(REAL_SETTINGS))
         self._reals[:n_param] = list(PARAMETER_START.values())
         self._reals[n_param:n_param + n_state] = list(STATE_START.values())
-        self._setting_vr = n_param + n_state + core.NOUTPUT
         self._reals[self._setting_vr:] = [SETTINGS_START[name] for name in REAL_SETTINGS]
-        self._ints = [SETTINGS_START[name] for name in INTEGER_SETTINGS] + [0] * len(STATS)
-        self._stepper = core.Stepper(self._reals[:n_param], self._reals[n_param:self._setting_vr])
+        self._ints = [SETTINGS_START[name] for name in INTEGER_SETTINGS]
+        self._stepper = core.Stepper(self._reals[:n_param], self._reals[n_param:stats_vr],
+                                     self._reals[stats_vr:self._setting_vr])
         self._stepper.update_outputs()
         self._mode = "instantiated"
         self._time = 0.0
@@ -111,15 +114,15 @@ class ConicalPendulum(Fmi2Slave):
         for name in self._core.OUTPUT_NAMES:
             self.register_variable(Real(name, causality=output, variability=continuous,
                                         initial=Fmi2Initial.calculated, description=_describe(name)))
+        for name in STATS:  # counts, as Real so that one getReal serves every output
+            self.register_variable(Real(name, causality=output, variability=Fmi2Variability.discrete,
+                                        initial=Fmi2Initial.calculated, description=_describe(name)))
         for name in REAL_SETTINGS:
             self.register_variable(Real(name, causality=parameter, variability=fixed,
                                         description=_describe(name)))
         for name in INTEGER_SETTINGS:
             self.register_variable(Integer(name, causality=parameter, variability=fixed,
                                            description=_describe(name)))
-        for name in STATS:
-            self.register_variable(Integer(name, causality=output, variability=Fmi2Variability.discrete,
-                                           initial=Fmi2Initial.calculated, description=_describe(name)))
 
     # --- FMI calls -------------------------------------------------------------------
 
@@ -155,10 +158,8 @@ class ConicalPendulum(Fmi2Slave):
                      "non-negative finite number", Fmi2Status.error)
             return False
         rtol, atol, max_step = self._reals[self._setting_vr:].tolist()
-        solver, max_steps = self._ints[0], self._ints[1]
-        stepper = self._stepper
-        status = stepper.step(solver, current_time, step_size, rtol, atol, max_step, max_steps)
-        self._ints[2:] = [stepper.nfev, stepper.naccept, stepper.nreject]
+        status = self._stepper.step(self._ints[0], current_time, step_size, rtol, atol, max_step,
+                                    self._ints[1])
         if status:
             self.log(self._step_failure(status, current_time, step_size), Fmi2Status.discard)
             return False
@@ -214,19 +215,16 @@ class ConicalPendulum(Fmi2Slave):
 
     @_fmi_call
     def _get_fmu_state(self):
-        stepper = self._stepper
-        return {"reals": self._reals.tolist(), "ints": list(self._ints), "h": stepper.h,
-                "stats": [stepper.nfev, stepper.naccept, stepper.nreject],
-                "mode": self._mode, "time": self._time, "tolerance": self._tolerance}
+        return {"reals": self._reals.tolist(), "ints": list(self._ints),
+                "solver": self._stepper.memory(), "mode": self._mode, "time": self._time,
+                "tolerance": self._tolerance}
 
     @_fmi_call
     def _set_fmu_state(self, state):
         self._check_alive()
-        stepper = self._stepper
         self._reals[:] = state["reals"]
         self._ints[:] = state["ints"]
-        stepper.h = state["h"]
-        stepper.nfev, stepper.naccept, stepper.nreject = state["stats"]
+        self._stepper.restore(state["solver"])
         self._mode, self._time, self._tolerance = state["mode"], state["time"], state["tolerance"]
 
     # --- helpers ----------------------------------------------------------------------

@@ -18,7 +18,7 @@ cdef extern from "solvers.h":
     int CP_WORK_SIZE(int dim)
     int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
                      double rtol, double atol, double max_step, long max_steps,
-                     double *h, double *work, cp_stats *stats) noexcept nogil
+                     double *h, double *work, int *fsal, cp_stats *stats) noexcept nogil
 
 cdef extern from "dynamics.h":
     int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NOUTPUT, CP_SINGULAR, CP_NONFINITE
@@ -155,29 +155,58 @@ cdef class Stepper:
     from one array. A failed step leaves the state as it was. max_steps bounds the
     internal steps of one call, so a step always returns.
 
-    Stepper(params, values): float64 arrays of NPARAM and NSTATE + NOUTPUT values (the
-    state first), used in place, so whoever owns them sees every step.
+    Stepper(params, values, stats=None): float64 arrays of NPARAM values, of NSTATE +
+    NOUTPUT values (the state first) and of 3 counters (right-hand side evaluations,
+    accepted and rejected steps), used in place, so whoever owns them sees every step.
     """
-    cdef public object values, params
-    cdef double[::1] _values, _params, _work
+    cdef public object values, params, stats
+    cdef double[::1] _values, _params, _stats, _work
+    cdef int _fsal
     cdef public double h
-    cdef public long nfev, naccept, nreject
     cdef public int bad_dof
     cdef public double pivot_ratio
 
-    def __init__(self, params, values):
+    def __init__(self, params, values, stats=None):
         self.params, self.values = params, values
+        self.stats = np.zeros(3) if stats is None else stats
         self._params = params
         self._values = values
+        self._stats = self.stats
         _check(self._params, CP_NPARAM, "parameters")
         _check(self._values, CP_NSTATE + CP_NOUTPUT, "state and outputs")
+        _check(self._stats, 3, "statistics")
         self._work = np.zeros(CP_WORK_SIZE(CP_NSTATE))
         self.h = 0.0
-        self.nfev = self.naccept = self.nreject = 0
         self.bad_dof = -1
         self.pivot_ratio = 1.0
+        self._fsal = 0
+
+    @property
+    def nfev(self):
+        return int(self._stats[0])
+
+    @property
+    def naccept(self):
+        return int(self._stats[1])
+
+    @property
+    def nreject(self):
+        return int(self._stats[2])
+
+    def memory(self):
+        """What the solver carries between steps: step size and cached derivative."""
+        return {"h": self.h, "fsal": self._fsal, "f": np.asarray(self._work[:CP_NSTATE]).tolist()}
+
+    def restore(self, memory):
+        self.h = memory["h"]
+        cdef double[::1] f = np.asarray(memory["f"], dtype=float)
+        _check(f, CP_NSTATE, "solver memory")
+        self._work[:CP_NSTATE] = f
+        self._fsal = memory["fsal"]
 
     def update_outputs(self):
+        """Recompute the outputs after the state or the parameters were changed in place."""
+        self._fsal = 0
         if CP_NOUTPUT:
             with nogil:
                 cp_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
@@ -198,12 +227,12 @@ cdef class Stepper:
         cdef int status
         with nogil:
             status = cp_integrate(method, &system, t, &self._values[0], dt, rtol, atol, max_step,
-                                  max_steps, &self.h, &self._work[0], &stats)
+                                  max_steps, &self.h, &self._work[0], &self._fsal, &stats)
             if status == CP_OK and CP_NOUTPUT:
                 cp_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
-        self.nfev += stats.nfev
-        self.naccept += stats.naccept
-        self.nreject += stats.nreject
+            self._stats[0] += stats.nfev
+            self._stats[1] += stats.naccept
+            self._stats[2] += stats.nreject
         self.bad_dof = model.bad_dof
         self.pivot_ratio = model.pivot_ratio
         return status

@@ -111,7 +111,7 @@ static double error_norm(const tableau *tb, int n, const double *K, double h, co
 
 static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x, double dt,
                     double rtol, double atol, double max_step, long max_steps, double *h_io,
-                    double *work, cp_stats *stats)
+                    double *work, int fsal, cp_stats *stats)
 {
     int n = sys->dim, status;
     double *K = work, *y = K + (tb->stages + 1) * n, *y_new = y + n, *tmp = y_new + n;
@@ -120,7 +120,7 @@ static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x
     long attempts = 0;
     if (!(max_step > 0)) max_step = INFINITY;
     memcpy(y, x, n * sizeof(double));
-    if ((status = eval(sys, y, K, stats))) return status;
+    if (!fsal && (status = eval(sys, y, K, stats))) return status;
     double h_abs = *h_io;
     if (!(h_abs > 0) || !isfinite(h_abs)) {
         status = initial_step(sys, y, K, dt, rtol, atol, max_step, tb->order, tmp, err, scale,
@@ -181,15 +181,16 @@ static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x
 
 int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
                  double rtol, double atol, double max_step, long max_steps,
-                 double *h, double *work, cp_stats *stats)
+                 double *h, double *work, int *fsal, cp_stats *stats)
 {
+    int status;
     if (dt <= 0) return CP_OK;
-    switch (method) {
-    case CP_RK4:
+    if (method == CP_RK4) {
+        *fsal = 0;
         return rk4(sys, x, dt, max_step, work, stats);
-    case CP_RK45:
-        return adaptive(&RK45_TABLEAU, sys, t, x, dt, rtol, atol, max_step, max_steps, h, work, stats);
-    default:
-        return adaptive(&DOP853_TABLEAU, sys, t, x, dt, rtol, atol, max_step, max_steps, h, work, stats);
     }
+    const tableau *tb = method == CP_RK45 ? &RK45_TABLEAU : &DOP853_TABLEAU;
+    status = adaptive(tb, sys, t, x, dt, rtol, atol, max_step, max_steps, h, work, *fsal, stats);
+    *fsal = status == CP_OK;   /* on success work starts with x' at the new x */
+    return status;
 }

@@ -25,9 +25,11 @@ enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2 };
  * RK45 and DOP853 control the error as scipy's solvers do (RMS norm of the error over
  * atol + rtol * max(|x|, |x_new|), same safety factor and limits); *h carries the
  * proposed step from one call to the next (<= 0: choose one as scipy does). At most
- * max_steps steps are attempted. On failure x is left as it was at t. */
+ * max_steps steps are attempted. On failure x is left as it was at t.
+ * *fsal says whether work still holds x' at x from the last call (first same as last);
+ * the caller clears it whenever it changes x or the parameters. */
 int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
                  double rtol, double atol, double max_step, long max_steps,
-                 double *h, double *work, cp_stats *stats);
+                 double *h, double *work, int *fsal, cp_stats *stats);
 
 #endif
