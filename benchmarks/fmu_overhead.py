@@ -46,14 +46,17 @@ def build_trivial(outputs: int, directory: Path) -> Path:
     return FmuBuilder.build_FMU(script, dest=directory)
 
 
-def median_seconds(f, repeats=7):
-    f()  # warm: extraction caches, imports
-    runs = []
+def median_seconds(*calls, repeats=15):
+    """Median seconds of each call, the calls interleaved so that load hits them alike."""
+    for f in calls:
+        f()  # warm: extraction caches, imports
+    runs = [[] for _ in calls]
     for _ in range(repeats):
-        start = time.perf_counter()
-        f()
-        runs.append(time.perf_counter() - start)
-    return float(np.median(runs))
+        for f, times in zip(calls, runs):
+            start = time.perf_counter()
+            f()
+            times.append(time.perf_counter() - start)
+    return [float(np.median(times)) for times in runs]
 
 
 def instantiate_seconds(path: Path, repeats=20) -> float:
@@ -89,8 +92,8 @@ def main():
               f"trivial {instantiate_seconds(trivial) * 1e3:.2f} ms")
         steps = 600
         run = dict(stop_time=10.0, output_interval=10.0 / steps)
-        ours = median_seconds(lambda: fmpy.simulate_fmu(str(fmu), **run))
-        floor = median_seconds(lambda: fmpy.simulate_fmu(str(trivial), **run))
+        ours, floor = median_seconds(lambda: fmpy.simulate_fmu(str(fmu), **run),
+                                     lambda: fmpy.simulate_fmu(str(trivial), **run))
         print(f"fmpy.simulate_fmu, {steps} steps, {outputs} outputs, default settings:")
         print(f"  ConicalPendulum {ours * 1e3:7.1f} ms ({ours / steps * 1e6:5.1f} us/step)")
         print(f"  trivial FMU     {floor * 1e3:7.1f} ms ({floor / steps * 1e6:5.1f} us/step)")

@@ -116,7 +116,7 @@ def _compile(name: str, work: Path) -> None:
     extension = Extension(
         name, [str(work / s) for s in sources], include_dirs=[str(work)],
         define_macros=[("Py_LIMITED_API", LIMITED_API), ("CYTHON_LIMITED_API", "1")],
-        py_limited_api=True, extra_compile_args=["-O2", "-g0"])
+        py_limited_api=True, extra_compile_args=["-O2", "-g0"], extra_link_args=["-s"])
     cwd = os.getcwd()
     os.chdir(work)
     try:

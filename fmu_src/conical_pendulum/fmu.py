@@ -91,7 +91,8 @@ def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.f
 
 
 def _finish(fmu: Path, starts: dict) -> None:
-    """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only.
+    """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only;
+    text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
     pythonfmu lists no InitialUnknowns, writes Real starts with 16 digits (a double
     needs 17 to round-trip), and packs binaries for every platform it has, while the
@@ -112,6 +113,7 @@ def _finish(fmu: Path, starts: dict) -> None:
     initial = ET.SubElement(structure, "InitialUnknowns")
     for index, var in enumerate(variables, start=1):
         real = var.find("Real")
+        var.set("description", describe(var.get("name")))
         if real is not None and real.get("start") is not None:
             real.set("start", repr(float(starts[var.get("name")])))
         if var.get("causality") == "output":
@@ -122,9 +124,10 @@ def _finish(fmu: Path, starts: dict) -> None:
         structure.remove(initial)
     ET.indent(root)
     entries["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
-    with zipfile.ZipFile(fmu, "w", zipfile.ZIP_DEFLATED) as archive:
-        for name, data in entries.items():
-            archive.writestr(name, data)
+    with zipfile.ZipFile(fmu, "w") as archive:
+        for name, data in entries.items():  # binaries stored: every run extracts them
+            stored = name.endswith((".so", ".dll", ".dylib"))
+            archive.writestr(name, data, zipfile.ZIP_STORED if stored else zipfile.ZIP_DEFLATED)
 
 
 def _description(scene: Scene) -> str:
@@ -135,3 +138,40 @@ def _description(scene: Scene) -> str:
                   else "; PUBLISHED pydy-example kinematics (does not conserve energy)")
     return f"{scene.n}-link conical pendulum ({links}){kinematics}"
 
+
+_INDEXED = {
+    "l": "length of link {i} [m]", "m": "mass of bob {i} [kg]", "M": "mass of link {i} [kg]",
+    "Ixx": "central inertia of link {i} about its x axis [kg m2]",
+    "Iyy": "central inertia of link {i} about its own (y) axis [kg m2]",
+    "Izz": "central inertia of link {i} about its z axis [kg m2]",
+    "alpha": "angle of joint {i} about the parent's z axis [rad]",
+    "beta": "angle of joint {i} about the parent's x axis [rad]",
+    "omega": "alpha{i}' [rad/s]", "delta": "beta{i}' [rad/s]",
+}
+_NAMED = {
+    "g": "gravitational acceleration along -Y [m/s2]",
+    "energy": "total mechanical energy (kinetic + potential, zero at Y = 0) [J]",
+    "rtol": "relative tolerance of the adaptive solvers (replaced by setupExperiment's tolerance when given)",
+    "atol": "absolute tolerance of the adaptive solvers",
+    "max_step": "largest internal step [s]; RK4 splits each communication step into steps of at most this (0: no limit)",
+    "solver": "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), 2 = DOP853",
+    "max_steps": "most internal steps per do_step: a step needing more is discarded",
+    "n_rhs": "right-hand side evaluations so far",
+    "n_steps": "accepted internal steps so far",
+    "n_rejected": "rejected internal steps so far",
+}
+
+
+def describe(name: str) -> str:
+    """The description of an FMU variable, from its name."""
+    if name in _NAMED:
+        return _NAMED[name]
+    if name.startswith("bob"):
+        return f"bob {name[3:].split('_')[0]} position, inertial {name[-1]} (Y up) [m]"
+    if name.startswith("link"):
+        index, part = name[4:].split("_")
+        if part.startswith("q"):
+            return f"link {index} orientation quaternion, {part[1]} component"
+        return f"link {index} mass-centre position, inertial {part} [m]"
+    kind = name.rstrip("0123456789")
+    return _INDEXED[kind].format(i=name[len(kind):])

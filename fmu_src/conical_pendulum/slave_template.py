@@ -102,27 +102,26 @@ class ConicalPendulum(Fmi2Slave):
         self._register()
 
     def _register(self):
-        """Declare the variables in the order of self._reals, then the Integers."""
+        """Declare the variables in the order of self._reals, then the Integers.
+
+        Their descriptions are added to the model description at build time."""
         fixed, continuous = Fmi2Variability.fixed, Fmi2Variability.continuous
         parameter, output = Fmi2Causality.parameter, Fmi2Causality.output
         for name in PARAMETER_START:
-            self.register_variable(Real(name, causality=parameter, variability=fixed,
-                                        description=_describe(name)))
+            self.register_variable(Real(name, causality=parameter, variability=fixed))
         for name in STATE_START:
             self.register_variable(Real(name, causality=output, variability=continuous,
-                                        initial=Fmi2Initial.exact, description=_describe(name)))
+                                        initial=Fmi2Initial.exact))
         for name in self._core.OUTPUT_NAMES:
             self.register_variable(Real(name, causality=output, variability=continuous,
-                                        initial=Fmi2Initial.calculated, description=_describe(name)))
+                                        initial=Fmi2Initial.calculated))
         for name in STATS:  # counts, as Real so that one getReal serves every output
             self.register_variable(Real(name, causality=output, variability=Fmi2Variability.discrete,
-                                        initial=Fmi2Initial.calculated, description=_describe(name)))
+                                        initial=Fmi2Initial.calculated))
         for name in REAL_SETTINGS:
-            self.register_variable(Real(name, causality=parameter, variability=fixed,
-                                        description=_describe(name)))
+            self.register_variable(Real(name, causality=parameter, variability=fixed))
         for name in INTEGER_SETTINGS:
-            self.register_variable(Integer(name, causality=parameter, variability=fixed,
-                                           description=_describe(name)))
+            self.register_variable(Integer(name, causality=parameter, variability=fixed))
 
     # --- FMI calls -------------------------------------------------------------------
 
@@ -278,40 +277,3 @@ class ConicalPendulum(Fmi2Slave):
             hint = f"the acceleration of {speed} is not finite; check parameters and state"
         return (f"do_step from t = {t:.9g} s by {dt:.3g} s failed: {what}. {hint}. "
                 f"The state is kept at t = {t:.9g} s.")
-
-
-_DESCRIPTIONS = {
-    "l": "length of link {i} [m]", "m": "mass of bob {i} [kg]", "M": "mass of link {i} [kg]",
-    "Ixx": "central inertia of link {i} about its x axis [kg m2]",
-    "Iyy": "central inertia of link {i} about its own (y) axis [kg m2]",
-    "Izz": "central inertia of link {i} about its z axis [kg m2]",
-    "alpha": "angle of joint {i} about the parent's z axis [rad]",
-    "beta": "angle of joint {i} about the parent's x axis [rad]",
-    "omega": "alpha{i}' [rad/s]", "delta": "beta{i}' [rad/s]",
-}
-_FIXED = {
-    "g": "gravitational acceleration along -Y [m/s2]",
-    "energy": "total mechanical energy (kinetic + potential, zero at Y = 0) [J]",
-    "rtol": "relative tolerance of the adaptive solvers (replaced by setupExperiment's tolerance when given)",
-    "atol": "absolute tolerance of the adaptive solvers",
-    "max_step": "largest internal step [s]; RK4 splits each communication step into steps of at most this (0: no limit)",
-    "solver": "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), 2 = DOP853",
-    "max_steps": "most internal steps per do_step: a step needing more is discarded",
-    "n_rhs": "right-hand side evaluations so far",
-    "n_steps": "accepted internal steps so far",
-    "n_rejected": "rejected internal steps so far",
-}
-
-
-def _describe(name):
-    if name in _FIXED:
-        return _FIXED[name]
-    if name.startswith("bob"):
-        return f"bob {name[3:].split('_')[0]} position, inertial {name[-1]} (Y up) [m]"
-    if name.startswith("link"):
-        index, part = name[4:].split("_")
-        if part.startswith("q"):
-            return f"link {index} orientation quaternion, {part[1]} component"
-        return f"link {index} mass-centre position, inertial {part} [m]"
-    kind = name.rstrip("0123456789")
-    return _DESCRIPTIONS[kind].format(i=name[len(kind):])
