@@ -97,3 +97,18 @@ def test_too_many_steps_and_underflow_are_reported_with_state_kept(core):
     # at t = 1e15 time resolves only 0.125 s: no step can meet rtol = 1e-15
     assert run.step(METHODS["rk45"], 1e15, 1.0, 1e-15, 1e-300, 0.0, 10**6) == core.STEP_UNDERFLOW
     np.testing.assert_array_equal(values, start)
+
+
+@pytest.mark.parametrize("tol", [1e-6, 1e-10])
+def test_dense_output_grid_equals_scipy_dop853_with_t_eval(core, tol):
+    """One DOP853 run over the grid, outputs from its dense output, as solve_ivp's t_eval."""
+    times = np.linspace(0.0, 10.0, 601)
+    x0 = SCENE.initial_state({"alpha2": 1.2})
+    p = np.array(SCENE.parameters())
+    states, nfev = core.integrate_grid(x0, p, times, tol, tol)
+    sol = solve_ivp(lambda t, x: core.rhs(x, p), (0.0, 10.0), x0, method="DOP853", t_eval=times,
+                    rtol=tol, atol=tol)
+    assert nfev == sol.nfev
+    np.testing.assert_allclose(states, sol.y.T, rtol=0, atol=tol)
+    exact = reference(core, 10.0, {"alpha2": 1.2})
+    assert np.abs(states[-1] - exact).max() < 2e3 * tol

@@ -154,7 +154,7 @@ _NAMED = {
     "rtol": "relative tolerance of the adaptive solvers (replaced by setupExperiment's tolerance when given)",
     "atol": "absolute tolerance of the adaptive solvers",
     "max_step": "largest internal step [s]; RK4 splits each communication step into steps of at most this (0: no limit)",
-    "solver": "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), 2 = DOP853",
+    "solver": "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), 2 = DOP853, 3 = Radau (scipy, stiff)",
     "max_steps": "most internal steps per do_step: a step needing more is discarded",
     "n_rhs": "right-hand side evaluations so far",
     "n_steps": "accepted internal steps so far",

@@ -27,7 +27,8 @@ DESCRIPTION = ""
 SETTINGS_START = {}
 # --- end of rendered values ---
 
-SOLVERS = ("rk4", "rk45", "dop853")
+SOLVERS = ("rk4", "rk45", "dop853", "radau")
+RADAU = SOLVERS.index("radau")
 REAL_SETTINGS = ("rtol", "atol", "max_step")
 INTEGER_SETTINGS = ("solver", "max_steps")
 STATS = ("n_rhs", "n_steps", "n_rejected")
@@ -157,10 +158,14 @@ class ConicalPendulum(Fmi2Slave):
                      "non-negative finite number", Fmi2Status.error)
             return False
         rtol, atol, max_step = self._reals[self._setting_vr:].tolist()
-        status = self._stepper.step(self._ints[0], current_time, step_size, rtol, atol, max_step,
-                                    self._ints[1])
-        if status:
-            self.log(self._step_failure(status, current_time, step_size), Fmi2Status.discard)
+        if self._ints[0] == RADAU:
+            failure = self._radau_step(current_time, step_size, rtol, atol, max_step)
+        else:
+            status = self._stepper.step(self._ints[0], current_time, step_size, rtol, atol,
+                                        max_step, self._ints[1])
+            failure = status and self._step_failure(status, current_time, step_size)
+        if failure:
+            self.log(failure, Fmi2Status.discard)
             return False
         self._time = current_time + step_size
         return True
@@ -204,6 +209,37 @@ class ConicalPendulum(Fmi2Slave):
             if name == "max_steps" and value < 1:
                 self._fail(f"max_steps = {value}: must be at least 1")
             self._ints[vr - first] = value
+
+    def _radau_step(self, t, dt, rtol, atol, max_step):
+        """The stiff fallback: scipy's Radau IIA on the compiled right-hand side.
+
+        Imports scipy, only when chosen. Returns None, or a message on failure.
+        """
+        from scipy.integrate import Radau
+
+        core, stepper = self._core, self._stepper
+        state = self._reals[self._n_param:self._n_param + self._n_state]
+        params = stepper.params
+        options = {"first_step": min(stepper.h, dt)} if stepper.h > 0 else {}
+        solver = Radau(lambda _, x: core.rhs(x, params), t, state.copy(), t + dt, rtol=rtol,
+                       atol=atol, max_step=max_step or np.inf, **options)
+        steps, problem = 0, None
+        try:
+            while solver.status == "running" and steps < self._ints[1]:
+                problem = solver.step()
+                steps += 1
+        except core.CoreError as exc:
+            problem = str(exc)
+        stepper.stats[0] += solver.nfev
+        stepper.stats[1] += steps
+        if solver.status != "finished":
+            problem = problem or f"more than max_steps = {self._ints[1]} internal steps were needed"
+            return (f"do_step from t = {t:.9g} s by {dt:.3g} s failed (radau): {problem}. "
+                    f"The state is kept at t = {t:.9g} s.")
+        state[:] = solver.y
+        stepper.h = solver.h_abs
+        stepper.update_outputs()
+        return None
 
     get_boolean = _fmi_call(Fmi2Slave.get_boolean)
     set_boolean = _fmi_call(Fmi2Slave.set_boolean)

@@ -109,73 +109,190 @@ static double error_norm(const tableau *tb, int n, const double *K, double h, co
     return fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * n);
 }
 
+/* Working memory of the adaptive pairs, carved from the caller's work array. */
+typedef struct {
+    double *K, *y, *y_new, *tmp, *scale, *err, *F;
+} rk_memory;
+
+static rk_memory carve(int n, double *work)
+{
+    rk_memory m;
+    m.K = work;                 /* 16 rows: stages, x' at the new point, dense-output stages */
+    m.y = m.K + 16 * n;
+    m.y_new = m.y + n;
+    m.tmp = m.y_new + n;
+    m.scale = m.tmp + n;
+    m.err = m.scale + n;
+    m.F = m.err + n;            /* 7 rows: DOP853's interpolant */
+    return m;
+}
+
+/* One accepted step from (t, m->y) towards t_end, rejecting as often as needed, as
+ * scipy's RungeKutta._step_impl does. On return *t_new and m->y_new hold the new point
+ * and K[stages] holds x' there; m->y and K[0] are left for dense output. */
+static int one_step(const tableau *tb, const cp_system *sys, double t, double t_end,
+                    rk_memory *m, double rtol, double atol, double max_step, long max_steps,
+                    long *attempts, double *h_abs_io, double *t_new_out, double *h_out,
+                    cp_stats *stats)
+{
+    int n = sys->dim, status;
+    double *K = m->K, exponent = -1.0 / (tb->order + 1), h_abs = *h_abs_io;
+    double min_step = 10 * fabs(nextafter(t, INFINITY) - t);
+    if (h_abs > max_step) h_abs = max_step;
+    else if (h_abs < min_step) h_abs = min_step;
+    int rejected = 0;
+    for (;;) {
+        if (h_abs < min_step) return CP_STEP_UNDERFLOW;
+        if (++*attempts > max_steps) return CP_TOO_MANY_STEPS;
+        double t_new = t + h_abs;
+        if (t_new > t_end) t_new = t_end;
+        double h = t_new - t;
+        h_abs = fabs(h);
+        for (int s = 1; s < tb->stages; s++) {
+            const double *a = tb->a + s * tb->a_stride;
+            for (int i = 0; i < n; i++) {
+                double dy = 0.0;
+                for (int j = 0; j < s; j++) dy += K[j * n + i] * a[j];
+                m->tmp[i] = m->y[i] + dy * h;
+            }
+            if ((status = eval(sys, m->tmp, K + s * n, stats))) return status;
+        }
+        for (int i = 0; i < n; i++) {
+            double dy = 0.0;
+            for (int j = 0; j < tb->stages; j++) dy += K[j * n + i] * tb->b[j];
+            m->y_new[i] = m->y[i] + h * dy;
+        }
+        if ((status = eval(sys, m->y_new, K + tb->stages * n, stats))) return status;
+        for (int i = 0; i < n; i++)
+            m->scale[i] = atol + fmax(fabs(m->y[i]), fabs(m->y_new[i])) * rtol;
+        double norm = error_norm(tb, n, K, h, m->scale, m->err);
+        if (norm < 1) {
+            double factor = norm == 0 ? MAX_FACTOR : fmin(MAX_FACTOR, SAFETY * pow(norm, exponent));
+            if (rejected && factor > 1) factor = 1;
+            *h_abs_io = h_abs * factor;
+            *t_new_out = t_new;
+            *h_out = h;
+            stats->naccept++;
+            return CP_OK;
+        }
+        /* a NaN norm (non-finite stage) counts as a failed step */
+        h_abs *= isnan(norm) ? MIN_FACTOR : fmax(MIN_FACTOR, SAFETY * pow(norm, exponent));
+        rejected = 1;
+        stats->nreject++;
+    }
+}
+
+/* Move to the new point: y <- y_new, K[0] <- x' there (first same as last). */
+static void advance(const tableau *tb, int n, rk_memory *m)
+{
+    memcpy(m->y, m->y_new, n * sizeof(double));
+    memcpy(m->K, m->K + tb->stages * n, n * sizeof(double));
+}
+
+static int start(const tableau *tb, const cp_system *sys, const double *x, double interval,
+                 double rtol, double atol, double max_step, int fsal, rk_memory *m,
+                 double *h_abs, cp_stats *stats)
+{
+    int status;
+    memcpy(m->y, x, sys->dim * sizeof(double));
+    if (!fsal && (status = eval(sys, m->y, m->K, stats))) return status;
+    if (!(*h_abs > 0) || !isfinite(*h_abs))
+        return initial_step(sys, m->y, m->K, interval, rtol, atol, max_step, tb->order, m->tmp,
+                            m->err, m->scale, stats, h_abs);
+    return CP_OK;
+}
+
 static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x, double dt,
                     double rtol, double atol, double max_step, long max_steps, double *h_io,
                     double *work, int fsal, cp_stats *stats)
 {
     int n = sys->dim, status;
-    double *K = work, *y = K + (tb->stages + 1) * n, *y_new = y + n, *tmp = y_new + n;
-    double *scale = tmp + n, *err = scale + n;
-    double t_end = t + dt, exponent = -1.0 / (tb->order + 1);
+    rk_memory m = carve(n, work);
+    double t_end = t + dt, h_abs = *h_io, t_new, h;
     long attempts = 0;
     if (!(max_step > 0)) max_step = INFINITY;
-    memcpy(y, x, n * sizeof(double));
-    if (!fsal && (status = eval(sys, y, K, stats))) return status;
-    double h_abs = *h_io;
-    if (!(h_abs > 0) || !isfinite(h_abs)) {
-        status = initial_step(sys, y, K, dt, rtol, atol, max_step, tb->order, tmp, err, scale,
-                              stats, &h_abs);
-        if (status) return status;
-    }
+    if ((status = start(tb, sys, x, dt, rtol, atol, max_step, fsal, &m, &h_abs, stats))) return status;
     while (t < t_end) {
-        double min_step = 10 * fabs(nextafter(t, INFINITY) - t);
-        if (h_abs > max_step) h_abs = max_step;
-        else if (h_abs < min_step) h_abs = min_step;
-        int rejected = 0;
-        for (;;) {
-            if (h_abs < min_step) return CP_STEP_UNDERFLOW;
-            if (++attempts > max_steps) return CP_TOO_MANY_STEPS;
-            double t_new = t + h_abs;
-            if (t_new > t_end) t_new = t_end;
-            double h = t_new - t;
-            h_abs = fabs(h);
-            for (int s = 1; s < tb->stages; s++) {
-                const double *a = tb->a + s * tb->a_stride;
-                for (int i = 0; i < n; i++) {
-                    double dy = 0.0;
-                    for (int j = 0; j < s; j++) dy += K[j * n + i] * a[j];
-                    tmp[i] = y[i] + dy * h;
-                }
-                if ((status = eval(sys, tmp, K + s * n, stats))) return status;
-            }
-            for (int i = 0; i < n; i++) {
-                double dy = 0.0;
-                for (int j = 0; j < tb->stages; j++) dy += K[j * n + i] * tb->b[j];
-                y_new[i] = y[i] + h * dy;
-            }
-            double *f_new = K + tb->stages * n;
-            if ((status = eval(sys, y_new, f_new, stats))) return status;
-            for (int i = 0; i < n; i++) scale[i] = atol + fmax(fabs(y[i]), fabs(y_new[i])) * rtol;
-            double norm = error_norm(tb, n, K, h, scale, err);
-            if (norm < 1) {
-                double factor = norm == 0 ? MAX_FACTOR : fmin(MAX_FACTOR, SAFETY * pow(norm, exponent));
-                if (rejected && factor > 1) factor = 1;
-                h_abs *= factor;
-                stats->naccept++;
-                t = t_new;
-                memcpy(y, y_new, n * sizeof(double));
-                memcpy(K, f_new, n * sizeof(double));   /* first same as last */
-                break;
-            }
-            /* a NaN norm (non-finite stage) counts as a failed step */
-            double factor = isnan(norm) ? MIN_FACTOR : fmax(MIN_FACTOR, SAFETY * pow(norm, exponent));
-            h_abs *= factor;
-            rejected = 1;
-            stats->nreject++;
-        }
+        status = one_step(tb, sys, t, t_end, &m, rtol, atol, max_step, max_steps, &attempts,
+                          &h_abs, &t_new, &h, stats);
+        if (status) return status;
+        advance(tb, n, &m);
+        t = t_new;
     }
     *h_io = h_abs;
-    memcpy(x, y, n * sizeof(double));
+    memcpy(x, m.y, n * sizeof(double));
+    return CP_OK;
+}
+
+/* scipy's DOP853._dense_output_impl: three more stages, then the interpolant F. */
+static int dop853_interpolant(const cp_system *sys, double h, rk_memory *m, cp_stats *stats)
+{
+    int n = sys->dim, status, stages = DOP853_STAGES;
+    double *K = m->K;
+    for (int e = 0; e < 3; e++) {
+        int s = stages + 1 + e;
+        for (int i = 0; i < n; i++) {
+            double dy = 0.0;
+            for (int j = 0; j < s; j++) dy += K[j * n + i] * DOP853_A_EXTRA[e][j];
+            m->tmp[i] = m->y[i] + dy * h;
+        }
+        if ((status = eval(sys, m->tmp, K + s * n, stats))) return status;
+    }
+    const double *f_old = K, *f_new = K + stages * n;
+    for (int i = 0; i < n; i++) {
+        double delta = m->y_new[i] - m->y[i];
+        m->F[i] = delta;
+        m->F[n + i] = h * f_old[i] - delta;
+        m->F[2 * n + i] = 2 * delta - h * (f_new[i] + f_old[i]);
+        for (int r = 0; r < 4; r++) {
+            double s = 0.0;
+            for (int j = 0; j < 16; j++) s += DOP853_D[r][j] * K[j * n + i];
+            m->F[(3 + r) * n + i] = h * s;
+        }
+    }
+    return CP_OK;
+}
+
+/* Dop853DenseOutput._call_impl at x = (t - t_old) / h. */
+static void dop853_evaluate(int n, const rk_memory *m, double x, double *out)
+{
+    for (int i = 0; i < n; i++) {
+        double y = 0.0;
+        for (int k = 6, odd = 0; k >= 0; k--, odd ^= 1) {
+            y += m->F[k * n + i];
+            y *= odd ? 1 - x : x;
+        }
+        out[i] = y + m->y[i];
+    }
+}
+
+int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double *out,
+                   double rtol, double atol, double max_step, long max_steps, double *work,
+                   cp_stats *stats)
+{
+    const tableau *tb = &DOP853_TABLEAU;
+    int n = sys->dim, status, next = 1;
+    rk_memory m = carve(n, work);
+    double t = times[0], t_end = times[ntimes - 1], h_abs = 0.0, t_new, h;
+    long attempts = 0;
+    if (!(max_step > 0)) max_step = INFINITY;
+    if (ntimes < 2) return CP_OK;
+    status = start(tb, sys, out, t_end - t, rtol, atol, max_step, 0, &m, &h_abs, stats);
+    if (status) return status;
+    while (t < t_end) {
+        status = one_step(tb, sys, t, t_end, &m, rtol, atol, max_step, max_steps, &attempts,
+                          &h_abs, &t_new, &h, stats);
+        if (status) return status;
+        if (next < ntimes && times[next] <= t_new) {
+            if ((status = dop853_interpolant(sys, h, &m, stats))) return status;
+            for (; next < ntimes && times[next] <= t_new; next++) {
+                if (times[next] == t_new) memcpy(out + next * n, m.y_new, n * sizeof(double));
+                else dop853_evaluate(n, &m, (times[next] - t) / h, out + next * n);
+            }
+        }
+        advance(tb, n, &m);
+        t = t_new;
+    }
     return CP_OK;
 }
 

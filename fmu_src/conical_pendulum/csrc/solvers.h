@@ -19,7 +19,7 @@ enum { CP_OK = 0, CP_TOO_MANY_STEPS = 1, CP_STEP_UNDERFLOW = 2 };
 enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2 };
 
 /* Doubles of scratch memory cp_integrate needs for a system of size dim. */
-#define CP_WORK_SIZE(dim) (20 * (dim))
+#define CP_WORK_SIZE(dim) (32 * (dim))
 
 /* Advance x from t to t + dt. RK4 splits dt evenly into steps of at most max_step.
  * RK45 and DOP853 control the error as scipy's solvers do (RMS norm of the error over
@@ -31,5 +31,12 @@ enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2 };
 int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
                  double rtol, double atol, double max_step, long max_steps,
                  double *h, double *work, int *fsal, cp_stats *stats);
+
+/* DOP853 from times[0] (state in out[0..dim)) through times[ntimes - 1], writing the
+ * state at every time into out (row-major, ntimes x dim) from the method's 7th-order
+ * dense output, as scipy's solve_ivp(method="DOP853", t_eval=times) does. */
+int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double *out,
+                   double rtol, double atol, double max_step, long max_steps, double *work,
+                   cp_stats *stats);
 
 #endif
