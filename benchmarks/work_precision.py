@@ -150,12 +150,16 @@ def main():
             angle, bob, final = errors(core, p, states, reference, ref_outputs, n, bob_index)
             drift = float("nan")
             if long_horizon:
-                if max_step is not None:
-                    long_states, _ = fmu_solver(core, p, x0, method, tol, tol, max_step, long_horizon, 60)
-                else:
-                    long_states, _ = native(rhs, x0, np.arange(0.0, long_horizon + 0.5, 1.0), method,
-                                            tol, core, p)
-                drift = energy_drift(core, p, long_states)
+                try:
+                    if max_step is not None:
+                        long_states, _ = fmu_solver(core, p, x0, method, tol, tol, max_step,
+                                                    long_horizon, 60)
+                    else:
+                        long_states, _ = native(rhs, x0, np.arange(0.0, long_horizon + 0.5, 1.0),
+                                                method, tol, core, p)
+                    drift = energy_drift(core, p, long_states)
+                except (RuntimeError, core.CoreError) as exc:
+                    print(f"  {label:<14} {setting:<20} 1000 s run failed: {exc}", flush=True)
             rows.append({"scenario": name, "solver": label, "setting": setting, "seconds": seconds,
                          "nfev": nfev, "angle_error": angle, "bob_error": bob, "final_error": final,
                          "energy_drift_1000s": drift})
