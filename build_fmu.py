@@ -37,7 +37,11 @@ def main(argv=None) -> int:
         return 2
     from conical_pendulum.fmu import build_fmu
 
-    build = build_fmu(scene, args.output)
+    try:
+        build = build_fmu(scene, args.output)
+    except ValueError as exc:
+        print(f"build_fmu.py: {exc}", file=sys.stderr)
+        return 2
     how = "from cache" if build.core.cached else "compiled " + ", ".join(
         f"{k} {v:.1f} s" for k, v in build.core.seconds.items())
     print(f"built {build.path} ({build.path.stat().st_size / 1024:.0f} KiB) in {build.seconds:.1f} s: "

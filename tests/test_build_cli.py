@@ -1,0 +1,38 @@
+"""build_fmu.py: what it builds, and clear refusals of options it cannot build."""
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def build(*args, cwd=ROOT):
+    return subprocess.run([sys.executable, str(ROOT / "build_fmu.py"), *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=600)
+
+
+def test_builds_the_requested_scene(tmp_path):
+    out = tmp_path / "Two.fmu"
+    run = build("--links", "2", "--no-bobs", "--output", str(out), "--no-check")
+    assert run.returncode == 0, run.stderr
+    assert f"built {out}" in run.stdout and "2 links" in run.stdout
+    assert out.exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--links", "0"], "links: 0 is out of range"),
+    (["--links", "1000"], "links: 1000 is out of range"),
+    (["--massless-links", "--no-bobs"], "scene has no mass"),
+    (["--kinematics", "seed"], "invalid choice: 'seed'"),
+    (["--links", "6", "--kinematics", "pydy-example"], "only reproduced up to 4 links"),
+    (["--output", "dist/model.zip"], "must end in .fmu"),
+    (["--frobnicate"], "unrecognized arguments: --frobnicate"),
+])
+def test_refuses_what_it_cannot_build(tmp_path, args, message):
+    run = build(*args, "--no-check", cwd=tmp_path)
+    assert run.returncode == 2
+    assert message in run.stderr
+    assert "Traceback" not in run.stderr
+    assert not list(tmp_path.rglob("*.fmu"))
