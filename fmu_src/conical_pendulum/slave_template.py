@@ -29,6 +29,7 @@ SETTINGS_START = {}
 
 SOLVERS = ("rk4", "rk45", "dop853", "radau")
 RADAU = SOLVERS.index("radau")
+NEAR_SINGULAR = 1e-8  # pivot ratio worth naming when a step fails for another reason
 REAL_SETTINGS = ("rtol", "atol", "max_step")
 INTEGER_SETTINGS = ("solver", "max_steps")
 STATS = ("n_rhs", "n_steps", "n_rejected")
@@ -296,20 +297,25 @@ class ConicalPendulum(Fmi2Slave):
         dof = stepper.bad_dof
         speed = (f"omega{dof}" if dof < n else f"delta{dof - n}") if 0 <= dof < 2 * n else "?"
         rtol, atol, max_step = self._reals[self._setting_vr:].tolist()
-        if status == core.TOO_MANY_STEPS:
-            hint = (f"more than max_steps = {self._ints[1]} internal steps were needed; raise "
-                    f"max_steps, loosen rtol = {rtol:g} / atol = {atol:g}, or take shorter "
-                    "communication steps")
-        elif status == core.STEP_UNDERFLOW:
-            hint = (f"the step size fell below what time t can resolve; rtol = {rtol:g} / "
-                    f"atol = {atol:g} cannot be met here: loosen them")
-        elif status == core.SINGULAR:
-            link = dof % n if dof >= 0 else "?"
+        link = dof % n if dof >= 0 else "?"
+        joint = (f"link {link}'s two-angle joint cannot represent this orientation (it lies "
+                 "along its parent's x axis, alpha = +-90 degrees) or a link has too little "
+                 "inertia")
+        if status == core.SINGULAR:
             hint = (f"the mass matrix is singular (pivot ratio {stepper.pivot_ratio:.2g}, at "
-                    f"{speed}): link {link}'s two-angle joint cannot represent this orientation "
-                    "(it lies along its parent's x axis, alpha = +-90 degrees) or a link has "
-                    "too little inertia; give the link inertia or start elsewhere")
-        else:
+                    f"{speed}): {joint}; give the link inertia or start elsewhere")
+        elif status == core.NONFINITE:
             hint = f"the acceleration of {speed} is not finite; check parameters and state"
+        else:
+            if status == core.TOO_MANY_STEPS:
+                hint = (f"more than max_steps = {self._ints[1]} internal steps were needed; raise "
+                        f"max_steps, loosen rtol = {rtol:g} / atol = {atol:g}, or take shorter "
+                        "communication steps")
+            else:
+                hint = (f"the step size fell below what time t can resolve; rtol = {rtol:g} / "
+                        f"atol = {atol:g} cannot be met here: loosen them")
+            if stepper.pivot_ratio < NEAR_SINGULAR:
+                hint += (f". The mass matrix came close to singular on the way (pivot ratio "
+                         f"{stepper.pivot_ratio:.2g}, at {speed}): {joint}")
         return (f"do_step from t = {t:.9g} s by {dt:.3g} s failed: {what}. {hint}. "
                 f"The state is kept at t = {t:.9g} s.")

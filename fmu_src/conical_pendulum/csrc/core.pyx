@@ -112,6 +112,8 @@ def rhs(x_in, p_in):
     cdef double[::1] dx = out
     cdef cp_model model
     model.p = &p[0]
+    model.pivot_ratio = 1.0
+    model.bad_dof = -1
     cdef int status
     with nogil:
         status = cp_rhs(&model, &x[0], &dx[0])
@@ -162,6 +164,8 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     cdef double[::1] work = np.zeros(CP_WORK_SIZE(CP_NSTATE))
     cdef cp_model model
     model.p = &p[0]
+    model.pivot_ratio = 1.0
+    model.bad_dof = -1
     cdef cp_system system
     system.dim = CP_NSTATE
     system.rhs = cp_rhs
@@ -186,6 +190,8 @@ def rhs_seconds(x_in, p_in, long calls):
     cdef double dx[256]
     cdef cp_model model
     model.p = &p[0]
+    model.pivot_ratio = 1.0
+    model.bad_dof = -1
     cdef timespec start, stop
     cdef long i
     with nogil:

@@ -8,6 +8,7 @@ static int lu_solve(double *M, double *F, cp_model *model)
 {
     const int n = CP_NDOF;
     double largest = 0.0, smallest = INFINITY;
+    int weakest = 0;
     for (int k = 0; k < n; k++) {
         int pivot = k;
         for (int i = k + 1; i < n; i++)
@@ -26,7 +27,7 @@ static int lu_solve(double *M, double *F, cp_model *model)
         if (d > largest) largest = d;
         if (d < smallest) {
             smallest = d;
-            model->bad_dof = k;
+            weakest = k;
         }
         if (d == 0.0) break;
         for (int i = k + 1; i < n; i++) {
@@ -36,8 +37,12 @@ static int lu_solve(double *M, double *F, cp_model *model)
             F[i] -= factor * F[k];
         }
     }
-    model->pivot_ratio = largest > 0 ? smallest / largest : 0.0;
-    if (!(model->pivot_ratio >= CP_SINGULAR_RATIO)) return CP_SINGULAR;
+    double ratio = largest > 0 ? smallest / largest : 0.0;
+    if (!(ratio >= model->pivot_ratio)) {
+        model->pivot_ratio = ratio;
+        model->bad_dof = weakest;
+    }
+    if (!(ratio >= CP_SINGULAR_RATIO)) return CP_SINGULAR;
     for (int k = n - 1; k >= 0; k--) {
         double s = F[k];
         for (int j = k + 1; j < n; j++) s -= M[k * n + j] * F[j];

@@ -11,8 +11,10 @@ enum { CP_SINGULAR = 10, CP_NONFINITE = 11 };
 
 typedef struct {
     const double *p;       /* parameters, in the order of the scene's parameter names */
-    double pivot_ratio;    /* of the last factorization: a cheap inverse condition estimate */
-    int bad_dof;           /* generalized speed (column of M) where the last failure showed */
+    double pivot_ratio;    /* smallest over largest |pivot| of the LUs since the caller set it
+                              to 1: a cheap inverse condition estimate */
+    int bad_dof;           /* generalized speed (column of M) of that smallest pivot, or of a
+                              non-finite acceleration */
 } cp_model;
 
 /* x = (alpha, beta, omega, delta); dx = (omega, delta, M^-1 F). ctx is a cp_model. */

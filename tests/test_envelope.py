@@ -1,0 +1,162 @@
+"""The envelope: extreme motion, parameters, steps and loads, through fmpy against the native
+reference. Each case either matches the reference or ends in a discarded step with a
+message that says what happened; never NaN reported as success."""
+import math
+import os
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+
+from conical_pendulum import Link, Scene
+from conical_pendulum.check import run_fmu
+from conical_pendulum.fmu import build_fmu
+from conical_pendulum.simulate import simulate
+from fmu_helpers import Instance
+
+SEED = Scene.uniform(3)
+TIGHT = {"solver": 2, "rtol": 1e-11, "atol": 1e-11}
+DEG = math.pi / 180
+
+
+def scaled_link_mass(i, factor):
+    """Link i's mass and inertias scaled together (a lighter or heavier cylinder)."""
+    ixx, iyy, izz = Link().inertia()
+    return {f"M{i}": 10.0 * factor, f"Ixx{i}": ixx * factor, f"Iyy{i}": iyy * factor,
+            f"Izz{i}": izz * factor}
+
+
+CASES = {
+    "angles +-170 deg": {"alpha0": 170 * DEG, "alpha1": -170 * DEG, "beta2": 170 * DEG},
+    "whipping chain": {"omega2": 30.0, "delta1": -20.0, "omega0": 5.0},
+    "upside down": {"alpha0": math.pi, "beta0": 1e-3, "alpha1": 0.0, "beta1": 0.0},
+    "thin links": {f"Iyy{i}": 10.0 * 1e-4**2 for i in range(3)},
+    "mass ratio 1e6": {"m0": 5e6, **scaled_link_mass(0, 1e6)},
+    "mass ratio 1e-6": {"m2": 5e-6, **scaled_link_mass(2, 1e-6)},
+    "lengths 1e-3 m": {**{f"l{i}": 1e-3 for i in range(3)},
+                       **{f"Ixx{i}": 10 * (3 * 0.25 + 1e-6) / 12 for i in range(3)}},
+    "lengths 1e3 m": {f"l{i}": 1e3 for i in range(3)},
+    "g = 0, spinning": {"g": 0.0, "omega0": 1.0, "delta1": -2.0, "omega2": 0.5},
+    "g = 1e4": {"g": 1e4},
+}
+
+
+@pytest.mark.parametrize("case", CASES, ids=list(CASES))
+def test_extreme_cases_match_the_native_reference(seed_fmu, case):
+    start = CASES[case]
+    result = run_fmu(seed_fmu, stop_time=2.0, output_interval=0.05, start_values={**TIGHT, **start})
+    assert result["time"][-1] == pytest.approx(2.0)
+    params = {k: v for k, v in start.items() if k in SEED.parameter_names()}
+    state = {k: v for k, v in start.items() if k in SEED.state_names()}
+    native = simulate(SEED, result["time"], parameters=params, state=state, rtol=1e-13, atol=1e-13)
+    for name in SEED.state_names() + ["energy"]:
+        assert np.all(np.isfinite(result[name])), name
+    angles = max(np.abs(result[n] - native[n]).max() for n in SEED.state_names()[:6])
+    assert angles < 1e-6
+    energy = native["energy"]
+    scale = max(np.abs(energy).max(), 1e-300)
+    assert np.abs(result["energy"] - energy).max() <= 1e-6 * scale
+
+
+def test_ten_links(fmu_dir):
+    scene = Scene.uniform(10)
+    path = build_fmu(scene, fmu_dir / "Ten.fmu").path
+    start = {**TIGHT, "alpha4": 0.8, "delta9": 1.0}
+    result = run_fmu(path, stop_time=2.0, output_interval=0.05, start_values=start)
+    native = simulate(scene, result["time"], state={"alpha4": 0.8, "delta9": 1.0},
+                      rtol=1e-13, atol=1e-13)
+    assert max(np.abs(result[n] - native[n]).max() for n in scene.state_names()[:20]) < 1e-6
+
+
+def test_communication_steps_from_1e9_to_100_s(seed_fmu):
+    steps = [1e-9, 1e-9, 1e-6, 1e-3, 0.1, 1.0, 10.0, 100.0, 0.25, 3e-7]
+    fmu = Instance(seed_fmu, start_values={"rtol": 1e-10, "atol": 1e-10})
+    times, states = [0.0], [fmu.get(*SEED.state_names())]
+    for dt in steps:
+        fmu.step(dt)
+        times.append(fmu.time)
+        states.append(fmu.get(*SEED.state_names()))
+    fmu.close()
+    native = simulate(SEED, times, rtol=1e-13, atol=1e-13)
+    for k, t in enumerate(times):
+        # errors grow with the 111 s simulated: 1e-10 per unit time is the tolerance asked
+        np.testing.assert_allclose(states[k][:6], native.states[k, :6], rtol=0,
+                                   atol=1e-10 * max(t, 1.0) * 100, err_msg=f"t = {t}")
+
+
+def test_a_tolerance_time_cannot_resolve_is_discarded_with_a_message(seed_fmu):
+    fmu = Instance(seed_fmu, start_values={"rtol": 1e-15, "atol": 1e-300}, initialize=False)
+    fmu.fmu.setupExperiment(startTime=1e15)
+    fmu.fmu.enterInitializationMode()
+    fmu.fmu.exitInitializationMode()
+    fmu.time = 1e15
+    before = fmu.get(*SEED.state_names())
+    with pytest.raises(FMICallException) as failure:
+        fmu.step(1.0)
+    assert failure.value.status == 2
+    assert any("step size underflow" in text and "loosen them" in text for _, text in fmu.messages)
+    assert fmu.get(*SEED.state_names()) == before
+    fmu.close()
+
+
+def test_a_step_never_hangs(seed_fmu):
+    """max_steps bounds each doStep: a year in one step is refused quickly, not computed."""
+    fmu = Instance(seed_fmu, start_values={"max_steps": 1000})
+    with pytest.raises(FMICallException) as failure:
+        fmu.step(3.15e7)
+    assert failure.value.status == 2
+    assert fmu.get("n_rhs")[0] < 1000 * 12 + 20
+    fmu.close()
+
+
+def test_approaching_the_joint_singularity(fmu_dir):
+    """A massless link with a bob near its parent's x axis: fine up to the singular point."""
+    scene = Scene(links=(Link(), Link(has_mass=False)))
+    path = build_fmu(scene, fmu_dir / "Singular.fmu").path
+    for alpha1 in (math.pi / 2 - 1e-3, math.pi / 2 - 1e-6):
+        start = {"alpha1": alpha1, "beta1": 0.3}
+        result = run_fmu(path, stop_time=2.0, output_interval=0.05, start_values={**TIGHT, **start})
+        native = simulate(scene, result["time"], state=start, rtol=1e-13, atol=1e-13)
+        assert np.abs(result["alpha1"] - native["alpha1"]).max() < 1e-6
+        assert np.abs(result["bob1_y"] - native["bob1_y"]).max() < 1e-6
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("solver, settings, bound", [
+    ("rk4", {"solver": 0, "max_step": 0.01}, 1e-6),
+    ("rk45", {"solver": 1, "rtol": 1e-8, "atol": 1e-8}, 1e-5),
+    ("dop853", {"solver": 2, "rtol": 1e-8, "atol": 1e-8}, 1e-6),
+])
+def test_energy_drift_over_1e4_s(seed_fmu, solver, settings, bound):
+    result = run_fmu(seed_fmu, stop_time=1e4, output_interval=1.0, start_values=settings,
+                     output=["energy"])
+    energy = result["energy"]
+    drift = np.abs(energy - energy[0]).max() / abs(energy[0])
+    print(f"{solver}: relative energy drift over 1e4 s = {drift:.2e}")
+    assert drift < bound
+
+
+@pytest.mark.slow
+def test_a_thousand_cycles_in_one_process(seed_fmu, tmp_path):
+    """Instantiate, simulate, free 1000 times: the same numbers every time.
+
+    Memory is printed, not bounded: pythonfmu 0.7 keeps the namespace of every
+    instantiation's re-execution of the slave module (about 50 KiB a cycle here, 9 KiB
+    for a trivial pythonfmu FMU), which no slave code can release.
+    """
+    from fmpy import extract
+
+    unzipped = extract(str(seed_fmu), unzipdir=str(tmp_path / "fmu"))
+
+    def rss_mib():
+        with open(f"/proc/{os.getpid()}/status") as status:
+            return next(int(line.split()[1]) for line in status if line.startswith("VmRSS")) / 1024
+
+    def cycle():
+        return run_fmu(unzipped, stop_time=0.2, output_interval=0.05)["bob2_x"][-1]
+
+    first = cycle()
+    baseline = rss_mib()
+    results = {cycle() for _ in range(1000)}
+    print(f"RSS growth over 1000 cycles: {rss_mib() - baseline:.1f} MiB")
+    assert results == {first}
