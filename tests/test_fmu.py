@@ -257,3 +257,15 @@ def test_radau_fallback_matches_native(seed_fmu):
     for name in Scene.uniform(3).state_names():
         assert np.abs(result[name] - native[name]).max() < 1e-7, name
     assert result["n_rhs"][-1] > 0 and result["n_steps"][-1] > 0
+
+
+@pytest.mark.parametrize("name, setter, value", [("l0", "setInteger", 3), ("solver", "setReal", 1.0)])
+def test_wrong_types_are_refused_and_named(seed_fmu, name, setter, value):
+    fmu = Instance(seed_fmu, initialize=False)
+    with pytest.raises(FMICallException):
+        getattr(fmu.fmu, setter)([fmu.vr[name]], [value])
+    kind = "an Integer" if setter == "setInteger" else "a Real"
+    assert any(f"value reference {fmu.vr[name]} is not {kind} variable" in text
+               for status, text in fmu.messages if status == 3)
+    fmu.close(after_fatal=True)
+    gc.collect()

@@ -61,11 +61,17 @@ def _fmi_call(method):
     def call(self, *args):
         try:
             return method(self, *args)
-        except BaseException:
+        except BaseException as exc:
+            if not isinstance(exc, Refused):  # refusals are logged where they are made
+                self.log(f"{method.__name__}: {exc}", Fmi2Status.error)
             for obj in (self, type(self), self.log_queue):
                 ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
             raise
     return call
+
+
+class Refused(ValueError):
+    """An input the slave refuses; its message went to the FMI logger already."""
 
 
 class ConicalPendulum(Fmi2Slave):
@@ -268,7 +274,7 @@ class ConicalPendulum(Fmi2Slave):
     def _fail(self, message):
         """Report a bad input through the FMI logger and stop the call (pythonfmu: fmi2Fatal)."""
         self.log(message, Fmi2Status.error)
-        raise ValueError(message)
+        raise Refused(message)
 
     def _fail_unless_valid(self, name, value):
         try:
