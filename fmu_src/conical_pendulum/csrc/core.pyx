@@ -88,6 +88,17 @@ def check_value(str name, value):
     return value
 
 
+cdef void _system(cp_system *system, cp_model *model, const double *p, cp_stats *stats) noexcept nogil:
+    """The model's right-hand side as a solver's system, with fresh diagnostics and counters."""
+    model.p = p
+    model.pivot_ratio = 1.0
+    model.bad_dof = -1
+    system.dim = CP_NSTATE
+    system.rhs = cp_rhs
+    system.ctx = model
+    stats.nfev = stats.naccept = stats.nreject = 0
+
+
 cdef void _check(const double[::1] a, int size, str what) except *:
     if a.shape[0] != size:
         raise ValueError(f"{what}: expected {size} values, got {a.shape[0]}")
@@ -163,15 +174,9 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     cdef double[:, ::1] out = result
     cdef double[::1] work = np.zeros(CP_WORK_SIZE(CP_NSTATE))
     cdef cp_model model
-    model.p = &p[0]
-    model.pivot_ratio = 1.0
-    model.bad_dof = -1
     cdef cp_system system
-    system.dim = CP_NSTATE
-    system.rhs = cp_rhs
-    system.ctx = &model
     cdef cp_stats stats
-    stats.nfev = stats.naccept = stats.nreject = 0
+    _system(&system, &model, &p[0], &stats)
     cdef int status
     with nogil:
         status = cp_dop853_grid(&system, &times[0], times.shape[0], &out[0, 0], rtol, atol,
@@ -269,15 +274,9 @@ cdef class Stepper:
              long max_steps):
         """Advance by dt; returns a status code (0: ok; see STATUS)."""
         cdef cp_model model
-        model.p = &self._params[0]
-        model.bad_dof = -1
-        model.pivot_ratio = 1.0
         cdef cp_system system
-        system.dim = CP_NSTATE
-        system.rhs = cp_rhs
-        system.ctx = &model
         cdef cp_stats stats
-        stats.nfev = stats.naccept = stats.nreject = 0
+        _system(&system, &model, &self._params[0], &stats)
         cdef int status
         with nogil:
             status = cp_integrate(method, &system, t, &self._values[0], dt, rtol, atol, max_step,
