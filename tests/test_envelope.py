@@ -165,3 +165,28 @@ def test_a_thousand_cycles_in_one_process(seed_fmu, tmp_path):
     assert results == {first}
     assert growth < 5.0
     assert len(sys.path) == path_entries
+
+
+@pytest.mark.parametrize("radius, outcome", [(0.5, "matches"), (1e-3, "matches"), (1e-9, "singular")])
+def test_a_massive_link_on_its_parents_x_axis(fmu_dir, radius, outcome):
+    """On the joint singularity a link's beta turns it about its own axis: only Iyy = M r^2
+    resists, so the mass matrix is regular for a real cylinder and singular as r -> 0."""
+    scene = Scene.uniform(2)
+    path = build_fmu(scene, fmu_dir / "Two.fmu").path
+    start = {"alpha1": math.pi / 2, "beta1": 0.0, "omega0": 0.3, "Iyy1": 10.0 * radius**2}
+    if outcome == "matches":
+        result = run_fmu(path, stop_time=2.0, output_interval=0.05, start_values={**TIGHT, **start})
+        native = simulate(scene, result["time"], parameters={"Iyy1": start["Iyy1"]},
+                          state={k: v for k, v in start.items() if k != "Iyy1"},
+                          rtol=1e-13, atol=1e-13)
+        assert np.abs(result["alpha1"] - native["alpha1"]).max() < 1e-6
+        assert result["alpha1"][-1] != pytest.approx(math.pi / 2)  # it moved off the axis
+        return
+    fmu = Instance(path, start_values=start)
+    with pytest.raises(FMICallException) as failure:
+        fmu.step(0.05)
+    assert failure.value.status == 2
+    text = " ".join(t for _, t in fmu.messages)
+    assert "singular mass matrix" in text and "link 1" in text and "too little inertia" in text
+    assert fmu.get("alpha1") == [math.pi / 2]
+    fmu.close()
