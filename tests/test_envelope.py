@@ -190,3 +190,17 @@ def test_a_massive_link_on_its_parents_x_axis(fmu_dir, radius, outcome):
     assert "singular mass matrix" in text and "link 1" in text and "too little inertia" in text
     assert fmu.get("alpha1") == [math.pi / 2]
     fmu.close()
+
+
+@pytest.mark.parametrize("dt", [-0.1, float("inf"), float("nan")])
+def test_an_invalid_communication_step_is_discarded(seed_fmu, dt):
+    fmu = Instance(seed_fmu)
+    before = fmu.get(*SEED.state_names())
+    with pytest.raises(FMICallException) as failure:
+        fmu.step(dt)
+    assert failure.value.status == 2
+    assert any("invalid communication step" in text for _, text in fmu.messages)
+    assert fmu.get(*SEED.state_names()) == before
+    fmu.time = 0.0
+    fmu.step(0.1)
+    fmu.close()

@@ -22,7 +22,7 @@ from .scene import Scene
 HERE = Path(__file__).parent
 TEMPLATE = HERE / "slave_template.py"
 MODEL_NAME = "ConicalPendulum"
-DEFAULT_SETTINGS = {"rtol": 1e-8, "atol": 1e-8, "max_step": 0.0, "solver": 2, "max_steps": 100_000}
+DEFAULT_SETTINGS = {"rtol": 1e-8, "atol": 1e-8, "max_step": 0.0, "solver": 1, "max_steps": 100_000}
 
 
 @dataclass
@@ -31,6 +31,21 @@ class FmuBuild:
     core: CoreBuild
     module_name: str
     seconds: float
+
+
+# The module pythonfmu loads. pythonfmu 0.7 compiles and executes it again at every
+# instantiation to find the slave class (findClass), with the module's dict as globals and
+# a fresh dict as locals; it never releases the classes it finds in those locals, and it
+# releases the module's dict once without having taken a reference. So it stays tiny
+# (compiled per instance), defines the class only at import, and later only names it and
+# gives the dict its reference back.
+ENTRY = '''"""{model}: FMI 2.0 co-simulation FMU entry point (the slave is {implementation})."""
+if "{model}" in globals():
+    {model} = globals()["{model}"]
+    __import__("ctypes").pythonapi.Py_IncRef(__import__("ctypes").py_object(globals()))
+else:
+    from {implementation} import {model}
+'''
 
 
 def render_slave(scene: Scene, core: CoreBuild, settings: dict) -> tuple[str, str]:
@@ -49,7 +64,7 @@ def render_slave(scene: Scene, core: CoreBuild, settings: dict) -> tuple[str, st
     block = "".join(f"{name} = {value!r}\n" for name, value in values.items())
     source = template[:start] + "# --- rendered by conical_pendulum.fmu ---\n" + block + template[end:]
     digest = hashlib.sha256(source.encode()).hexdigest()[:16]
-    return f"conical_pendulum_{digest}", source
+    return f"cp_slave_{digest}", source
 
 
 def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.fmu",
@@ -65,23 +80,26 @@ def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.f
         raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(DEFAULT_SETTINGS)}")
     core = build_core(scene, cache)
     settings = {**DEFAULT_SETTINGS, **(settings or {})}
-    module_name, source = render_slave(scene, core, settings)
+    slave_name, source = render_slave(scene, core, settings)
+    module_name = slave_name.replace("cp_slave_", "conical_pendulum_")
     output.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_fmu_") as tmp:
         tmp = Path(tmp)
         script = tmp / "src" / f"{module_name}.py"
         script.parent.mkdir()
-        script.write_text(source)
+        script.write_text(ENTRY.format(model=MODEL_NAME, implementation=slave_name))
+        slave = script.parent / f"{slave_name}.py"
+        slave.write_text(source)
         staged = tmp / f"{MODEL_NAME}.fmu"
         saved_path, saved_modules = list(sys.path), set(sys.modules)
         try:
-            FmuBuilder.build_FMU(script, dest=staged, project_files=[core.library],
+            FmuBuilder.build_FMU(script, dest=staged, project_files=[slave, core.library],
                                  canHandleVariableCommunicationStepSize=True,
                                  canGetAndSetFMUstate=True, canSerializeFMUstate=True)
         finally:  # pythonfmu leaves its import of the slave behind
             sys.path[:] = saved_path
             for name in set(sys.modules) - saved_modules:
-                if name == module_name:
+                if name in (module_name, slave_name):
                     del sys.modules[name]
         starts = {**dict(zip(scene.parameter_names(), scene.parameter_defaults())),
                   **dict(zip(scene.state_names(), scene.state_defaults())), **settings}

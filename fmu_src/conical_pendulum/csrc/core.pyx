@@ -37,6 +37,9 @@ cdef extern from "dynamics.h":
     void cp_mass_forcing(const double *x, const double *p, double *M, double *F) noexcept nogil
     void cp_outputs(const double *x, const double *p, double *y) noexcept nogil
 
+cdef extern from "<math.h>" nogil:
+    double INFINITY
+
 cdef extern from "<time.h>" nogil:
     cdef struct timespec:
         long tv_sec
@@ -53,10 +56,12 @@ STATE_NAMES = tuple(CP_STATE_NAMES.decode().split())
 PARAMETER_NAMES = tuple(CP_PARAMETER_NAMES.decode().split())
 OUTPUT_NAMES = tuple(CP_OUTPUT_NAMES.decode().split())
 TOO_MANY_STEPS, STEP_UNDERFLOW = CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW
+BAD_STEP = 3  # a communication step that is negative or not finite
 SINGULAR, NONFINITE = CP_SINGULAR, CP_NONFINITE
 METHODS = {"rk4": CP_RK4, "rk45": CP_RK45, "dop853": CP_DOP853}
 STATUS = {CP_OK: "ok", CP_TOO_MANY_STEPS: "too many steps", CP_STEP_UNDERFLOW: "step size underflow",
-          CP_SINGULAR: "singular mass matrix", CP_NONFINITE: "non-finite acceleration"}
+          CP_SINGULAR: "singular mass matrix", CP_NONFINITE: "non-finite acceleration",
+          BAD_STEP: "invalid communication step"}
 
 
 class CoreError(RuntimeError):
@@ -221,6 +226,9 @@ cdef class Stepper:
     cdef public object values, params, stats
     cdef double[::1] _values, _params, _stats, _work
     cdef int _fsal
+    cdef int _method
+    cdef double _rtol, _atol, _max_step
+    cdef long _max_steps
     cdef public double h
     cdef public int bad_dof
     cdef public double pivot_ratio
@@ -269,6 +277,18 @@ cdef class Stepper:
         if CP_NOUTPUT:
             with nogil:
                 cp_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
+
+    def configure(self, int method, double rtol, double atol, double max_step, long max_steps):
+        """Fix the solver settings that advance() uses."""
+        self._method, self._rtol, self._atol = method, rtol, atol
+        self._max_step, self._max_steps = max_step, max_steps
+
+    def advance(self, double t, double dt):
+        """step() with the configured settings: the FMU's doStep, in one call."""
+        if not (dt >= 0 and dt < INFINITY):
+            return BAD_STEP
+        return self.step(self._method, t, dt, self._rtol, self._atol, self._max_step,
+                         self._max_steps)
 
     def step(self, int method, double t, double dt, double rtol, double atol, double max_step,
              long max_steps):
