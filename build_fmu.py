@@ -2,6 +2,7 @@
 
     python build_fmu.py                       # the seed scene: 3 links with bobs
     python build_fmu.py --links 5 --no-bobs --output dist/Chain5.fmu
+    python build_fmu.py --scene scenes/seed.toml
 """
 from __future__ import annotations
 
@@ -11,15 +12,16 @@ import time
 from pathlib import Path
 
 from conical_pendulum import Scene, SceneError
-from conical_pendulum.scene import KINEMATICS, MAX_LINKS
+from conical_pendulum.scene import KINEMATICS, MAX_LINKS, load_scene
 
 
 def parse(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--links", type=int, default=3, help=f"number of links, 1 to {MAX_LINKS} (3)")
+    parser.add_argument("--scene", type=Path, help="a scene file (TOML or JSON, see scenes/seed.toml)")
+    parser.add_argument("--links", type=int, help=f"number of links, 1 to {MAX_LINKS} (3)")
     parser.add_argument("--massless-links", action="store_true", help="links without mass or inertia")
     parser.add_argument("--no-bobs", action="store_true", help="no bobs at the joints")
-    parser.add_argument("--kinematics", choices=KINEMATICS, default="consistent",
+    parser.add_argument("--kinematics", choices=KINEMATICS,
                         help="'pydy-example' reproduces the published (energy-violating) equations")
     parser.add_argument("--output", type=Path, default=Path("dist/ConicalPendulum.fmu"))
     parser.add_argument("--no-check", action="store_true",
@@ -27,11 +29,24 @@ def parse(argv=None):
     return parser.parse_args(argv)
 
 
+def choose_scene(args) -> Scene:
+    options = [name for name, given in [("--links", args.links is not None),
+                                        ("--massless-links", args.massless_links),
+                                        ("--no-bobs", args.no_bobs),
+                                        ("--kinematics", args.kinematics is not None)] if given]
+    if args.scene:
+        if options:
+            raise SceneError(f"--scene describes the whole scene; drop {', '.join(options)}")
+        return load_scene(args.scene)
+    return Scene.uniform(3 if args.links is None else args.links,
+                         massless_links=args.massless_links, bobs=not args.no_bobs,
+                         kinematics=args.kinematics or "consistent")
+
+
 def main(argv=None) -> int:
     args = parse(argv)
     try:
-        scene = Scene.uniform(args.links, massless_links=args.massless_links,
-                              bobs=not args.no_bobs, kinematics=args.kinematics)
+        scene = choose_scene(args)
     except SceneError as exc:
         print(f"build_fmu.py: {exc}", file=sys.stderr)
         return 2

@@ -29,6 +29,9 @@ def test_builds_the_requested_scene(tmp_path):
     (["--links", "6", "--kinematics", "pydy-example"], "only reproduced up to 4 links"),
     (["--output", "dist/model.zip"], "must end in .fmu"),
     (["--frobnicate"], "unrecognized arguments: --frobnicate"),
+    (["--scene", str(ROOT / "scenes" / "seed.toml"), "--links", "2"],
+     "--scene describes the whole scene; drop --links"),
+    (["--scene", "missing.toml"], "scene file 'missing.toml': No such file or directory"),
 ])
 def test_refuses_what_it_cannot_build(tmp_path, args, message):
     run = build(*args, "--no-check", cwd=tmp_path)

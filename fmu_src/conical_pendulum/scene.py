@@ -10,7 +10,9 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import tomllib
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
 KINEMATICS = ("consistent", "pydy-example")
 OUTPUT_GROUPS = ("bobs", "poses", "energy")
@@ -33,9 +35,13 @@ class Link:
     mass: float = 10.0
     radius: float = 0.5
     bob_mass: float = 5.0
+    bob_radius: float = 1.0
+    moments: tuple[float, float, float] | None = None  # (Ixx, Iyy, Izz); None: a cylinder's
 
     def inertia(self) -> tuple[float, float, float]:
-        """Central inertia (Ixx, Iyy, Izz) of a solid cylinder along the link's y axis."""
+        """Central inertia (Ixx, Iyy, Izz): as given, or a solid cylinder along the link's y axis."""
+        if self.moments is not None:
+            return tuple(float(m) for m in self.moments)
         transverse = self.mass * (3.0 * self.radius**2 + self.length**2) / 12.0
         return transverse, self.mass * self.radius**2, transverse
 
@@ -48,6 +54,9 @@ class Scene:
     gravity: float = 9.8
 
     def __post_init__(self):
+        unknown = [g for g in self.outputs if g not in OUTPUT_GROUPS]
+        if unknown:
+            raise SceneError(f"outputs: unknown group(s) {unknown}; choose from {list(OUTPUT_GROUPS)}")
         object.__setattr__(self, "links", tuple(self.links))
         object.__setattr__(self, "outputs", tuple(g for g in OUTPUT_GROUPS if g in self.outputs))
         self.validate()
@@ -77,10 +86,14 @@ class Scene:
                 f"links: {self.n} with kinematics 'pydy-example'; the published derivation is "
                 f"only reproduced up to {MAX_PUBLISHED_LINKS} links (its size grows exponentially)")
         for i, link in enumerate(self.links):
-            for name in ("length", "mass", "radius", "bob_mass"):
+            for name in ("length", "mass", "radius", "bob_mass", "bob_radius"):
                 value = getattr(link, name)
-                if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                if not _positive(value):
                     raise SceneError(f"link {i}: {name} must be a positive finite number, got {value!r}")
+            if link.moments is not None and not (
+                    len(link.moments) == 3 and all(_positive(m) or m == 0 for m in link.moments)):
+                raise SceneError(f"link {i}: inertia must be three finite numbers >= 0 "
+                                 f"(Ixx, Iyy, Izz), got {link.moments!r}")
         if not math.isfinite(self.gravity):
             raise SceneError(f"gravity: must be finite, got {self.gravity!r}")
         # A joint whose angles move no mass has an undetermined acceleration.
@@ -153,6 +166,87 @@ class Scene:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+def _positive(value) -> bool:
+    return (isinstance(value, (int, float)) and not isinstance(value, bool)
+            and math.isfinite(value) and value > 0)
+
+
+def load_scene(path) -> Scene:
+    """A scene from a TOML or JSON file (see scenes/seed.toml for the fields)."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise SceneError(f"scene file {str(path)!r}: {exc.strerror}") from None
+    try:
+        if path.suffix == ".toml":
+            data = tomllib.loads(text)
+        elif path.suffix == ".json":
+            data = json.loads(text)
+        else:
+            raise SceneError(f"scene file {str(path)!r}: expected a .toml or .json file")
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
+        raise SceneError(f"scene file {str(path)!r}: {exc}") from None
+    try:
+        return scene_from_dict(data)
+    except SceneError as exc:
+        raise SceneError(f"scene file {str(path)!r}: {exc}") from None
+
+
+SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs"}
+LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob"}
+BOB_FIELDS = {"mass", "radius"}
+
+
+def scene_from_dict(data: dict) -> Scene:
+    """A scene from the structure of a scene file: [[link]] tables and scene-wide fields."""
+    _known(data, SCENE_FIELDS, "scene")
+    links = data.get("link")
+    if not isinstance(links, list) or not links:
+        raise SceneError("link: give one [[link]] table per link, top to bottom")
+    made = []
+    for i, entry in enumerate(links):
+        where = f"link[{i}]"
+        if not isinstance(entry, dict):
+            raise SceneError(f"{where}: expected a table of fields, got {entry!r}")
+        _known(entry, LINK_FIELDS, where)
+        mass = entry.get("mass", 10.0)
+        bob = entry.get("bob")
+        if bob is not None and not isinstance(bob, dict):
+            raise SceneError(f"{where}.bob: expected a table {{ mass = ..., radius = ... }}, got {bob!r}")
+        _known(bob or {}, BOB_FIELDS, f"{where}.bob")
+        fields = {"has_mass": mass != 0, "has_bob": bob is not None,
+                  "length": entry.get("length", 10.0), "mass": mass if mass != 0 else 10.0,
+                  "radius": entry.get("radius", 0.5)}
+        if bob is not None:
+            fields.update(bob_mass=bob.get("mass", 5.0), bob_radius=bob.get("radius", 1.0))
+        if "inertia" in entry:
+            fields["moments"] = tuple(entry["inertia"]) if isinstance(entry["inertia"], list) else entry["inertia"]
+        for name in ("length", "mass", "radius", "bob_mass", "bob_radius"):
+            if name in fields and not _positive(fields[name]):
+                label = {"bob_mass": "bob.mass", "bob_radius": "bob.radius"}.get(name, name)
+                raise SceneError(f"{where}.{label}: must be a positive finite number"
+                                 f"{' (or 0 for a massless link)' if name == 'mass' else ''}, "
+                                 f"got {fields[name]!r}")
+        try:
+            made.append(Link(**fields))
+        except TypeError as exc:
+            raise SceneError(f"{where}: {exc}") from None
+    scene_fields = {"links": tuple(made)}
+    for name in ("kinematics", "gravity", "outputs"):
+        if name in data:
+            scene_fields[name] = tuple(data[name]) if name == "outputs" else data[name]
+    if "gravity" in data and not isinstance(data["gravity"], (int, float)):
+        raise SceneError(f"gravity: expected a number, got {data['gravity']!r}")
+    return Scene(**scene_fields)
+
+
+def _known(table: dict, fields: set, where: str) -> None:
+    unknown = sorted(set(table) - fields)
+    if unknown:
+        raise SceneError(f"{where}: unknown field(s) {unknown}; known: {sorted(fields)}")
 
 
 def _merge(names, defaults, overrides, what):
