@@ -36,7 +36,7 @@ def main():
     core = load_core(scene)
     x = np.array(scene.state_defaults()) + np.linspace(0.1, 0.3, 12)
     p = np.array(scene.parameter_defaults())
-    in_c = float(np.median([core.rhs_seconds(x, p, 200000) for _ in range(7)]))
+    in_c = float(np.median([core.seconds_per_call("rhs", x, p, 200000) for _ in range(7)]))
     from_python = per_call(lambda: core.rhs(x, p))
     print(f"compiled core RHS, n = 3, timed in C:           {in_c * 1e6:7.3f} us/call")
     print(f"compiled core RHS called from Python:           {from_python * 1e6:7.3f} us/call")

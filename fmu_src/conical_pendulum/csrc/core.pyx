@@ -193,21 +193,28 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     return result, stats.nfev
 
 
-def rhs_seconds(x_in, p_in, long calls):
-    """Seconds per call of the C right-hand side, timed in a C loop."""
+def seconds_per_call(str what, x_in, p_in, long calls):
+    """Seconds per call of the C right-hand side (what="rhs") or outputs ("outputs"),
+    timed in a C loop."""
     cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
     cdef const double[::1] p = _vector(p_in, CP_NPARAM, "parameters")
-    cdef double dx[256]
+    if what not in ("rhs", "outputs"):
+        raise ValueError(f"what: 'rhs' or 'outputs', not {what!r}")
+    cdef bint outputs = what == "outputs"
+    cdef double out[512]
     cdef cp_model model
-    model.p = &p[0]
-    model.pivot_ratio = 1.0
-    model.bad_dof = -1
+    cdef cp_system system
+    cdef cp_stats stats
+    _system(&system, &model, &p[0], &stats)
     cdef timespec start, stop
     cdef long i
     with nogil:
         clock_gettime(CLOCK_MONOTONIC, &start)
         for i in range(calls):
-            cp_rhs(&model, &x[0], dx)
+            if outputs:
+                cp_outputs(&x[0], &p[0], out)
+            else:
+                cp_rhs(&model, &x[0], out)
         clock_gettime(CLOCK_MONOTONIC, &stop)
     return ((stop.tv_sec - start.tv_sec) + 1e-9 * (stop.tv_nsec - start.tv_nsec)) / calls
 
