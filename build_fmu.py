@@ -25,7 +25,8 @@ def parse(argv=None):
                         help="'pydy-example' reproduces the published (energy-violating) equations")
     parser.add_argument("--output", type=Path, default=Path("dist/ConicalPendulum.fmu"))
     parser.add_argument("--no-check", action="store_true",
-                        help="only build; skip the fmpy run against the native integrator")
+                        help="only build; skip the fmpy run against the native integrator, "
+                             "its plot and its animation")
     return parser.parse_args(argv)
 
 
@@ -73,7 +74,23 @@ def main(argv=None) -> int:
     print(comparison.report())
     ok = comparison.angle_error() < 1e-8
     print(f"angles agree to {comparison.angle_error():.2e} rad: {'OK' if ok else 'FAILED'}")
+    show(comparison.result, args.output.parent)
     return 0 if ok else 1
+
+
+def show(result, folder: Path) -> None:
+    """The run as CSV, a plot and an animation, next to the FMU."""
+    from fmpy.util import write_csv
+
+    from conical_pendulum import show as viz
+
+    csv = folder / "results.csv"
+    write_csv(str(csv), result)
+    results = viz.load_results(csv)
+    viz.plot(results, folder / "pendulum.png")
+    seconds = viz.animate(results, folder / "pendulum.gif")
+    print(f"wrote {csv}, {folder / 'pendulum.png'} and {folder / 'pendulum.gif'} "
+          f"(animation rendered in {seconds:.1f} s)")
 
 
 if __name__ == "__main__":

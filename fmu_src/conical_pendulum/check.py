@@ -14,6 +14,7 @@ class Comparison:
     names: list[str]
     max_abs_diff: np.ndarray
     fmu_seconds: float
+    result: np.ndarray  # the FMU's run, as fmpy returns it
 
     def worst(self, prefix: str = "") -> float:
         picked = [d for n, d in zip(self.names, self.max_abs_diff) if n.startswith(prefix)]
@@ -52,4 +53,4 @@ def compare(fmu_path, scene: Scene, *, stop_time=10.0, output_interval=1.0 / 60.
                       rtol=min(rtol, 1e-12), atol=min(atol, 1e-12))
     names = scene.state_names() + scene.output_names()
     diffs = np.array([np.abs(result[name] - native[name]).max() for name in names])
-    return Comparison(names, diffs, seconds)
+    return Comparison(names, diffs, seconds, result)

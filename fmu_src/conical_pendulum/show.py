@@ -1,0 +1,151 @@
+"""Plots and an animation of simulation results, with matplotlib.
+
+    python -m conical_pendulum.show dist/results.csv --plot dist/pendulum.png --gif dist/pendulum.gif
+
+The CSV is fmpy's (`fmpy.util.write_csv`): a `time` column and one per variable. Links
+are drawn from their mass-centre positions (`link<i>_x/y/z`, the midpoint of each link),
+or from the bob positions when the scene has a bob on every link.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def load_results(path) -> dict[str, np.ndarray]:
+    """Columns of an fmpy results CSV by name."""
+    path = Path(path)
+    try:
+        data = np.genfromtxt(path, delimiter=",", names=True, deletechars="")
+    except OSError as exc:
+        raise SystemExit(f"show: {path}: {exc.strerror or exc}") from None
+    if data.dtype.names is None or "time" not in data.dtype.names:
+        raise SystemExit(f"show: {path}: expected fmpy's CSV with a 'time' column")
+    return {name.strip('"'): np.atleast_1d(data[name]) for name in data.dtype.names}
+
+
+def joints(results: dict) -> np.ndarray:
+    """Joint positions (time, joint, xyz) from the pivot down, in plot axes (x, z, y up)."""
+    n = sum(1 for name in results if name.startswith("alpha"))
+    count = len(results["time"])
+    points = np.zeros((count, n + 1, 3))
+    if all(f"link{i}_x" in results for i in range(n)):
+        for i in range(n):
+            centre = np.column_stack([results[f"link{i}_{c}"] for c in "xyz"])
+            points[:, i + 1] = 2 * centre - points[:, i]
+    elif all(f"bob{i}_x" in results for i in range(n)):
+        for i in range(n):
+            points[:, i + 1] = np.column_stack([results[f"bob{i}_{c}"] for c in "xyz"])
+    else:
+        raise SystemExit("show: the results need link poses (link<i>_x/y/z) or a bob on every "
+                         "link (bob<i>_x/y/z); build the FMU with those outputs")
+    return points[:, :, [0, 2, 1]]  # inertial Y is up: draw it as the plot's z
+
+
+def plot(results: dict, path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = results["time"]
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    for name in sorted(k for k in results if k.rstrip("0123456789") in ("alpha", "beta")):
+        axes[0].plot(t, np.degrees(results[name]), label=name)
+    axes[0].set(xlabel="time [s]", ylabel="angle [deg]", title="joint angles")
+    axes[0].legend(fontsize=7, ncol=2)
+    points = joints(results)
+    for i in range(1, points.shape[1]):
+        axes[1].plot(points[:, i, 0], points[:, i, 1], label=f"end of link {i - 1}")
+    axes[1].set(xlabel="x [m]", ylabel="z [m]", title="paths seen from above")
+    axes[1].set_aspect("equal", adjustable="datalim")
+    axes[1].legend(fontsize=7)
+    if "energy" in results:
+        energy = results["energy"]
+        axes[2].plot(t, (energy - energy[0]) / abs(energy[0]))
+        axes[2].set(xlabel="time [s]", ylabel="(E - E0) / |E0|", title="energy drift")
+    else:
+        axes[2].set_axis_off()
+        axes[2].text(0.5, 0.5, "no energy output", ha="center")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def animate(results: dict, path, fps: float = 30.0, size: float = 5.0) -> float:
+    """A GIF of the chain from above and aside, at about `fps` frames per simulated second.
+
+    Returns the seconds it took; prints a progress bar to stderr.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    start = time.perf_counter()
+    t = results["time"]
+    points = joints(results)
+    duration = t[-1] - t[0]
+    frames = np.unique(np.searchsorted(t, np.arange(t[0], t[-1] + 1e-12, 1.0 / fps)).clip(0, len(t) - 1))
+    reach = np.abs(points).max() * 1.05 or 1.0
+    fig = plt.figure(figsize=(size, size))
+    ax = fig.add_subplot(projection="3d")
+    ax.set(xlim=(-reach, reach), ylim=(-reach, reach), zlim=(-reach, 0.25 * reach),
+           xlabel="x [m]", ylabel="z [m]", zlabel="y (up) [m]")
+    ax.view_init(elev=10, azim=-60)
+    ax.plot([0], [0], [0], "ks", markersize=6)
+    line, = ax.plot([], [], [], "-", color="tab:red", linewidth=3)
+    bobs, = ax.plot([], [], [], "o", color="tab:blue", markersize=8)
+    trail, = ax.plot([], [], [], "-", color="tab:blue", linewidth=0.8, alpha=0.5)
+    label = ax.text2D(0.02, 0.95, "", transform=ax.transAxes)
+
+    def draw(k):
+        p = points[k]
+        line.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
+        bobs.set_data_3d(p[1:, 0], p[1:, 1], p[1:, 2])
+        tail = points[max(0, k - int(len(t) * 2 / max(duration, 1e-9))):k + 1, -1]
+        trail.set_data_3d(tail[:, 0], tail[:, 1], tail[:, 2])
+        label.set_text(f"t = {t[k]:6.2f} s")
+        return line, bobs, trail, label
+
+    def progress(i, total):
+        done = int(30 * (i + 1) / total)
+        if i + 1 == total or done != int(30 * i / total):
+            print(f"\r  rendering {path}: [{'#' * done}{'.' * (30 - done)}] {i + 1}/{total}",
+                  end="", file=sys.stderr, flush=True)
+
+    animation = FuncAnimation(fig, draw, frames=frames, blit=False)
+    animation.save(path, writer=PillowWriter(fps=fps), progress_callback=progress)
+    print(file=sys.stderr)
+    plt.close(fig)
+    return time.perf_counter() - start
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("results", type=Path, help="fmpy results CSV")
+    parser.add_argument("--plot", type=Path, help="PNG of angles, paths from above and energy")
+    parser.add_argument("--gif", type=Path, help="animated GIF of the chain in 3D")
+    parser.add_argument("--fps", type=float, default=30.0, help="frames per simulated second (30)")
+    args = parser.parse_args(argv)
+    if not (args.plot or args.gif):
+        parser.error("give --plot and/or --gif")
+    if not args.fps > 0:
+        parser.error(f"--fps must be positive, got {args.fps}")
+    results = load_results(args.results)
+    if args.plot:
+        plot(results, args.plot)
+        print(f"wrote {args.plot}")
+    if args.gif:
+        seconds = animate(results, args.gif, fps=args.fps)
+        print(f"wrote {args.gif} in {seconds:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
