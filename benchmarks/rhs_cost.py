@@ -12,7 +12,6 @@ Then the seed scenario (10 s, 601 samples) simulated natively.
 import time
 
 import numpy as np
-from scipy.integrate import odeint
 
 from conical_pendulum import Scene
 from conical_pendulum.compiler import load_core

@@ -33,7 +33,6 @@ from conical_pendulum.fmu import DEFAULT_SETTINGS
 
 RESULTS = Path(__file__).parent / "results"
 STEP = 1.0 / 60.0
-METHOD_CODES = {"rk4": 0, "rk45": 1, "dop853": 2}
 
 
 def scenarios():
@@ -63,7 +62,7 @@ def fmu_solver(core, p, x0, method, rtol, atol, max_step, t_end, sample_every=1)
     steps = round(t_end / STEP)
     rows = [values.copy()]
     for k in range(steps):
-        status = stepper.step(METHOD_CODES[method], k * STEP, STEP, rtol, atol, max_step, 10**7)
+        status = stepper.step(core.METHODS[method], k * STEP, STEP, rtol, atol, max_step, 10**7)
         if status:
             raise RuntimeError(f"{method} failed: {core.STATUS[status]}")
         if (k + 1) % sample_every == 0:

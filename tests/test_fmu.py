@@ -8,7 +8,6 @@ import sys
 import zipfile
 import xml.etree.ElementTree as ET
 
-import fmpy
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException

@@ -7,7 +7,6 @@ from conical_pendulum import Scene
 from conical_pendulum.compiler import load_core
 
 SCENE = Scene.uniform(3)
-METHODS = {"rk4": 0, "rk45": 1, "dop853": 2}
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +33,7 @@ def test_adaptive_pairs_step_as_scipy_does(core, method, scipy_name, tol):
     """Same tableau, error norm and controller: the same steps, to rounding."""
     state = {"alpha0": 1.0, "beta2": -0.8, "omega1": 0.5}
     run, values = stepper(core, state)
-    status = run.step(METHODS[method], 0.0, 10.0, tol, tol, 0.0, 10**7)
+    status = run.step(core.METHODS[method], 0.0, 10.0, tol, tol, 0.0, 10**7)
     assert status == 0
     p = np.array(SCENE.parameters())
     sol = solve_ivp(lambda t, x: core.rhs(x, p), (0.0, 10.0), SCENE.initial_state(state),
@@ -53,7 +52,7 @@ def test_rk4_is_fourth_order(core):
     errors = []
     for max_step in (0.02, 0.01):
         run, values = stepper(core)
-        assert run.step(METHODS["rk4"], 0.0, 2.0, 1.0, 1.0, max_step, 10**7) == 0
+        assert run.step(core.METHODS["rk4"], 0.0, 2.0, 1.0, 1.0, max_step, 10**7) == 0
         assert run.naccept == round(2.0 / max_step)
         errors.append(np.abs(values[:core.NSTATE] - exact).max())
     assert 14 < errors[0] / errors[1] < 18  # 2^4 = 16
@@ -61,10 +60,10 @@ def test_rk4_is_fourth_order(core):
 
 def test_rk4_splits_the_communication_step_evenly(core):
     run, _ = stepper(core)
-    run.step(METHODS["rk4"], 0.0, 0.1, 1.0, 1.0, 0.03, 100)  # ceil(0.1 / 0.03) = 4 steps of 0.025
+    run.step(core.METHODS["rk4"], 0.0, 0.1, 1.0, 1.0, 0.03, 100)  # ceil(0.1 / 0.03) = 4 steps of 0.025
     assert (run.naccept, run.nfev) == (4, 16)
     run, _ = stepper(core)
-    run.step(METHODS["rk4"], 0.0, 0.1, 1.0, 1.0, 0.0, 100)  # no limit: one step
+    run.step(core.METHODS["rk4"], 0.0, 0.1, 1.0, 1.0, 0.0, 100)  # no limit: one step
     assert (run.naccept, run.nfev) == (1, 4)
 
 
@@ -74,28 +73,28 @@ def test_step_size_carries_over_communication_steps(core, method):
     size and the derivative the last step ended with (first same as last)."""
     stages = {"rk45": 6, "dop853": 12}[method]
     run, _ = stepper(core)
-    run.step(METHODS[method], 0.0, 0.5, 1e-8, 1e-8, 0.0, 10**6)
+    run.step(core.METHODS[method], 0.0, 0.5, 1e-8, 1e-8, 0.0, 10**6)
     assert run.nfev == 2 + stages * (run.naccept + run.nreject)  # f(x0) + initial-step probe
     h = run.h
     assert h > 0
     before = (run.nfev, run.naccept, run.nreject)
-    run.step(METHODS[method], 0.5, 0.5, 1e-8, 1e-8, 0.0, 10**6)
+    run.step(core.METHODS[method], 0.5, 0.5, 1e-8, 1e-8, 0.0, 10**6)
     attempts = run.naccept + run.nreject - before[1] - before[2]
     assert run.nfev - before[0] == stages * attempts
     # and the same trajectory as one call over the whole interval, to the tolerance
     whole, values_whole = stepper(core)
-    whole.step(METHODS[method], 0.0, 1.0, 1e-8, 1e-8, 0.0, 10**6)
+    whole.step(core.METHODS[method], 0.0, 1.0, 1e-8, 1e-8, 0.0, 10**6)
     assert abs(run.naccept - whole.naccept) <= 2
 
 
 def test_too_many_steps_and_underflow_are_reported_with_state_kept(core):
     run, values = stepper(core)
     start = values.copy()
-    assert run.step(METHODS["dop853"], 0.0, 10.0, 1e-12, 1e-12, 0.0, 5) == core.TOO_MANY_STEPS
+    assert run.step(core.METHODS["dop853"], 0.0, 10.0, 1e-12, 1e-12, 0.0, 5) == core.TOO_MANY_STEPS
     np.testing.assert_array_equal(values, start)
     run, values = stepper(core)
     # at t = 1e15 time resolves only 0.125 s: no step can meet rtol = 1e-15
-    assert run.step(METHODS["rk45"], 1e15, 1.0, 1e-15, 1e-300, 0.0, 10**6) == core.STEP_UNDERFLOW
+    assert run.step(core.METHODS["rk45"], 1e15, 1.0, 1e-15, 1e-300, 0.0, 10**6) == core.STEP_UNDERFLOW
     np.testing.assert_array_equal(values, start)
 
 
