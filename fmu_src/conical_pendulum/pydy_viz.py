@@ -1,0 +1,65 @@
+"""The seed's own viewer for FMU results: pydy.viz's static page, fed our trajectories.
+
+Builds the scene's frames and points with sympy.physics.mechanics (analysis time, not FMU
+run time), gives each link a cylinder and each bob a sphere as the seed does, and lets
+pydy.viz write its scene description and simulation data (a 4x4 matrix per object per
+step) next to its HTML. Needs pydy (`pip install -e .[test]`).
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .scene import Scene
+
+PREFIX = "conical_pendulum"
+
+
+def write_pydy_page(scene: Scene, results: dict, directory) -> str:
+    """Write pydy.viz's static page for these results; returns its address relative to
+    `directory` (open it through a web server, e.g. `python -m http.server`)."""
+    import sympy.physics.mechanics as me
+    from pydy.viz.scene import Scene as PydyScene
+    from pydy.viz.shapes import Cylinder, Sphere
+    from pydy.viz.visualization_frame import VisualizationFrame
+
+    times = np.asarray(results["time"], dtype=float)
+    steps = np.diff(times)
+    if len(times) < 2 or np.ptp(steps) > 1e-9 * max(times[-1] - times[0], 1.0):
+        raise ValueError("results: pydy.viz needs at least two samples on a uniform time grid")
+    names = scene.state_names()
+    missing = [name for name in names if name not in results]
+    if missing:
+        raise ValueError(f"results: the state {missing} is missing; pydy.viz draws from it")
+    n = scene.n
+    q = me.dynamicsymbols(f"alpha0:{n}") + me.dynamicsymbols(f"beta0:{n}")
+    u = me.dynamicsymbols(f"omega0:{n}") + me.dynamicsymbols(f"delta0:{n}")
+    inertial, pivot = me.ReferenceFrame("I"), me.Point("O")
+    parent, joint, shown = inertial, pivot, []
+    for i, link in enumerate(scene.links):
+        frame = me.ReferenceFrame(f"F{i}")
+        frame.orient(parent, "Space", [q[i], q[n + i], 0], "ZXY")
+        centre = joint.locatenew(f"G{i}", -link.length / 2 * frame.y)
+        end = joint.locatenew(f"P{i}", -link.length * frame.y)
+        shown.append(VisualizationFrame(f"link{i}", frame, centre, Cylinder(
+            name=f"cylinder{i}", radius=link.radius, length=link.length, color="red")))
+        if link.has_bob:
+            shown.append(VisualizationFrame(f"bob{i}", frame, end, Sphere(
+                name=f"sphere{i}", radius=link.bob_radius, color="blue")))
+        parent, joint = frame, end
+    viz = PydyScene(inertial, pivot, *shown)
+    viz.times = times
+    viz.constants = {}
+    viz.states_symbols = q + u
+    viz.states_trajectories = np.column_stack([results[name] for name in names])
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    cwd = os.getcwd()
+    os.chdir(directory)
+    try:
+        viz.create_static_html(overwrite=True, silent=True, prefix=PREFIX)
+    finally:
+        os.chdir(cwd)
+    return f"{viz.pydy_directory}/index.html?load={PREFIX}_scene_desc.json"
