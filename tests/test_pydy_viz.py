@@ -13,11 +13,10 @@ def test_the_page_carries_the_fmu_trajectories(seed_fmu, tmp_path):
     run = run_fmu(seed_fmu, stop_time=1.0, output_interval=1 / 60,
                   start_values={"alpha0": 1.0, "delta2": 2.0})
     results = {name: run[name] for name in run.dtype.names}
-    address = write_pydy_page(Scene.uniform(3), results, tmp_path)
-    page = tmp_path / address.split("?")[0]
-    assert page.exists() and address.endswith(f"?load={PREFIX}_scene_desc.json")
-    description = json.loads((page.parent / f"{PREFIX}_scene_desc.json").read_text())
-    data = json.loads((page.parent / f"{PREFIX}_simulation_data.json").read_text())
+    folder, address = write_pydy_page(Scene.uniform(3), results, tmp_path)
+    assert (folder / "index.html").exists() and address.endswith(f"?load={PREFIX}_scene_desc.json")
+    description = json.loads((folder / f"{PREFIX}_scene_desc.json").read_text())
+    data = json.loads((folder / f"{PREFIX}_simulation_data.json").read_text())
     assert description["timeSteps"] == len(run["time"])
     assert description["timeDelta"] == pytest.approx(1 / 60)
     shapes = {obj["name"]: (obj["type"], key) for key, obj in description["objects"].items()}
@@ -39,9 +38,8 @@ def test_a_scene_without_bobs_draws_only_links(seed_fmu, tmp_path, fmu_dir):
     scene = Scene(links=(Link(has_bob=False), Link(has_bob=False)))
     path = build_fmu(scene, fmu_dir / "NoBobs.fmu").path
     run = run_fmu(path, stop_time=0.2, output_interval=0.05)
-    address = write_pydy_page(scene, {n: run[n] for n in run.dtype.names}, tmp_path)
-    description = json.loads((tmp_path / address.split("?")[0]).parent.joinpath(
-        f"{PREFIX}_scene_desc.json").read_text())
+    folder, _ = write_pydy_page(scene, {n: run[n] for n in run.dtype.names}, tmp_path)
+    description = json.loads((folder / f"{PREFIX}_scene_desc.json").read_text())
     assert sorted(o["name"] for o in description["objects"].values()) == ["link0", "link1"]
 
 
@@ -51,3 +49,59 @@ def test_uneven_times_are_refused(tmp_path):
     results["time"] = np.array([0.0, 0.1, 0.3])
     with pytest.raises(ValueError, match="uniform time grid"):
         write_pydy_page(scene, results, tmp_path)
+
+
+def test_the_page_plays_in_headless_chromium(seed_fmu, tmp_path):
+    """Served on localhost, loaded in Debian's chromium through chromedriver (.ci/run
+    installs both): no JavaScript errors, and the WebGL canvas shows the red link."""
+    import functools
+    import http.server
+    import shutil
+    import threading
+    import time
+
+    from PIL import Image
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    browser, driver_path = shutil.which("chromium"), shutil.which("chromedriver")
+    assert browser and driver_path, "needs Debian's chromium and chromium-driver (see .ci/run)"
+    run = run_fmu(seed_fmu, stop_time=1.0, output_interval=1 / 60, start_values={"alpha0": 1.0})
+    folder, address = write_pydy_page(Scene.uniform(3), {n: run[n] for n in run.dtype.names}, tmp_path)
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(folder))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    options = webdriver.ChromeOptions()
+    options.binary_location = browser
+    for flag in ["--headless=new", "--no-sandbox", "--disable-gpu", "--use-gl=swiftshader",
+                 "--enable-unsafe-swiftshader", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                 "--window-size=1000,800", f"--user-data-dir={tmp_path / 'profile'}"]:
+        options.add_argument(flag)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(driver_path), options=options)
+    try:
+        driver.set_page_load_timeout(30)
+        driver.get(f"http://127.0.0.1:{server.server_address[1]}/{address}")
+        canvas = None
+        for _ in range(50):
+            messages = " ".join(entry["message"] for entry in driver.get_log("browser"))
+            if "Created Time Array" in messages:  # pydy loaded both JSON files
+                canvas = driver.find_element("tag name", "canvas")
+                break
+            time.sleep(0.2)
+        assert canvas is not None, "pydy never loaded the simulation data"
+        shot = tmp_path / "page.png"
+        driver.save_screenshot(str(shot))
+        errors = [entry["message"] for entry in driver.get_log("browser")
+                  if entry["level"] == "SEVERE" and not any(
+                      benign in entry["message"] for benign in ("favicon.ico", "/fonts/"))]
+        box = canvas.rect
+    finally:
+        driver.quit()
+        server.shutdown()
+    assert errors == []
+    pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=int)
+    inside = pixels[int(box["y"]):int(box["y"] + box["height"]), int(box["x"]):int(box["x"] + box["width"])]
+    red = (inside[..., 0] > 150) & (inside[..., 1] < 80) & (inside[..., 2] < 80)
+    assert red.sum() > 500  # the link's cylinder, not a blank canvas

@@ -17,9 +17,12 @@ from .scene import Scene
 PREFIX = "conical_pendulum"
 
 
-def write_pydy_page(scene: Scene, results: dict, directory) -> str:
-    """Write pydy.viz's static page for these results; returns its address relative to
-    `directory` (open it through a web server, e.g. `python -m http.server`)."""
+def write_pydy_page(scene: Scene, results: dict, directory) -> tuple[Path, str]:
+    """Write pydy.viz's static page for these results into directory/pydy-resources.
+
+    Returns that folder and the page's address in it: serve the folder as the web root
+    (pydy's page fetches the simulation data from "/"), e.g. `python -m http.server`
+    there, and open `http://127.0.0.1:8000/<address>`."""
     import sympy.physics.mechanics as me
     from pydy.viz.scene import Scene as PydyScene
     from pydy.viz.shapes import Cylinder, Sphere
@@ -62,4 +65,4 @@ def write_pydy_page(scene: Scene, results: dict, directory) -> str:
         viz.create_static_html(overwrite=True, silent=True, prefix=PREFIX)
     finally:
         os.chdir(cwd)
-    return f"{viz.pydy_directory}/index.html?load={PREFIX}_scene_desc.json"
+    return directory / viz.pydy_directory, f"index.html?load={PREFIX}_scene_desc.json"
