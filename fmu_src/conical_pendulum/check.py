@@ -1,6 +1,7 @@
 """fmpy runs the FMU; the native reference runs the same scene; compare every output."""
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,8 +41,6 @@ def run_fmu(fmu_path, stop_time=10.0, output_interval=1.0 / 60.0, start_values=N
 def compare(fmu_path, scene: Scene, *, stop_time=10.0, output_interval=1.0 / 60.0,
             start_values=None, rtol=1e-12, atol=1e-12) -> Comparison:
     """Run the FMU at the given tolerances and the native DOP853 reference on the same grid."""
-    import time
-
     start_values = dict(start_values or {})
     settings = {"solver": 2, "rtol": rtol, "atol": atol}
     begin = time.perf_counter()

@@ -108,7 +108,6 @@ class ConicalPendulum(Fmi2Slave):
                                      self._reals[stats_vr:self._setting_vr])
         self._stepper.update_outputs()
         self._mode = "instantiated"
-        self._time = 0.0
         self._tolerance = None
         self._register()
 
@@ -143,7 +142,6 @@ class ConicalPendulum(Fmi2Slave):
     @_fmi_call
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._check_alive()
-        self._time = float(start_time)
         if tolerance is not None:
             self._tolerance = self._fail_unless_valid("tolerance (from setupExperiment)", tolerance)
 
@@ -176,7 +174,6 @@ class ConicalPendulum(Fmi2Slave):
         if failure:
             self.log(failure, Fmi2Status.discard)
             return False
-        self._time = current_time + step_size
         return True
 
     @_fmi_call
@@ -263,7 +260,7 @@ class ConicalPendulum(Fmi2Slave):
     @_fmi_call
     def _get_fmu_state(self):
         return {"reals": self._reals.tolist(), "ints": list(self._ints),
-                "solver": self._stepper.memory(), "mode": self._mode, "time": self._time,
+                "solver": self._stepper.memory(), "mode": self._mode,
                 "tolerance": self._tolerance}
 
     @_fmi_call
@@ -272,7 +269,7 @@ class ConicalPendulum(Fmi2Slave):
         self._reals[:] = state["reals"]
         self._ints[:] = state["ints"]
         self._stepper.restore(state["solver"])
-        self._mode, self._time, self._tolerance = state["mode"], state["time"], state["tolerance"]
+        self._mode, self._tolerance = state["mode"], state["tolerance"]
         self._configure()
 
     # --- helpers ----------------------------------------------------------------------
