@@ -11,6 +11,7 @@ from conical_pendulum.simulate import simulate
 
 SEED_TIMES = np.linspace(0.0, 10.0, 601)  # the seed's 10 s at 60 samples per second
 MIXED = Scene(links=(Link(has_mass=False), Link(has_bob=False), Link()))
+COUPLED = Scene.uniform(2, coupling=True)
 
 
 def random_points(scene, count, seed=0):
@@ -18,7 +19,8 @@ def random_points(scene, count, seed=0):
     for _ in range(count):
         x = rng.uniform(-2.0, 2.0, 4 * scene.n)
         p = np.array(scene.parameter_defaults()) * rng.uniform(0.5, 2.0, len(scene.parameter_names()))
-        yield x, p
+        inputs = rng.uniform(-5.0, 5.0, len(scene.input_names()))  # a moving pivot
+        yield x, np.concatenate([p, inputs])
 
 
 def relative_error(a, b):
@@ -26,8 +28,8 @@ def relative_error(a, b):
     return np.abs(a - b).max() / np.abs(b).max()
 
 
-@pytest.mark.parametrize("scene", [Scene.uniform(1), Scene.uniform(2), Scene.uniform(3), MIXED],
-                         ids=["n1", "n2", "n3", "mixed"])
+@pytest.mark.parametrize("scene", [Scene.uniform(1), Scene.uniform(2), Scene.uniform(3), MIXED, COUPLED],
+                         ids=["n1", "n2", "n3", "mixed", "moving-pivot"])
 def test_derivation_equals_sympy_kanes_method(scene):
     eqs = derive(scene)
     mass, forcing, _ = eqs.lambdify()
@@ -39,8 +41,8 @@ def test_derivation_equals_sympy_kanes_method(scene):
         assert relative_error(forcing(x, p), ref_forcing(x, p)) < 1e-12
 
 
-@pytest.mark.parametrize("scene", [Scene.uniform(3), MIXED, Scene.uniform(2, kinematics="pydy-example")],
-                         ids=["n3", "mixed", "pydy-example"])
+@pytest.mark.parametrize("scene", [Scene.uniform(3), MIXED, Scene.uniform(2, kinematics="pydy-example"),
+                                   COUPLED], ids=["n3", "mixed", "pydy-example", "moving-pivot"])
 def test_compiled_core_equals_lambdify(scene):
     eqs = derive(scene)
     mass, forcing, outputs = eqs.lambdify()
@@ -49,8 +51,8 @@ def test_compiled_core_equals_lambdify(scene):
         M, F = core.mass_forcing(x, p)
         assert relative_error(M, mass(x, p)) < 1e-12
         assert relative_error(F, np.ravel(forcing(x, p))) < 1e-12
-        assert relative_error(core.outputs(x, p), outputs(x, p)) < 1e-12
         expected_accel = np.linalg.solve(np.array(mass(x, p), float), np.ravel(forcing(x, p)))
+        assert relative_error(core.outputs(x, p), outputs(x, p, expected_accel)) < 1e-10
         assert relative_error(core.rhs(x, p)[2 * scene.n:], expected_accel) < 1e-10
         np.testing.assert_array_equal(core.rhs(x, p)[:2 * scene.n], x[2 * scene.n:])
 
@@ -142,6 +144,9 @@ def test_every_chain_builds_and_conserves_energy(n, variant):
     (lambda: Scene(links=(Link(length=-1.0),)), "length"),
     (lambda: Scene.uniform(3).parameters({"mass": 1.0}), "unknown parameter 'mass'"),
     (lambda: Scene.uniform(3, massless_links=True).parameters({"M0": 1.0}), "unknown parameter 'M0'"),
+    (lambda: Scene.uniform(3).parameters({"a_pivot_x": 1.0}), "unknown parameter 'a_pivot_x'"),
+    (lambda: Scene.uniform(2, kinematics="pydy-example", coupling=True), "coupling: .* 'consistent'"),
+    (lambda: Scene.uniform(2, coupling="yes"), "coupling: expected true or false, got 'yes'"),
 ])
 def test_bad_scenes_and_values_are_named(make, message):
     with pytest.raises(SceneError, match=message):
@@ -155,9 +160,10 @@ def test_bad_scenes_and_values_are_named(make, message):
     ({"g": float("nan")}, None, "g = nan: must be finite"),
     ({"M0": "heavy"}, None, "M0: expected a number, got 'heavy'"),
     (None, {"alpha0": float("inf")}, "alpha0 = inf: must be finite"),
+    ({"a_pivot_y": float("nan")}, None, "a_pivot_y = nan: must be finite"),
 ])
 def test_bad_values_are_named(parameters, state, message):
-    scene = Scene.uniform(3)
+    scene = Scene.uniform(3, coupling=True)
     core = load_core(scene)
     with pytest.raises(core.BadValue, match=message):
         simulate(scene, [0.0, 1.0], parameters=parameters, state=state, core=core)

@@ -46,7 +46,7 @@ def compare(fmu_path, scene: Scene, *, stop_time=10.0, output_interval=1.0 / 60.
     begin = time.perf_counter()
     result = run_fmu(fmu_path, stop_time, output_interval, {**settings, **start_values})
     seconds = time.perf_counter() - begin
-    params = {k: v for k, v in start_values.items() if k in scene.parameter_names()}
+    params = {k: v for k, v in start_values.items() if k in scene.core_parameter_names()}
     state = {k: v for k, v in start_values.items() if k in scene.state_names()}
     native = simulate(scene, result["time"], parameters=params, state=state, method="DOP853",
                       rtol=min(rtol, 1e-12), atol=min(atol, 1e-12))

@@ -11,6 +11,10 @@ the work O(n^3) and the code small.
 Generalized speeds are the angle rates u = (omega, delta) = (alpha', beta'), the state
 a user sees, so the kinematic equations are q' = u.
 
+With coupling, the pivot accelerates by a_pivot (inputs, inertial components): every
+mass centre's acceleration gains a_pivot. The force on the support is Newton's law for
+the whole chain, sum m (g - a), so it needs u' (the symbols `rates`).
+
 The published model (kinematics="pydy-example") cannot be formed this way: its
 equations are whatever sympy derives from contradictory kinematics, so they come from
 running the seed's own KanesMethod derivation (see kane_reference).
@@ -30,23 +34,27 @@ Vec = sm.Matrix
 
 @dataclass
 class Equations:
-    """M(x, p) u' = F(x, p), with intermediate definitions evaluated in order."""
+    """M(x, p) u' = F(x, p), with intermediate definitions evaluated in order.
+
+    p holds the parameters, then the inputs; outputs may depend on u' (`rates`)."""
 
     scene: Scene
     states: list[sm.Symbol]
     params: list[sm.Symbol]
+    rates: list[sm.Symbol]
     definitions: list[tuple[sm.Symbol, sm.Expr]]
     mass_matrix: sm.Matrix
     forcing: sm.Matrix
     outputs: list[sm.Expr]
 
     def lambdify(self):
-        """Numpy functions (x, p) -> M, F, outputs of these very expressions (for checks)."""
+        """Numpy functions (x, p) -> M, F and (x, p, u') -> outputs of these very
+        expressions (for checks)."""
         cse = lambda exprs: (self.definitions, exprs)  # noqa: E731 - lambdify's hook
         args = [self.states, self.params]
         return (sm.lambdify(args, self.mass_matrix, cse=cse),
                 sm.lambdify(args, self.forcing, cse=cse),
-                sm.lambdify(args, self.outputs, cse=cse))
+                sm.lambdify(args + [self.rates], self.outputs, cse=cse))
 
 
 def joint_kinematics():
@@ -93,9 +101,11 @@ def derive(scene: Scene) -> Equations:
     omega = sm.symbols(f"omega0:{n}")
     delta = sm.symbols(f"delta0:{n}")
     speeds = list(omega) + list(delta)
-    param_symbols = {name: sm.Symbol(name) for name in scene.parameter_names()}
+    param_symbols = {name: sm.Symbol(name) for name in scene.core_parameter_names()}
     P = param_symbols.__getitem__
     g = P("g")
+    rates = sm.symbols(f"domega0:{n}") + sm.symbols(f"ddelta0:{n}")
+    pivot_acc = Vec([P(name) for name in scene.input_names()]) if scene.coupling else None
     zero, unit_x, unit_z = Vec([0, 0, 0]), Vec([1, 0, 0]), Vec([0, 0, 1])
     ja, jb, joint_dcm, joint_jac = joint_kinematics()
     joint_jac_rate = [joint_jac.diff(ja), joint_jac.diff(jb)]
@@ -114,6 +124,7 @@ def derive(scene: Scene) -> Equations:
     mass_terms = [[0] * dim for _ in range(dim)]
     force_terms = [0] * dim
     kinetic, potential = 0, 0
+    support_force = Vec([0, 0, 0])   # sum of m (g - a) over the bodies: force on the support
     bob_positions, poses = [], []
     quat_parent = (1, 0, 0, 0)
 
@@ -161,6 +172,10 @@ def derive(scene: Scene) -> Equations:
             bob_positions.append(bob)
         # Kane: Fr + Fr* = 0 with Fr* = -M u' + (terms at u' = 0).
         for mass, point, partials, vel, acc in bodies:
+            if pivot_acc is not None:
+                acc = acc + pivot_acc
+                full_acc = acc + sum((partials[s] * rates[s] for s in range(dim)), zero)
+                support_force += mass * (Vec([0, -g, 0]) - full_acc)
             for s in range(dim):
                 if partials[s] == zero:
                     continue
@@ -203,10 +218,13 @@ def derive(scene: Scene) -> Equations:
         outputs += [c for centre, quat in poses for c in list(centre) + list(quat)]
     if "energy" in scene.outputs:
         outputs.append(kinetic + potential)
+    if scene.coupling:
+        outputs += list(support_force)
     return Equations(
         scene=scene,
         states=list(alpha) + list(beta) + speeds,
-        params=[param_symbols[name] for name in scene.parameter_names()],
+        params=[param_symbols[name] for name in scene.core_parameter_names()],
+        rates=list(rates),
         definitions=b.definitions,
         mass_matrix=mass_matrix,
         forcing=forcing,

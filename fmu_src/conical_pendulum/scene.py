@@ -16,6 +16,8 @@ from pathlib import Path
 
 KINEMATICS = ("consistent", "pydy-example")
 OUTPUT_GROUPS = ("bobs", "poses", "energy")
+PIVOT_INPUTS = ("a_pivot_x", "a_pivot_y", "a_pivot_z")
+PIVOT_OUTPUTS = ("F_pivot_x", "F_pivot_y", "F_pivot_z")
 MAX_LINKS = 20
 MAX_PUBLISHED_LINKS = 4  # the published derivation grows exponentially with n
 SEED_ANGLE = math.radians(10.0)
@@ -52,6 +54,7 @@ class Scene:
     outputs: tuple[str, ...] = OUTPUT_GROUPS
     kinematics: str = "consistent"
     gravity: float = 9.8
+    coupling: bool = False  # pivot acceleration inputs and pivot force outputs
 
     def __post_init__(self):
         unknown = [g for g in self.outputs if g not in OUTPUT_GROUPS]
@@ -94,6 +97,11 @@ class Scene:
                     len(link.moments) == 3 and all(_positive(m) or m == 0 for m in link.moments)):
                 raise SceneError(f"link {i}: inertia must be three finite numbers >= 0 "
                                  f"(Ixx, Iyy, Izz), got {link.moments!r}")
+        if not isinstance(self.coupling, bool):
+            raise SceneError(f"coupling: expected true or false, got {self.coupling!r}")
+        if self.coupling and self.kinematics != "consistent":
+            raise SceneError("coupling: the pivot's inputs and force need kinematics 'consistent'; "
+                             f"the published {self.kinematics!r} equations have no moving support")
         if not math.isfinite(self.gravity):
             raise SceneError(f"gravity: must be finite, got {self.gravity!r}")
         # A joint whose angles move no mass has an undetermined acceleration.
@@ -108,7 +116,8 @@ class Scene:
     def structure(self) -> dict:
         """What the generated code depends on, and nothing else."""
         return {"links": [[link.has_mass, link.has_bob] for link in self.links],
-                "outputs": list(self.outputs), "kinematics": self.kinematics}
+                "outputs": list(self.outputs), "kinematics": self.kinematics,
+                "coupling": self.coupling}
 
     def key(self, salt: str = "") -> str:
         text = json.dumps(self.structure(), sort_keys=True) + salt
@@ -134,6 +143,14 @@ class Scene:
         values["g"] = self.gravity
         return [float(values[name]) for name in self.parameter_names()]
 
+    def input_names(self) -> list[str]:
+        """Inputs, held constant over a communication step: the pivot's inertial acceleration."""
+        return list(PIVOT_INPUTS) if self.coupling else []
+
+    def core_parameter_names(self) -> list[str]:
+        """What the compiled core reads from its array p: the parameters, then the inputs."""
+        return self.parameter_names() + self.input_names()
+
     def state_names(self) -> list[str]:
         """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order."""
         return [f"{s}{i}" for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)]
@@ -152,13 +169,16 @@ class Scene:
                       for c in ("x", "y", "z", "qw", "qx", "qy", "qz")]
         if "energy" in self.outputs:
             names.append("energy")
+        if self.coupling:
+            names += PIVOT_OUTPUTS
         return names
 
     def parameters(self, overrides: dict | None = None) -> list[float]:
-        """Parameter values in core order: the scene's numbers, some replaced by name.
+        """The core's p: the scene's numbers, then inputs at 0, some replaced by name.
 
         Values are checked where they are used (the compiled core's check_value)."""
-        return _merge(self.parameter_names(), self.parameter_defaults(), overrides, "parameter")
+        defaults = self.parameter_defaults() + [0.0] * len(self.input_names())
+        return _merge(self.core_parameter_names(), defaults, overrides, "parameter")
 
     def initial_state(self, overrides: dict | None = None) -> list[float]:
         """State in core order: the seed's start values, some replaced by name."""
@@ -195,7 +215,7 @@ def load_scene(path) -> Scene:
         raise SceneError(f"scene file {str(path)!r}: {exc}") from None
 
 
-SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs"}
+SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs", "coupling"}
 LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob"}
 BOB_FIELDS = {"mass", "radius"}
 
@@ -235,7 +255,7 @@ def scene_from_dict(data: dict) -> Scene:
         except TypeError as exc:
             raise SceneError(f"{where}: {exc}") from None
     scene_fields = {"links": tuple(made)}
-    for name in ("kinematics", "gravity", "outputs"):
+    for name in ("kinematics", "gravity", "outputs", "coupling"):
         if name in data:
             scene_fields[name] = tuple(data[name]) if name == "outputs" else data[name]
     if "gravity" in data and not isinstance(data["gravity"], (int, float)):

@@ -45,7 +45,7 @@ def simulate(scene: Scene, times, *, parameters: dict | None = None, state: dict
     core = core or load_core(scene)
     times = np.asarray(times, dtype=float)
     p = np.array([core.check_value(name, value) for name, value in
-                  zip(scene.parameter_names(), scene.parameters(parameters))])
+                  zip(scene.core_parameter_names(), scene.parameters(parameters))])
     x0 = np.array([core.check_value(name, value) for name, value in
                    zip(scene.state_names(), scene.initial_state(state))])
     rhs = core.rhs

@@ -24,7 +24,7 @@ cdef extern from "solvers.h":
                      double *h, double *work, int *fsal, cp_stats *stats) noexcept nogil
 
 cdef extern from "dynamics.h":
-    int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NOUTPUT, CP_SINGULAR, CP_NONFINITE
+    int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT, CP_SINGULAR, CP_NONFINITE
     const char *CP_STATE_NAMES
     const char *CP_PARAMETER_NAMES
     const char *CP_OUTPUT_NAMES
@@ -35,7 +35,7 @@ cdef extern from "dynamics.h":
         int bad_dof
     int cp_rhs(void *ctx, const double *x, double *dx) noexcept nogil
     void cp_mass_forcing(const double *x, const double *p, double *M, double *F) noexcept nogil
-    void cp_outputs(const double *x, const double *p, double *y) noexcept nogil
+    void cp_eval_outputs(const double *x, const double *p, double *y) noexcept nogil
 
 cdef extern from "<math.h>" nogil:
     double INFINITY
@@ -49,7 +49,8 @@ cdef extern from "<time.h>" nogil:
 
 NDOF = CP_NDOF
 NSTATE = CP_NSTATE
-NPARAM = CP_NPARAM
+NPARAM = CP_NPARAM  # parameters, then inputs: everything in p
+NINPUT = CP_NINPUT
 NOUTPUT = CP_NOUTPUT
 SINGULAR_RATIO = CP_SINGULAR_RATIO
 STATE_NAMES = tuple(CP_STATE_NAMES.decode().split())
@@ -159,7 +160,7 @@ def outputs(x_in, p_in):
     cdef double[::1] y = out
     if CP_NOUTPUT:
         with nogil:
-            cp_outputs(&x[0], &p[0], &y[0])
+            cp_eval_outputs(&x[0], &p[0], &y[0])
     return out
 
 
@@ -212,7 +213,7 @@ def seconds_per_call(str what, x_in, p_in, long calls):
         clock_gettime(CLOCK_MONOTONIC, &start)
         for i in range(calls):
             if outputs:
-                cp_outputs(&x[0], &p[0], out)
+                cp_eval_outputs(&x[0], &p[0], out)
             else:
                 cp_rhs(&model, &x[0], out)
         clock_gettime(CLOCK_MONOTONIC, &stop)
@@ -283,7 +284,7 @@ cdef class Stepper:
         self._fsal = 0
         if CP_NOUTPUT:
             with nogil:
-                cp_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
+                cp_eval_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
 
     def configure(self, int method, double rtol, double atol, double max_step, long max_steps):
         """Fix the solver settings that advance() uses."""
@@ -309,7 +310,7 @@ cdef class Stepper:
             status = cp_integrate(method, &system, t, &self._values[0], dt, rtol, atol, max_step,
                                   max_steps, &self.h, &self._work[0], &self._fsal, &stats)
             if status == CP_OK and CP_NOUTPUT:
-                cp_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
+                cp_eval_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
             self._stats[0] += stats.nfev
             self._stats[1] += stats.naccept
             self._stats[2] += stats.nreject

@@ -68,3 +68,16 @@ int cp_rhs(void *ctx, const double *x, double *dx)
     }
     return 0;
 }
+
+void cp_eval_outputs(const double *x, const double *p, double *y)
+{
+#if CP_OUTPUTS_NEED_RATES
+    double dx[CP_NSTATE];
+    cp_model model = {p, 1.0, -1};
+    if (cp_rhs(&model, x, dx))
+        for (int i = 0; i < CP_NSTATE; i++) dx[i] = NAN;
+    cp_outputs(x, p, dx, y);
+#else
+    cp_outputs(x, p, NULL, y);
+#endif
+}

@@ -20,4 +20,8 @@ typedef struct {
 /* x = (alpha, beta, omega, delta); dx = (omega, delta, M^-1 F). ctx is a cp_model. */
 int cp_rhs(void *ctx, const double *x, double *dx);
 
+/* The scene's outputs at x. Those needing accelerations (the pivot force) get them from
+   cp_rhs, and are NaN where the mass matrix is singular. */
+void cp_eval_outputs(const double *x, const double *p, double *y);
+
 #endif
