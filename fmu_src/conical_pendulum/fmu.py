@@ -54,6 +54,7 @@ def render_slave(scene: Scene, core: CoreBuild, settings: dict) -> tuple[str, st
         "CORE_MODULE": core.module_name,
         "CORE_FILE": core.library.name,
         "PARAMETER_START": dict(zip(scene.parameter_names(), scene.parameter_defaults())),
+        "INPUT_START": dict.fromkeys(scene.input_names(), 0.0),
         "STATE_START": dict(zip(scene.state_names(), scene.state_defaults())),
         "DESCRIPTION": _description(scene),
         "SETTINGS_START": settings,
@@ -102,6 +103,7 @@ def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.f
                 if name in (module_name, slave_name):
                     del sys.modules[name]
         starts = {**dict(zip(scene.parameter_names(), scene.parameter_defaults())),
+                  **dict.fromkeys(scene.input_names(), 0.0),
                   **dict(zip(scene.state_names(), scene.state_defaults())), **settings}
         _finish(staged, starts)
         os.replace(staged, output)
@@ -111,6 +113,9 @@ def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.f
 def _finish(fmu: Path, starts: dict) -> None:
     """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only;
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
+
+    Outputs declare their direct feedthrough: only the pivot force depends on the inputs
+    within a communication point, so a master knows where an algebraic loop can be.
 
     pythonfmu lists no InitialUnknowns, writes Real starts with 16 digits (a double
     needs 17 to round-trip), and packs binaries for every platform it has, while the
@@ -129,13 +134,18 @@ def _finish(fmu: Path, starts: dict) -> None:
         structure.remove(child)
     outputs = ET.SubElement(structure, "Outputs")
     initial = ET.SubElement(structure, "InitialUnknowns")
+    inputs = " ".join(str(index) for index, var in enumerate(variables, start=1)
+                      if var.get("causality") == "input")
     for index, var in enumerate(variables, start=1):
         real = var.find("Real")
         var.set("description", describe(var.get("name")))
         if real is not None and real.get("start") is not None:
             real.set("start", repr(float(starts[var.get("name")])))
         if var.get("causality") == "output":
-            ET.SubElement(outputs, "Unknown", index=str(index))
+            feedthrough = var.get("name").startswith("F_pivot_")
+            ET.SubElement(outputs, "Unknown", index=str(index), dependencies=inputs if feedthrough else "",
+                          **({"dependenciesKind": " ".join(["dependent"] * len(inputs.split()))}
+                             if feedthrough and inputs else {}))
             if var.get("initial") in ("calculated", "approx"):
                 ET.SubElement(initial, "Unknown", index=str(index))
     if not len(initial):
@@ -154,7 +164,9 @@ def _description(scene: Scene) -> str:
         for link in scene.links)
     kinematics = ("" if scene.kinematics == "consistent"
                   else "; PUBLISHED pydy-example kinematics (does not conserve energy)")
-    return f"{scene.n}-link conical pendulum ({links}){kinematics}"
+    coupling = ("; hangs from a moving support: inputs a_pivot_x/y/z (held constant over each "
+                "communication step), outputs F_pivot_x/y/z" if scene.coupling else "")
+    return f"{scene.n}-link conical pendulum ({links}){kinematics}{coupling}"
 
 
 _INDEXED = {
@@ -168,7 +180,7 @@ _INDEXED = {
 }
 _NAMED = {
     "g": "gravitational acceleration along -Y [m/s2]",
-    "energy": "total mechanical energy (kinetic + potential, zero at Y = 0) [J]",
+    "energy": "total mechanical energy relative to the pivot (kinetic + potential, zero at Y = 0) [J]",
     "rtol": "relative tolerance of the adaptive solvers (replaced by setupExperiment's tolerance when given)",
     "atol": "absolute tolerance of the adaptive solvers",
     "max_step": "largest internal step [s]; RK4 splits each communication step into steps of at most this (0: no limit)",
@@ -184,12 +196,18 @@ def describe(name: str) -> str:
     """The description of an FMU variable, from its name."""
     if name in _NAMED:
         return _NAMED[name]
+    if name.startswith("a_pivot_"):
+        return (f"acceleration of the pivot (the support), inertial {name[-1]} (Y up) [m/s2]; "
+                "held constant over each communication step")
+    if name.startswith("F_pivot_"):
+        return (f"force the pendulum exerts on its support, inertial {name[-1]} (Y up) [N]; "
+                "depends at once on the a_pivot inputs")
     if name.startswith("bob"):
-        return f"bob {name[3:].split('_')[0]} position, inertial {name[-1]} (Y up) [m]"
+        return f"bob {name[3:].split('_')[0]} position relative to the pivot, inertial {name[-1]} (Y up) [m]"
     if name.startswith("link"):
         index, part = name[4:].split("_")
         if part.startswith("q"):
             return f"link {index} orientation quaternion, {part[1]} component"
-        return f"link {index} mass-centre position, inertial {part} [m]"
+        return f"link {index} mass-centre position relative to the pivot, inertial {part} [m]"
     kind = name.rstrip("0123456789")
     return _INDEXED[kind].format(i=name[len(kind):])

@@ -23,6 +23,7 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variabil
 CORE_MODULE = "cp_core"
 CORE_FILE = "cp_core.abi3.so"
 PARAMETER_START = {}
+INPUT_START = {}
 STATE_START = {}
 DESCRIPTION = ""
 SETTINGS_START = {}
@@ -93,18 +94,20 @@ class ConicalPendulum(Fmi2Slave):
             self.log(self._broken, Fmi2Status.fatal)
             return
         core = self._core
-        n_param, n_state = len(PARAMETER_START), len(STATE_START)
-        self._n_param, self._n_state = n_param, n_state
-        # One array for every Real variable: parameters, state, outputs, statistics,
-        # settings; getReal answers from it in one indexing.
-        stats_vr = n_param + n_state + core.NOUTPUT
+        # One array for every Real variable: parameters, inputs, state, outputs,
+        # statistics, settings; getReal answers from it in one indexing. The core reads
+        # parameters and inputs as one array p.
+        n_p, n_state = len(PARAMETER_START) + len(INPUT_START), len(STATE_START)
+        self._n_state = n_state
+        stats_vr = n_p + n_state + core.NOUTPUT
         self._setting_vr = stats_vr + len(STATS)
         self._reals = np.zeros(self._setting_vr + len(REAL_SETTINGS))
-        self._reals[:n_param] = list(PARAMETER_START.values())
-        self._reals[n_param:n_param + n_state] = list(STATE_START.values())
+        self._reals[:n_p] = list(PARAMETER_START.values()) + list(INPUT_START.values())
+        self._reals[n_p:n_p + n_state] = list(STATE_START.values())
         self._reals[self._setting_vr:] = [SETTINGS_START[name] for name in REAL_SETTINGS]
         self._ints = [SETTINGS_START[name] for name in INTEGER_SETTINGS]
-        self._stepper = core.Stepper(self._reals[:n_param], self._reals[n_param:stats_vr],
+        self._state = self._reals[n_p:n_p + n_state]
+        self._stepper = core.Stepper(self._reals[:n_p], self._reals[n_p:stats_vr],
                                      self._reals[stats_vr:self._setting_vr])
         self._stepper.update_outputs()
         self._mode = "instantiated"
@@ -119,6 +122,8 @@ class ConicalPendulum(Fmi2Slave):
         parameter, output = Fmi2Causality.parameter, Fmi2Causality.output
         for name in PARAMETER_START:
             self.register_variable(Real(name, causality=parameter, variability=fixed))
+        for name in INPUT_START:  # held constant over each communication step
+            self.register_variable(Real(name, causality=Fmi2Causality.input, variability=continuous))
         for name in STATE_START:
             self.register_variable(Real(name, causality=output, variability=continuous,
                                         initial=Fmi2Initial.exact))
@@ -185,13 +190,17 @@ class ConicalPendulum(Fmi2Slave):
 
     @_fmi_call
     def set_real(self, vrs, values):
+        changed = False
         for vr, value in zip(vrs, values):
             if not isinstance(self.vars.get(vr), Real):
                 raise TypeError(f"value reference {vr} is not a Real variable")
             name = self.vars[vr].name
             self._check_settable(vr, name)
-            self._reals[vr] = self._fail_unless_valid(name, value)
-        self._stepper.update_outputs()
+            value = self._fail_unless_valid(name, value)
+            changed |= self._reals[vr] != value
+            self._reals[vr] = value
+        if changed:  # outputs depend on inputs at once (the pivot force), and so does x'
+            self._stepper.update_outputs()
 
     @_fmi_call
     def get_integer(self, vrs):
@@ -227,8 +236,7 @@ class ConicalPendulum(Fmi2Slave):
             return self._step_failure(self._core.BAD_STEP, t, dt)
         rtol, atol, max_step = self._reals[self._setting_vr:].tolist()
         core, stepper = self._core, self._stepper
-        state = self._reals[self._n_param:self._n_param + self._n_state]
-        params = stepper.params
+        state, params = self._state, stepper.params
         options = {"first_step": min(stepper.h, dt)} if stepper.h > 0 else {}
         solver = Radau(lambda _, x: core.rhs(x, params), t, state.copy(), t + dt, rtol=rtol,
                        atol=atol, max_step=max_step or np.inf, **options)
@@ -295,7 +303,7 @@ class ConicalPendulum(Fmi2Slave):
         var = self.vars[vr]
         if var.causality == Fmi2Causality.output and var.initial != Fmi2Initial.exact:
             self._fail(f"{name} is a calculated output: it cannot be set")
-        if self._mode == "step":
+        if self._mode == "step" and var.causality != Fmi2Causality.input:
             self._fail(f"{name} cannot be set after initialization (variability fixed); "
                        "set it before exitInitializationMode, or instantiate again")
 
