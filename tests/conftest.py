@@ -26,3 +26,9 @@ def chain_fmu(fmu_dir):
         return built[n]
 
     return get
+
+
+@pytest.fixture(scope="session")
+def coupled_fmu(fmu_dir):
+    """The seed chain hanging from a moving support: a_pivot inputs, F_pivot outputs."""
+    return build_fmu(Scene.uniform(3, coupling=True), fmu_dir / "Coupled.fmu").path
