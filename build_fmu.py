@@ -3,6 +3,7 @@
     python build_fmu.py                       # the seed scene: 3 links with bobs
     python build_fmu.py --links 5 --no-bobs --output dist/Chain5.fmu
     python build_fmu.py --scene scenes/seed.toml
+    python build_fmu.py --coupling --output dist/Coupled.fmu   # a moving support: a_pivot in, F_pivot out
 """
 from __future__ import annotations
 
@@ -23,6 +24,9 @@ def parse(argv=None):
     parser.add_argument("--no-bobs", action="store_true", help="no bobs at the joints")
     parser.add_argument("--kinematics", choices=KINEMATICS,
                         help="'pydy-example' reproduces the published (energy-violating) equations")
+    parser.add_argument("--coupling", action="store_true",
+                        help="inputs a_pivot_x/y/z (the support's acceleration) and outputs "
+                             "F_pivot_x/y/z (the force on it)")
     parser.add_argument("--output", type=Path, default=Path("dist/ConicalPendulum.fmu"))
     parser.add_argument("--no-check", action="store_true",
                         help="only build; skip the fmpy run against the native integrator, "
@@ -34,14 +38,15 @@ def choose_scene(args) -> Scene:
     options = [name for name, given in [("--links", args.links is not None),
                                         ("--massless-links", args.massless_links),
                                         ("--no-bobs", args.no_bobs),
-                                        ("--kinematics", args.kinematics is not None)] if given]
+                                        ("--kinematics", args.kinematics is not None),
+                                        ("--coupling", args.coupling)] if given]
     if args.scene:
         if options:
             raise SceneError(f"--scene describes the whole scene; drop {', '.join(options)}")
         return load_scene(args.scene)
     return Scene.uniform(3 if args.links is None else args.links,
                          massless_links=args.massless_links, bobs=not args.no_bobs,
-                         kinematics=args.kinematics or "consistent")
+                         kinematics=args.kinematics or "consistent", coupling=args.coupling)
 
 
 def main(argv=None) -> int:
@@ -61,7 +66,7 @@ def main(argv=None) -> int:
     how = "from cache" if build.core.cached else "compiled " + ", ".join(
         f"{k} {v:.1f} s" for k, v in build.core.seconds.items())
     print(f"built {build.path} ({build.path.stat().st_size / 1024:.0f} KiB) in {build.seconds:.1f} s: "
-          f"{scene.n} links, {len(scene.parameter_names())} parameters, "
+          f"{scene.n} links, {len(scene.parameter_names())} parameters, {len(scene.input_names())} inputs, "
           f"{len(scene.output_names())} calculated outputs; core {how}")
     if args.no_check:
         return 0

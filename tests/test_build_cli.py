@@ -27,6 +27,7 @@ def test_builds_the_requested_scene(tmp_path):
     (["--massless-links", "--no-bobs"], "scene has no mass"),
     (["--kinematics", "seed"], "invalid choice: 'seed'"),
     (["--links", "6", "--kinematics", "pydy-example"], "only reproduced up to 4 links"),
+    (["--coupling", "--kinematics", "pydy-example"], "coupling: the pivot's inputs and force need"),
     (["--output", "dist/model.zip"], "must end in .fmu"),
     (["--frobnicate"], "unrecognized arguments: --frobnicate"),
     (["--scene", str(ROOT / "scenes" / "seed.toml"), "--links", "2"],

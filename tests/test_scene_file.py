@@ -30,6 +30,7 @@ def test_a_scene_file_decides_equations_variables_and_starts(tmp_path, fmu_dir):
     path.write_text("""
 gravity = 3.7
 outputs = ["energy"]
+coupling = true
 
 [[link]]
 length = 2.0
@@ -52,6 +53,7 @@ inertia = [0.07, 0.015, 0.07]
               for name in ["l0", "m0", "l1", "M1", "Ixx1", "Iyy1", "g"]}
     assert starts == {"l0": 2.0, "m0": 1.5, "l1": 0.5, "M1": 3.0, "Ixx1": 0.07, "Iyy1": 0.015, "g": 3.7}
     assert built["energy"].get("causality") == "output"
+    assert built["a_pivot_y"].get("causality") == "input" and "F_pivot_y" in built
 
 
 @pytest.mark.parametrize("text, message", [
@@ -66,6 +68,7 @@ inertia = [0.07, 0.015, 0.07]
     ('kinematics = "seed"\n[[link]]', "kinematics: 'seed' is not one of"),
     ('outputs = ["bobz"]\n[[link]]', "outputs: unknown group(s) ['bobz']"),
     ('gravity = "down"\n[[link]]', "gravity: expected a number"),
+    ('coupling = "yes"\n[[link]]', "coupling: expected true or false, got 'yes'"),
     ("[[link]\nlength = 1", "Expected ']]' at the end of an array declaration (at line 1"),
 ])
 def test_a_bad_scene_file_names_the_field(tmp_path, text, message):

@@ -70,8 +70,6 @@ def render_slave(scene: Scene, core: CoreBuild, settings: dict) -> tuple[str, st
 
 def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.fmu",
               settings: dict | None = None, cache: Path | None = None) -> FmuBuild:
-    from pythonfmu import FmuBuilder  # build time only
-
     start = time.perf_counter()
     output = Path(output)
     if output.suffix != ".fmu":
@@ -82,35 +80,48 @@ def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.f
     core = build_core(scene, cache)
     settings = {**DEFAULT_SETTINGS, **(settings or {})}
     slave_name, source = render_slave(scene, core, settings)
+    starts = {**dict(zip(scene.parameter_names(), scene.parameter_defaults())),
+              **dict.fromkeys(scene.input_names(), 0.0),
+              **dict(zip(scene.state_names(), scene.state_defaults())), **settings}
     module_name = slave_name.replace("cp_slave_", "conical_pendulum_")
+    package(MODEL_NAME, module_name, slave_name, source, [core.library], output, starts, describe,
+            canGetAndSetFMUstate=True, canSerializeFMUstate=True)
+    return FmuBuild(output, core, module_name, time.perf_counter() - start)
+
+
+def package(model: str, module_name: str, slave_name: str, source: str, project_files: list[Path],
+            output: Path, starts: dict, describe=None, **capabilities) -> None:
+    """Build the FMU of a pythonfmu slave (class `model` in module `slave_name`) at `output`.
+
+    The module pythonfmu loads is the small ENTRY, named `module_name` (the FMU's model
+    identifier); the FMU moves into place only when everything succeeded. `describe`
+    gives variable descriptions by name, if the slave's own are not kept.
+    """
+    from pythonfmu import FmuBuilder  # build time only
+
     output.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_fmu_") as tmp:
         tmp = Path(tmp)
         script = tmp / "src" / f"{module_name}.py"
         script.parent.mkdir()
-        script.write_text(ENTRY.format(model=MODEL_NAME, implementation=slave_name))
+        script.write_text(ENTRY.format(model=model, implementation=slave_name))
         slave = script.parent / f"{slave_name}.py"
         slave.write_text(source)
-        staged = tmp / f"{MODEL_NAME}.fmu"
+        staged = tmp / f"{model}.fmu"
         saved_path, saved_modules = list(sys.path), set(sys.modules)
         try:
-            FmuBuilder.build_FMU(script, dest=staged, project_files=[slave, core.library],
-                                 canHandleVariableCommunicationStepSize=True,
-                                 canGetAndSetFMUstate=True, canSerializeFMUstate=True)
+            FmuBuilder.build_FMU(script, dest=staged, project_files=[slave, *project_files],
+                                 canHandleVariableCommunicationStepSize=True, **capabilities)
         finally:  # pythonfmu leaves its import of the slave behind
             sys.path[:] = saved_path
             for name in set(sys.modules) - saved_modules:
                 if name in (module_name, slave_name):
                     del sys.modules[name]
-        starts = {**dict(zip(scene.parameter_names(), scene.parameter_defaults())),
-                  **dict.fromkeys(scene.input_names(), 0.0),
-                  **dict(zip(scene.state_names(), scene.state_defaults())), **settings}
-        _finish(staged, starts)
+        _finish(staged, starts, describe)
         os.replace(staged, output)
-    return FmuBuild(output, core, module_name, time.perf_counter() - start)
 
 
-def _finish(fmu: Path, starts: dict) -> None:
+def _finish(fmu: Path, starts: dict, describe) -> None:
     """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only;
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
@@ -138,7 +149,8 @@ def _finish(fmu: Path, starts: dict) -> None:
                       if var.get("causality") == "input")
     for index, var in enumerate(variables, start=1):
         real = var.find("Real")
-        var.set("description", describe(var.get("name")))
+        if describe:
+            var.set("description", describe(var.get("name")))
         if real is not None and real.get("start") is not None:
             real.set("start", repr(float(starts[var.get("name")])))
         if var.get("causality") == "output":

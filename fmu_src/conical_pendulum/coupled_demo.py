@@ -1,0 +1,244 @@
+"""The coupled demo: the pendulum hanging from a cart on a spring, co-simulated in ecospy.
+
+Two FMUs built here (the coupled pendulum and `Cart`) exchange the pivot's acceleration
+and the force on the support at every communication step, in ecospy's fixed-step
+master; one monolithic sympy model of cart and pendulum (kane_reference), integrated
+natively at 1e-12, is the truth. The coupling error against the communication step is
+the co-simulation's own face of the speed/accuracy trade.
+
+    python -m conical_pendulum.coupled_demo [--out dist/coupled] [--steps 0.1,0.05,...]
+
+ecospy (the `cosim` extra) runs in a subprocess: it needs libtbb loaded first, and its
+interpreter can abort at exit while pythonfmu's library is mapped.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .scene import Scene
+
+CART_SOURCE = Path(__file__).with_name("cart_slave.py")
+STEPS = (0.2, 0.1, 0.05, 0.02, 0.01, 0.005)
+STOP_TIME = 10.0
+SCENE = Scene.uniform(3, coupling=True)
+CART_START = {"x": 1.0, "v": 0.0}
+EXCHANGED = ["cart::x", "cart::v", "cart::a", "p::F_pivot_x"] + [f"p::{name}" for name in SCENE.state_names()]
+
+
+def build_cart_fmu(output: Path | str) -> Path:
+    """Cart.fmu from cart_slave.py, behind the same small entry module as the pendulum."""
+    from .cart_slave import PARAMETERS  # imports pythonfmu: build time only
+    from .fmu import package
+
+    output = Path(output)
+    source = CART_SOURCE.read_text()
+    digest = hashlib.sha256(source.encode()).hexdigest()[:16]
+    starts = {**{name: value for name, (_, value) in PARAMETERS.items()}, **CART_START, "F_x": 0.0}
+    package("Cart", f"cart_{digest}", f"cart_slave_{digest}", source, [], output, starts)
+    return output
+
+
+def cart_parameters() -> dict[str, float]:
+    from .kane_reference import CART_PARAMETERS
+
+    defaults = {"m_cart": 100.0, "k_cart": 150.0, "c_cart": 20.0}
+    return {name: defaults[name] for name in CART_PARAMETERS}
+
+
+def monolithic(times, scene: Scene = SCENE, rtol: float = 1e-12, atol: float = 1e-12) -> dict:
+    """Cart and pendulum as one sympy model (KanesMethod), integrated by scipy's DOP853.
+
+    Returns {name: array on `times`} for x_cart, v_cart, the pendulum's state, and the
+    accelerations: a_cart and d<speed> for each of the pendulum's speeds.
+    """
+    import sympy as sm
+    from scipy.integrate import solve_ivp
+
+    from .kane_reference import cart_and_pendulum
+
+    M, F, states, params = cart_and_pendulum(scene)
+    mass = sm.lambdify([states, params], M, cse=True)
+    forcing = sm.lambdify([states, params], F, cse=True)
+    p = np.array(scene.parameter_defaults() + list(cart_parameters().values()))
+    n = len(states) // 2
+    pendulum = dict(zip(scene.state_names(), scene.state_defaults()))
+    start = {"x_cart": CART_START["x"], "v_cart": CART_START["v"], **pendulum}
+    y0 = np.array([start[str(s)] for s in states])
+
+    def rhs(_, y):
+        return np.concatenate([y[n:], np.linalg.solve(mass(y, p), np.ravel(forcing(y, p)))])
+
+    solution = solve_ivp(rhs, (times[0], times[-1]), y0, method="DOP853", t_eval=times,
+                         rtol=rtol, atol=atol)
+    if not solution.success:
+        raise RuntimeError(f"monolithic reference failed: {solution.message}")
+    result = {str(s): row for s, row in zip(states, solution.y)}
+    rates = np.array([rhs(0.0, y)[n:] for y in solution.y.T]).T
+    result["a_cart"] = rates[0]
+    result.update({f"d{s}": row for s, row in zip(states[n + 1:], rates[1:])})
+    return result
+
+
+ECOSPY_SCRIPT = r"""
+import ctypes, json, os, sys
+ctypes.CDLL(os.path.join(sys.prefix, "lib", "libtbb.so.12"), mode=ctypes.RTLD_GLOBAL)
+from ecospy import EcosLib, EcosSimulation, EcosSimulationStructure
+
+job = json.loads(sys.argv[1])
+EcosLib.set_log_level("warn")
+runs = {}
+for dt in job["steps"]:
+    with EcosSimulationStructure() as structure:
+        structure.add_model("p", job["pendulum"])
+        structure.add_model("cart", job["cart"])
+        structure.make_real_connection("cart::a", "p::a_pivot_x")
+        structure.make_real_connection("p::F_pivot_x", "cart::F_x")
+        with EcosSimulation(structure=structure, step_size=dt) as sim:
+            sim.init()
+            run = {name: [] for name in ["time"] + job["record"]}
+            steps = round(job["stop_time"] / dt)
+            for k in range(steps + 1):
+                if k:
+                    sim.step()
+                run["time"].append(sim.get_time())
+                for name in job["record"]:
+                    run[name].append(sim.get_real(name))
+            sim.terminate()
+    runs[repr(dt)] = run
+print(json.dumps(runs))
+sys.stdout.flush()
+os._exit(0)
+"""
+
+
+def cosimulate(pendulum_fmu: Path, cart_fmu: Path, steps=STEPS, stop_time: float = STOP_TIME) -> dict:
+    """{step: {variable: array}} from ecospy's fixed-step master, one run per step size."""
+    job = {"pendulum": str(Path(pendulum_fmu).resolve()), "cart": str(Path(cart_fmu).resolve()),
+           "steps": list(steps), "stop_time": stop_time, "record": EXCHANGED}
+    try:
+        run = subprocess.run([sys.executable, "-c", ECOSPY_SCRIPT, json.dumps(job)],
+                             capture_output=True, text=True, timeout=1800)
+    except subprocess.TimeoutExpired:
+        raise RuntimeError("ecospy did not finish the co-simulations within 30 minutes") from None
+    if run.returncode != 0:
+        if "No module named 'ecospy'" in run.stderr or "libtbb" in run.stderr:
+            raise RuntimeError("the coupled demo needs ecospy and tbb: pip install -e \".[cosim]\"")
+        raise RuntimeError(f"ecospy failed (exit {run.returncode}):\n{run.stderr[-3000:]}")
+    runs = json.loads(run.stdout.strip().splitlines()[-1])
+    return {float(dt): {name.split("::")[-1]: np.array(values) for name, values in result.items()}
+            for dt, result in runs.items()}
+
+
+@dataclass
+class CouplingError:
+    step: float
+    cart_error: float    # max |x - x_ref| over the communication points [m]
+    angle_error: float   # max |angle - angle_ref| over the pendulum's angles [rad]
+    force_error: float   # max |F_pivot_x - F_ref| [N]
+
+
+def coupling_errors(runs: dict, scene: Scene = SCENE) -> tuple[list[CouplingError], dict]:
+    """Each run against the monolithic reference at its own communication points."""
+    finest = min(runs)
+    reference = monolithic(runs[finest]["time"], scene)
+    force = _reference_force(reference, scene)
+    errors = []
+    for dt, run in sorted(runs.items()):
+        every = round(dt / finest)
+        ref = {name: values[::every] for name, values in {**reference, "F_pivot_x": force}.items()}
+        angles = [name for name in scene.state_names()[:2 * scene.n]]
+        errors.append(CouplingError(
+            dt, np.abs(run["x"] - ref["x_cart"]).max(),
+            max(np.abs(run[name] - ref[name]).max() for name in angles),
+            np.abs(run["F_pivot_x"] - ref["F_pivot_x"]).max()))
+    return errors, {**reference, "F_pivot_x": force}
+
+
+def _reference_force(reference: dict, scene: Scene) -> np.ndarray:
+    """F_pivot_x along the reference, from the compiled core with the cart's acceleration."""
+    from .compiler import load_core
+
+    core = load_core(scene)
+    names = scene.state_names()
+    column = scene.output_names().index("F_pivot_x")
+    return np.array([core.outputs([reference[name][k] for name in names],
+                                  scene.parameters({"a_pivot_x": reference["a_cart"][k]}))[column]
+                     for k in range(len(reference["a_cart"]))])
+
+
+def plot(runs: dict, errors: list[CouplingError], reference: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    finest = min(runs)
+    times = runs[finest]["time"]
+    fig, (ax_x, ax_e) = plt.subplots(1, 2, figsize=(12, 4.5))
+    ax_x.plot(times, reference["x_cart"], "k", lw=2.5, label="monolithic (DOP853 1e-12)")
+    for dt in sorted(runs, reverse=True)[:3]:
+        ax_x.plot(runs[dt]["time"], runs[dt]["x"], lw=1, label=f"ecospy, step {dt:g} s")
+    ax_x.set(xlabel="time [s]", ylabel="cart position x [m]", title="cart carrying the 3-link pendulum")
+    ax_x.legend(fontsize=8)
+    steps = np.array([e.step for e in errors])
+    for field, label in (("cart_error", "cart x [m]"), ("angle_error", "pendulum angles [rad]")):
+        ax_e.loglog(steps, [getattr(e, field) for e in errors], "o-", label=label)
+    guide = errors[-1].cart_error * steps / steps[-1]
+    ax_e.loglog(steps, guide, "k:", label="first order")
+    ax_e.set(xlabel="communication step [s]", ylabel="max error over 10 s",
+             title="coupling error against the step")
+    ax_e.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m conical_pendulum.coupled_demo", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=Path, default=Path("dist") / "coupled",
+                        help="folder for the FMUs, coupling_error.csv and coupling.png")
+    parser.add_argument("--steps", default=",".join(map(str, STEPS)),
+                        help="communication steps [s], comma-separated; each must divide the stop "
+                             "time and be a multiple of the smallest")
+    parser.add_argument("--stop-time", type=float, default=STOP_TIME)
+    args = parser.parse_args(argv)
+    try:
+        steps = sorted({float(s) for s in args.steps.split(",")})
+    except ValueError:
+        parser.error(f"--steps: expected numbers separated by commas, got {args.steps!r}")
+    for dt in steps:
+        if not (dt > 0 and abs(args.stop_time / dt - round(args.stop_time / dt)) < 1e-9
+                and abs(dt / steps[0] - round(dt / steps[0])) < 1e-9):
+            parser.error(f"--steps: {dt:g} must be positive, divide --stop-time {args.stop_time:g} "
+                         f"and be a multiple of the smallest step {steps[0]:g}")
+    from .fmu import build_fmu
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    pendulum = build_fmu(SCENE, args.out / "ConicalPendulum.fmu").path
+    cart = build_cart_fmu(args.out / "Cart.fmu")
+    try:
+        runs = cosimulate(pendulum, cart, steps, args.stop_time)
+    except RuntimeError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    errors, reference = coupling_errors(runs)
+    rows = ["step_s,cart_error_m,angle_error_rad,force_error_N"]
+    rows += [f"{e.step:g},{e.cart_error:.3e},{e.angle_error:.3e},{e.force_error:.3e}" for e in errors]
+    (args.out / "coupling_error.csv").write_text("\n".join(rows) + "\n")
+    plot(runs, errors, reference, args.out / "coupling.png")
+    print("\n".join(rows).replace(",", "\t"))
+    print(f"wrote {args.out / 'coupling_error.csv'} and {args.out / 'coupling.png'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
