@@ -77,6 +77,7 @@ def test_the_demo_command_converges_at_first_order(tmp_path):
     (["--steps", "0.1,x"], "--steps: expected numbers"),
     (["--steps", "0.3", "--stop-time", "1"], "must be positive, divide --stop-time"),
     (["--steps", "0.1,0.15"], "multiple of the smallest"),
+    (["--cart-mass", "-1"], "--cart-mass: must be a positive number of kg, got -1.0"),
 ])
 def test_bad_demo_options_are_named(argv, message, capsys):
     with pytest.raises(SystemExit) as exit_:
