@@ -84,3 +84,10 @@ def test_bad_demo_options_are_named(argv, message, capsys):
         main(argv)
     assert exit_.value.code == 2
     assert message in capsys.readouterr().err
+
+
+def test_a_too_light_cart_is_reported_as_diverged(tmp_path, capsys):
+    """The added-mass limit: a 2 kg cart under the 45 kg chain, explicit exchange."""
+    assert main(["--out", str(tmp_path), "--steps", "0.01", "--stop-time", "0.2", "--cart-mass", "2"]) == 0
+    assert "step 0.01 s: the exchange diverged" in capsys.readouterr().out
+    assert (tmp_path / "coupling.png").exists()
