@@ -1,6 +1,7 @@
 """conical_pendulum.sweep: Dask runs equal to fmpy's one by one, failures kept with their
 messages, one Parquet file, the FMU loaded once per worker, and a command that refuses
 what it cannot run."""
+import math
 import subprocess
 import sys
 
@@ -46,8 +47,9 @@ def test_a_refused_value_fails_only_its_run(seed_fmu, cluster):
     runs = grid({"l0": [5.0, 10.0], "alpha0": [0.2, 0.4]}) + [{"l0": -1.0}]
     results = sweep(seed_fmu, runs, stop_time=2.0, output_interval=0.5,
                     scheduler=cluster.scheduler_address, progress=False)
-    runs_ = by_run(results)
-    assert list(runs_["status"]) == ["ok"] * 4 + ["failed"]
+    inputs = by_run(results)
+    assert list(inputs["status"]) == ["ok"] * 4 + ["failed"]
+    assert inputs.loc[4, "alpha0_start"] == math.radians(10)  # left alone: the FMU's start value
     failed = results[results["run"] == 4]
     assert len(failed) == 1 and np.isnan(failed["time"]).all() and np.isnan(failed["energy"]).all()
     assert "l0 = -1.0: a length must be positive" in failed["message"].iat[0]
