@@ -119,6 +119,12 @@ def test_each_worker_loads_the_fmu_once(seed_fmu, cluster):
     assert all(names == [] for names in left.values())  # unregistered: extracted files removed
 
 
+def test_a_scheduler_without_workers_is_refused(seed_fmu):
+    with LocalCluster(n_workers=0, dashboard_address="127.0.0.1:0") as empty:
+        with pytest.raises(ConnectionError, match="no workers after 1 s"):
+            sweep(seed_fmu, [{"l0": 5.0}], scheduler=empty.scheduler_address, timeout=1, progress=False)
+
+
 def test_runs_are_made_reproducibly():
     assert grid({"l0": [5, 10], "alpha0": [0.1, 0.2]}) == [
         {"l0": 5, "alpha0": 0.1}, {"l0": 5, "alpha0": 0.2}, {"l0": 10, "alpha0": 0.1}, {"l0": 10, "alpha0": 0.2}]
