@@ -1,0 +1,424 @@
+"""Parameter and initial-condition sweeps of an FMU, run as Dask tasks, kept in one Parquet file.
+
+    python -m conical_pendulum.sweep dist/ConicalPendulum.fmu --grid l0=5,10,15 --grid alpha0=0.1,0.2
+    python -m conical_pendulum.sweep dist/ConicalPendulum.fmu --random l0=5:15 --samples 100 --seed 1
+
+Each worker process extracts the FMU, reads its model description and loads its library
+once (a WorkerPlugin carries the FMU's bytes, so a remote cluster needs no shared
+filesystem), then instantiates it once per run, since pythonfmu 0.7 has no fmi2Reset
+to rely on. Runs travel in batches, several to a task, so that Dask's cost per task
+stays small next to a run's 25 ms. A run fails, keeping the rows it produced and the
+FMU's message, when a value is refused (fmi2Fatal), a step is discarded (fmpy then
+stops quietly, short of the stop time) or an output is not finite.
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import itertools
+import logging
+import math
+import numbers
+import shutil
+import sys
+import tempfile
+import threading
+import time
+import uuid
+import zipfile
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+
+import dask
+import numpy as np
+import pandas as pd
+from distributed import Client, LocalCluster, WorkerPlugin, as_completed, get_worker
+from fmpy import read_model_description
+from fmpy.fmi1 import calloc, free
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy.simulation import settable_in_initialization_mode, settable_in_instantiated
+
+from .check import run_fmu
+
+
+def grid(axes: Mapping[str, Sequence[float]]) -> list[dict]:
+    """Every combination of the values given per variable (the last varies fastest), as runs."""
+    empty = [name for name, values in axes.items() if len(values) == 0]
+    if empty:
+        raise ValueError(f"grid: no values for {', '.join(empty)}")
+    return [dict(zip(axes, combination)) for combination in itertools.product(*axes.values())]
+
+
+def random_samples(ranges: Mapping[str, tuple[float, float]], n: int, seed=None) -> list[dict]:
+    """n runs drawn uniformly from [low, high) per variable; the same seed gives the same runs."""
+    if n < 1:
+        raise ValueError(f"random samples: n = {n}: must be at least 1")
+    for name, (low, high) in ranges.items():
+        if not (math.isfinite(low) and math.isfinite(high) and low <= high):
+            raise ValueError(f"random samples: {name} range {low}:{high} must be finite with low <= high")
+    lows, highs = zip(*ranges.values()) if ranges else ((), ())
+    draws = np.random.default_rng(seed).uniform(lows, highs, size=(n, len(ranges)))
+    return [dict(zip(ranges, map(float, row))) for row in draws]
+
+
+class LoadedFmu:
+    """An FMU extracted, described and its library loaded once; instantiated afresh per run.
+
+    Runs in one process take turns: one library serves them, and the slave, being
+    Python, would hold the GIL anyway. `loads` counts the FMUs this process has loaded (a sweep loads once per worker).
+    """
+
+    loads = 0
+
+    def __init__(self, data: bytes):
+        self.directory = tempfile.mkdtemp(prefix="conical_pendulum_sweep_")
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            archive.extractall(self.directory)
+        self.md = read_model_description(self.directory)
+
+        def log(component, instance, status, category, message):
+            self.messages.append(message.decode(errors="replace").replace("\n", " "))
+
+        # pythonfmu forwards messages only to an instance made with logging on
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(log)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        # fmpy's freeInstance also unloads the library; instances are freed with
+        # fmi2FreeInstance instead, so the library stays loaded for the next run.
+        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.directory,
+                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName="sweep")
+        self._lock = threading.Lock()
+        LoadedFmu.loads += 1
+
+    def run(self, start_values: dict, stop_time: float, output_interval: float,
+            outputs: list[str]) -> tuple[np.ndarray | None, bool, str]:
+        """(rows as fmpy records them or None, ok, message): fmpy's way, on a fresh instance."""
+        with self._lock:
+            self.messages = problems = []  # this run's, also once the next has begun
+            self.slave.instantiate(callbacks=self._callbacks, loggingOn=True)
+            try:
+                rows = run_fmu(self.directory, stop_time, output_interval, start_values, output=outputs,
+                               model_description=self.md, fmu_instance=self.slave)
+            except Exception as exc:  # noqa: BLE001 - the run failed; the sweep goes on
+                return None, False, "; ".join([*problems, str(exc)])
+            finally:  # fmi2FreeInstance is all FMI allows after fmi2Fatal
+                self.slave.fmi2FreeInstance(self.slave.component)
+        # after a discarded step fmpy samples the last good point a second time
+        rows = rows[np.r_[True, np.diff(rows["time"]) > 0]]
+        end = rows["time"][-1]
+        stopped_early = end < stop_time and not math.isclose(end, stop_time)
+        if stopped_early and not problems:
+            problems.append(f"stopped at t = {end:g} s, short of the stop time {stop_time:g} s")
+        not_finite = [name for name in outputs if not np.isfinite(rows[name]).all()]
+        if not_finite:
+            problems.append(f"non-finite values in {', '.join(not_finite)}")
+        return rows, not (stopped_early or not_finite), "; ".join(problems)
+
+    def close(self):
+        self.slave.freeLibrary()
+        shutil.rmtree(self.directory, ignore_errors=True)
+
+
+class _FmuPlugin(WorkerPlugin):
+    """Loads the FMU it carries once on each worker, and removes it when unregistered."""
+
+    def __init__(self, data: bytes):
+        self.data = data
+
+    def setup(self, worker):
+        self.fmu = LoadedFmu(self.data)
+        self.data = None  # extracted: the worker keeps no second copy
+
+    def teardown(self, worker):
+        self.fmu.close()
+
+
+def _run_batch(plugin: str, batch: list[tuple[int, dict]], stop_time: float, output_interval: float,
+               outputs: list[str]):
+    """On a worker: the batch's runs, as one long frame (run, status, message, time, outputs)."""
+    fmu = get_worker().plugins[plugin].fmu
+    frames = []
+    for index, start_values in batch:
+        rows, ok, message = fmu.run(start_values, stop_time, output_interval, outputs)
+        columns = ["time", *outputs]
+        frame = pd.DataFrame(rows if rows is not None else dict.fromkeys(columns, [math.nan]),
+                             columns=columns)
+        frame.insert(0, "run", index)
+        frame.insert(1, "status", "ok" if ok else "failed")
+        frame.insert(2, "message", message)
+        frames.append(frame)
+    return pd.concat(frames, ignore_index=True)
+
+
+def _check_runs(md, runs: Iterable[Mapping]) -> list[dict]:
+    """The runs with values as the FMU's types; unknown or unsettable names and non-numbers refused."""
+    runs = [dict(run) for run in runs]
+    if not runs:
+        raise ValueError("no runs to do")
+    variables = {v.name: v for v in md.modelVariables}
+    names = set().union(*runs)
+    unknown = sorted(names - variables.keys())
+    if unknown:
+        raise ValueError(f"unknown variable(s) {', '.join(unknown)}: {md.modelName} has no such variable")
+    fixed = sorted(name for name in names if not (settable_in_instantiated(variables[name])
+                                                  or settable_in_initialization_mode(variables[name])))
+    if fixed:
+        raise ValueError(f"{', '.join(fixed)} cannot be set (calculated); a run sets parameters and start values")
+    for index, run in enumerate(runs):
+        for name, value in run.items():
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):
+                raise ValueError(f"run {index}: {name} = {value!r} is not a number")
+            if variables[name].type == "Integer":
+                if not float(value).is_integer():
+                    raise ValueError(f"run {index}: {name} = {value!r}: {name} is an Integer variable")
+                run[name] = int(value)
+            else:
+                run[name] = float(value)
+    return runs
+
+
+def _check_outputs(md, outputs: Sequence[str] | None) -> list[str]:
+    """The variables to record: the given ones, known to the FMU, or all its outputs."""
+    if outputs is None:
+        return [v.name for v in md.modelVariables if v.causality == "output"]
+    outputs = list(dict.fromkeys(outputs))
+    if not outputs:
+        raise ValueError("no outputs chosen")
+    unknown = [name for name in outputs if name not in {v.name for v in md.modelVariables}]
+    if unknown:
+        raise ValueError(f"unknown output(s) {', '.join(unknown)}: {md.modelName} has no such variable")
+    return outputs
+
+
+def _inputs(md, runs: list[dict]):
+    """One row per run with every variable any run sets; a run that leaves one alone gets
+    the FMU's start value (what it ran with). A state's start value is `<name>_start`,
+    apart from its recorded trajectory."""
+    variables = {v.name: v for v in md.modelVariables}
+    names = list(dict.fromkeys(itertools.chain.from_iterable(runs)))
+    columns = {}
+    for name in names:
+        variable = variables[name]
+        start = (int if variable.type == "Integer" else float)(variable.start)
+        column = f"{name}_start" if variable.causality == "output" else name
+        columns[column] = [run.get(name, start) for run in runs]
+    return pd.DataFrame(columns, index=pd.RangeIndex(len(runs), name="run"))
+
+
+@contextlib.contextmanager
+def _client(scheduler: str | None, n_workers: int, timeout: float):
+    """A client of the scheduler at that address, or of a LocalCluster made and closed here."""
+    if scheduler is None:
+        if n_workers < 1:
+            raise ValueError(f"n_workers = {n_workers}: must be at least 1")
+        # The workers' statistical profiler (for the dashboard) takes the GIL every 10 ms
+        # and would cost these runs, Python in fmpy and the slave, about 17 %.
+        with dask.config.set({"distributed.worker.profile.enabled": False}):
+            cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                                   dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR)
+        with cluster, Client(cluster) as client:
+            yield client
+        return
+    try:
+        client = Client(scheduler, timeout=timeout)
+    except Exception as exc:  # noqa: BLE001 - bad address, nobody there, or not a scheduler
+        raise ConnectionError(f"scheduler {scheduler!r}: cannot connect ({exc})") from None
+    with client:
+        try:
+            client.wait_for_workers(1, timeout=timeout)
+        except TimeoutError:
+            raise ConnectionError(f"scheduler {scheduler!r}: no workers after {timeout:g} s") from None
+        yield client
+
+
+def _show_progress(done: int, total: int, failed: int, start: float) -> None:
+    filled = 30 * done // total
+    print(f"\rsweep: [{'#' * filled}{'.' * (30 - filled)}] {done}/{total} runs, {failed} failed, "
+          f"{time.perf_counter() - start:.1f} s", end="\n" if done == total else "",
+          file=sys.stderr, flush=True)
+
+
+def sweep(fmu, runs: Iterable[Mapping[str, float]], *, stop_time: float = 10.0,
+          output_interval: float = 1.0 / 60.0, outputs: Sequence[str] | None = None,
+          scheduler: str | None = None, n_workers: int = 2, batch: int | None = None,
+          out=None, progress: bool = True, timeout: float = 10.0) -> pd.DataFrame:
+    """Run the FMU once per run (a dict of parameters and start values) on a Dask cluster.
+
+    On a LocalCluster of `n_workers` processes made for the sweep, or on the cluster whose
+    scheduler is at `scheduler` ("tcp://host:8786"; its workers need this package, and
+    connecting gives up after `timeout` s). Returns the results in long form, one row per
+    run and time, ordered by run: `run`, the inputs (every variable any run sets; a
+    state's start value as `<name>_start`), `status` ("ok" or "failed"),
+    `message` (why a run failed; one row of NaN when it produced nothing), `time` and the
+    `outputs` (default: all of the FMU's). With `out`, also written there as Parquet;
+    the FMU's name and the sweep's settings are in `attrs`, which the file keeps.
+    `batch` runs go to a task (default: about four tasks per worker, at most 25 runs).
+    """
+    path = Path(fmu)
+    try:
+        data = path.read_bytes()
+        md = read_model_description(str(path))
+    except (OSError, zipfile.BadZipFile) as exc:
+        raise ValueError(f"{path}: cannot read the FMU ({getattr(exc, 'strerror', None) or exc})") from None
+    if md.fmiVersion != "2.0" or md.coSimulation is None:
+        raise ValueError(f"{path}: not an FMI 2.0 co-simulation FMU")
+    runs = _check_runs(md, runs)
+    outputs = _check_outputs(md, outputs)
+    if not (math.isfinite(stop_time) and stop_time > 0 and math.isfinite(output_interval) and output_interval > 0):
+        raise ValueError(f"stop time {stop_time} and output interval {output_interval} must be positive")
+    if batch is not None and batch < 1:
+        raise ValueError(f"batch = {batch}: must be at least 1")
+    if out is not None and not Path(out).parent.is_dir():
+        raise ValueError(f"out: {Path(out).parent} is not a directory")
+    inputs = _inputs(md, runs)
+    start, frames, done, failed = time.perf_counter(), [], 0, 0
+    with _client(scheduler, n_workers, timeout) as client:
+        plugin = f"conical-pendulum-sweep-{uuid.uuid4().hex}"
+        client.register_plugin(_FmuPlugin(data), name=plugin)
+        try:
+            size = batch or max(1, min(25, math.ceil(len(runs) / (4 * sum(client.nthreads().values())))))
+            numbered = list(enumerate(runs))
+            futures = [client.submit(_run_batch, plugin, numbered[i:i + size], stop_time, output_interval,
+                                     outputs, pure=False) for i in range(0, len(runs), size)]
+            if progress:
+                _show_progress(0, len(runs), 0, start)
+            for future in as_completed(futures):
+                frame = future.result()
+                frames.append(frame)
+                done += frame["run"].nunique()
+                failed += frame.loc[frame["status"] == "failed", "run"].nunique()
+                if progress:
+                    _show_progress(done, len(runs), failed, start)
+        finally:
+            client.unregister_worker_plugin(plugin)
+    frames.sort(key=lambda frame: frame["run"].iat[0])
+    results = pd.concat(frames, ignore_index=True)
+    results = pd.concat([results[["run"]], inputs.loc[results["run"]].reset_index(drop=True),
+                         results.drop(columns="run")], axis=1)
+    results.attrs = {"fmu": md.modelName, "fmu_guid": md.guid, "stop_time": stop_time,
+                     "output_interval": output_interval, "outputs": outputs, "inputs": list(inputs.columns)}
+    if out is not None:
+        results.to_parquet(out, index=False)
+    return results
+
+
+def _assignment(text: str, form: str) -> tuple[str, str]:
+    name, equals, value = text.partition("=")
+    if not (name and equals and value):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected {form}")
+    return name, value
+
+
+def _number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def _grid_axis(text: str) -> tuple[str, list[float]]:
+    name, values = _assignment(text, "NAME=V1,V2,...")
+    return name, [_number(value) for value in values.split(",")]
+
+
+def _range(text: str) -> tuple[str, tuple[float, float]]:
+    name, bounds = _assignment(text, "NAME=LOW:HIGH")
+    low, colon, high = bounds.partition(":")
+    if not colon:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected NAME=LOW:HIGH")
+    return name, (_number(low), _number(high))
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of at least 1")
+    return value
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):
+        """One line, not the usage block: it is long."""
+        self.exit(2, f"sweep: {message} (see --help)\n")
+
+
+def _parse(argv):
+    parser = _Parser(
+        prog="python -m conical_pendulum.sweep", formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="\n\n".join(__doc__.split("\n\n")[:2]),
+        epilog="Variables: the FMU's parameters (l0, m0, M0, Ixx0, g, rtol, solver, ...) and state\n"
+               "start values (alpha0, beta0, omega0, delta0, ...). The file has one row per run and\n"
+               "time: run, the inputs (a state's start value as <name>_start), status ('ok' or\n"
+               "'failed'), message, time, the outputs.\n"
+               "Exit status: 0 when every run succeeded, 1 when some failed (they are in the file),\n"
+               "2 for bad options or when the sweep could not run.")
+    parser.add_argument("fmu", type=Path, help="the FMU (FMI 2.0 co-simulation)")
+    runs = parser.add_mutually_exclusive_group(required=True)
+    runs.add_argument("--grid", type=_grid_axis, action="append", metavar="NAME=V1,V2,...",
+                      help="values of one variable; repeat for more: every combination is run")
+    runs.add_argument("--random", type=_range, action="append", metavar="NAME=LOW:HIGH",
+                      help="a range of one variable, sampled uniformly; repeat for more")
+    parser.add_argument("--samples", type=_positive_int, help="with --random: how many runs")
+    parser.add_argument("--seed", type=int, help="with --random: seed for reproducible samples")
+    parser.add_argument("--stop-time", type=float, default=10.0, help="simulated seconds per run (10)")
+    parser.add_argument("--interval", type=float, default=1.0 / 60.0, help="output interval [s] (1/60)")
+    parser.add_argument("--outputs", type=lambda text: text.split(","), metavar="NAME,NAME,...",
+                        help="variables to record (default: every output)")
+    parser.add_argument("--workers", type=_positive_int,
+                        help="worker processes of the local cluster made for the sweep (2)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="run on an existing cluster instead, e.g. tcp://host:8786")
+    parser.add_argument("--connect-timeout", type=float, default=10.0, metavar="SECONDS",
+                        help="with --scheduler: how long to try to connect (10)")
+    parser.add_argument("--batch", type=_positive_int, help="runs per task (default: automatic)")
+    parser.add_argument("--out", type=Path, default=Path("sweep.parquet"), help="Parquet file (sweep.parquet)")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    args = parser.parse_args(argv)
+    given = args.grid or args.random
+    if len({name for name, _ in given}) < len(given):
+        parser.error("a variable is given twice")
+    if args.random and args.samples is None:
+        parser.error("--random needs --samples")
+    if args.grid and (args.samples is not None or args.seed is not None):
+        parser.error("--samples and --seed go with --random")
+    if args.scheduler and args.workers is not None:
+        parser.error("--workers is for the local cluster; drop it with --scheduler")
+    return args
+
+
+def main(argv=None) -> int:
+    args = _parse(argv)
+    try:
+        runs = (grid(dict(args.grid)) if args.grid
+                else random_samples(dict(args.random), args.samples, args.seed))
+        start = time.perf_counter()
+        results = sweep(args.fmu, runs, stop_time=args.stop_time, output_interval=args.interval,
+                        outputs=args.outputs, scheduler=args.scheduler, n_workers=args.workers or 2,
+                        batch=args.batch, out=args.out, progress=not args.no_progress,
+                        timeout=args.connect_timeout)
+    except (ValueError, ConnectionError) as exc:
+        print(f"sweep: {exc}", file=sys.stderr)
+        return 2
+    seconds = time.perf_counter() - start
+    by_run = results.drop_duplicates("run").set_index("run")
+    failed = by_run[by_run["status"] == "failed"]
+    print(f"wrote {args.out}: {len(by_run)} runs ({len(failed)} failed), {len(results)} rows, "
+          f"in {seconds:.1f} s ({len(by_run) / seconds:.1f} runs/s)")
+    for run, row in failed.head(5).iterrows():
+        values = ", ".join(f"{name} = {row[name]:g}" for name in results.attrs["inputs"])
+        print(f"  run {run} ({values}) failed: {row['message']}")
+    if len(failed) > 5:
+        print(f"  ... and {len(failed) - 5} more: status == 'failed' in the file")
+    return 1 if len(failed) else 0
+
+
+if __name__ == "__main__":  # through the package, so that tasks pickle by reference, not as __main__
+    from conical_pendulum.sweep import main as package_main
+
+    sys.exit(package_main())
