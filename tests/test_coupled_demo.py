@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
@@ -19,6 +20,9 @@ def cart_fmu(tmp_path_factory):
 
 def test_cart_alone_is_the_exact_damped_oscillator(cart_fmu):
     assert validate_fmu(str(cart_fmu)) == []
+    md = read_model_description(str(cart_fmu))
+    dependencies = {u.variable.name: [v.name for v in u.dependencies] for u in md.outputs}
+    assert dependencies == {"x": [], "v": [], "a": ["F_x"]}  # only a answers its input at once
     fmu = Instance(cart_fmu, start_values={"x": 1.0, "v": 0.0})
     m, k, c = cart_parameters().values()
     rate, damping = math.sqrt(k / m - (c / (2 * m)) ** 2), c / (2 * m)

@@ -42,7 +42,7 @@ def build_cart_fmu(output: Path | str) -> Path:
     source = CART_SOURCE.read_text()
     digest = hashlib.sha256(source.encode()).hexdigest()[:16]
     starts = {**{name: value for name, (_, value) in PARAMETERS.items()}, **CART_START, "F_x": 0.0}
-    package("Cart", f"cart_{digest}", f"cart_slave_{digest}", source, [], output, starts)
+    package("Cart", f"cart_{digest}", f"cart_slave_{digest}", source, [], output, starts, feedthrough=["a"])
     return output
 
 

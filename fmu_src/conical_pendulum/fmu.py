@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .compiler import CoreBuild, build_core
-from .scene import Scene
+from .scene import PIVOT_OUTPUTS, Scene
 
 HERE = Path(__file__).parent
 TEMPLATE = HERE / "slave_template.py"
@@ -48,14 +48,19 @@ else:
 '''
 
 
+def start_values(scene: Scene) -> dict[str, dict[str, float]]:
+    """The scene's start values by name: parameters, inputs (at rest) and state."""
+    return {"PARAMETER_START": dict(zip(scene.parameter_names(), scene.parameter_defaults())),
+            "INPUT_START": dict.fromkeys(scene.input_names(), 0.0),
+            "STATE_START": dict(zip(scene.state_names(), scene.state_defaults()))}
+
+
 def render_slave(scene: Scene, core: CoreBuild, settings: dict) -> tuple[str, str]:
     """(module name, source) of the slave: the template with this scene's values."""
     values = {
         "CORE_MODULE": core.module_name,
         "CORE_FILE": core.library.name,
-        "PARAMETER_START": dict(zip(scene.parameter_names(), scene.parameter_defaults())),
-        "INPUT_START": dict.fromkeys(scene.input_names(), 0.0),
-        "STATE_START": dict(zip(scene.state_names(), scene.state_defaults())),
+        **start_values(scene),
         "DESCRIPTION": _description(scene),
         "SETTINGS_START": settings,
     }
@@ -80,22 +85,22 @@ def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.f
     core = build_core(scene, cache)
     settings = {**DEFAULT_SETTINGS, **(settings or {})}
     slave_name, source = render_slave(scene, core, settings)
-    starts = {**dict(zip(scene.parameter_names(), scene.parameter_defaults())),
-              **dict.fromkeys(scene.input_names(), 0.0),
-              **dict(zip(scene.state_names(), scene.state_defaults())), **settings}
+    starts = {name: value for group in start_values(scene).values() for name, value in group.items()}
     module_name = slave_name.replace("cp_slave_", "conical_pendulum_")
-    package(MODEL_NAME, module_name, slave_name, source, [core.library], output, starts, describe,
+    package(MODEL_NAME, module_name, slave_name, source, [core.library], output, {**starts, **settings},
+            describe, feedthrough=PIVOT_OUTPUTS if scene.coupling else (),
             canGetAndSetFMUstate=True, canSerializeFMUstate=True)
     return FmuBuild(output, core, module_name, time.perf_counter() - start)
 
 
 def package(model: str, module_name: str, slave_name: str, source: str, project_files: list[Path],
-            output: Path, starts: dict, describe=None, **capabilities) -> None:
+            output: Path, starts: dict, describe=None, feedthrough=(), **capabilities) -> None:
     """Build the FMU of a pythonfmu slave (class `model` in module `slave_name`) at `output`.
 
     The module pythonfmu loads is the small ENTRY, named `module_name` (the FMU's model
     identifier); the FMU moves into place only when everything succeeded. `describe`
-    gives variable descriptions by name, if the slave's own are not kept.
+    gives variable descriptions by name, if the slave's own are not kept; `feedthrough`
+    names the outputs that depend at once on the inputs.
     """
     from pythonfmu import FmuBuilder  # build time only
 
@@ -117,16 +122,16 @@ def package(model: str, module_name: str, slave_name: str, source: str, project_
             for name in set(sys.modules) - saved_modules:
                 if name in (module_name, slave_name):
                     del sys.modules[name]
-        _finish(staged, starts, describe)
+        _finish(staged, starts, describe, set(feedthrough))
         os.replace(staged, output)
 
 
-def _finish(fmu: Path, starts: dict, describe) -> None:
+def _finish(fmu: Path, starts: dict, describe, feedthrough: set[str]) -> None:
     """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only;
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
-    Outputs declare their direct feedthrough: only the pivot force depends on the inputs
-    within a communication point, so a master knows where an algebraic loop can be.
+    Outputs declare their direct feedthrough (the `feedthrough` outputs depend on every
+    input, the others on none), so a master knows where an algebraic loop can be.
 
     pythonfmu lists no InitialUnknowns, writes Real starts with 16 digits (a double
     needs 17 to round-trip), and packs binaries for every platform it has, while the
@@ -154,10 +159,10 @@ def _finish(fmu: Path, starts: dict, describe) -> None:
         if real is not None and real.get("start") is not None:
             real.set("start", repr(float(starts[var.get("name")])))
         if var.get("causality") == "output":
-            feedthrough = var.get("name").startswith("F_pivot_")
-            ET.SubElement(outputs, "Unknown", index=str(index), dependencies=inputs if feedthrough else "",
+            direct = var.get("name") in feedthrough
+            ET.SubElement(outputs, "Unknown", index=str(index), dependencies=inputs if direct else "",
                           **({"dependenciesKind": " ".join(["dependent"] * len(inputs.split()))}
-                             if feedthrough and inputs else {}))
+                             if direct and inputs else {}))
             if var.get("initial") in ("calculated", "approx"):
                 ET.SubElement(initial, "Unknown", index=str(index))
     if not len(initial):
