@@ -4,9 +4,9 @@ from __future__ import annotations
 import shutil
 
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE,
-                       fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE)
-from fmpy.fmi1 import calloc, free
+from fmpy.fmi2 import FMU2Slave
+
+from conical_pendulum.check import logging_callbacks
 
 
 class Instance:
@@ -18,14 +18,7 @@ class Instance:
         self.types = {v.name: v.type for v in self.md.modelVariables}
         self.unzipdir = extract(str(path))
         self.messages = []
-
-        def log(component, instance, status, category, message):
-            self.messages.append((status, message.decode()))
-
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(log)
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._callbacks = logging_callbacks(lambda status, text: self.messages.append((status, text)))
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipdir,
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)

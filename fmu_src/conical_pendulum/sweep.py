@@ -35,12 +35,10 @@ import numpy as np
 import pandas as pd
 from distributed import Client, LocalCluster, WorkerPlugin, as_completed, get_worker
 from fmpy import read_model_description
-from fmpy.fmi1 import calloc, free
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy.fmi2 import FMU2Slave
 from fmpy.simulation import settable_in_initialization_mode, settable_in_instantiated
 
-from .check import run_fmu
+from .check import logging_callbacks, run_fmu
 
 
 def grid(axes: Mapping[str, Sequence[float]]) -> list[dict]:
@@ -78,14 +76,8 @@ class LoadedFmu:
             archive.extractall(self.directory)
         self.md = read_model_description(self.directory)
 
-        def log(component, instance, status, category, message):
-            self.messages.append(message.decode(errors="replace").replace("\n", " "))
-
-        # pythonfmu forwards messages only to an instance made with logging on
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(log)
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._callbacks = logging_callbacks(
+            lambda status, text: self.messages.append(text.replace("\n", " ")))
         # fmpy's freeInstance also unloads the library; instances are freed with
         # fmi2FreeInstance instead, so the library stays loaded for the next run.
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.directory,
@@ -187,7 +179,8 @@ def _check_outputs(md, outputs: Sequence[str] | None) -> list[str]:
     outputs = list(dict.fromkeys(outputs))
     if not outputs:
         raise ValueError("no outputs chosen")
-    unknown = [name for name in outputs if name not in {v.name for v in md.modelVariables}]
+    known = {v.name for v in md.modelVariables}
+    unknown = [name for name in outputs if name not in known]
     if unknown:
         raise ValueError(f"unknown output(s) {', '.join(unknown)}: {md.modelName} has no such variable")
     return outputs
