@@ -56,7 +56,7 @@ def main(argv=None) -> int:
     except SceneError as exc:
         print(f"build_fmu.py: {exc}", file=sys.stderr)
         return 2
-    from conical_pendulum.fmu import build_fmu
+    from conical_pendulum.build.fmu import build_fmu
 
     try:
         build = build_fmu(scene, args.output)
@@ -70,7 +70,7 @@ def main(argv=None) -> int:
           f"{len(scene.output_names())} calculated outputs; core {how}")
     if args.no_check:
         return 0
-    from conical_pendulum.check import compare
+    from conical_pendulum.analysis.compare import compare
 
     start = time.perf_counter()
     comparison = compare(build.path, scene)
@@ -87,7 +87,7 @@ def show(result, folder: Path) -> None:
     """The run as CSV, a plot and an animation, next to the FMU."""
     from fmpy.util import write_csv
 
-    from conical_pendulum import show as viz
+    from conical_pendulum.viz import plots as viz
 
     csv = folder / "results.csv"
     write_csv(str(csv), result)

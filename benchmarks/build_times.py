@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from conical_pendulum import Scene
-from conical_pendulum.compiler import build_core
+from conical_pendulum.build.compiler import build_core
 
 RESULTS = Path(__file__).parent / "results"
 

@@ -20,7 +20,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 from conical_pendulum import Scene
-from conical_pendulum.fmu import build_fmu
+from conical_pendulum.build.fmu import build_fmu
 
 TRIVIAL = '''
 from pythonfmu import Fmi2Slave, Real, Fmi2Causality

@@ -9,14 +9,18 @@ Compared in one run on this machine:
   called from Python as odeint calls it.
 Then the seed scenario (10 s, 601 samples) simulated natively.
 """
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 from conical_pendulum import Scene
-from conical_pendulum.compiler import load_core
-from conical_pendulum.seed_pipeline import seed_right_hand_side
-from conical_pendulum.simulate import simulate
+from conical_pendulum.analysis.simulate import simulate
+from conical_pendulum.build.compiler import load_core
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the seed's pipeline, a test reference
+from references.seed_pipeline import seed_right_hand_side  # noqa: E402
 
 
 def per_call(f, repeats=7, calls=20000):

@@ -30,9 +30,9 @@ import numpy as np
 from distributed import LocalCluster
 
 from conical_pendulum import Scene
-from conical_pendulum.check import run_fmu
-from conical_pendulum.fmu import build_fmu
-from conical_pendulum.sweep import LoadedFmu, random_samples, sweep
+from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.analysis.sweep import LoadedFmu, random_samples, sweep
 
 STOP, INTERVAL = 10.0, 1.0 / 60.0
 RESULTS = Path(__file__).parent / "results" / "sweep_throughput.csv"

@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import csv
 import math
+import sys
 import time
 from pathlib import Path
 
@@ -28,8 +29,8 @@ import numpy as np
 from scipy.integrate import odeint, solve_ivp
 
 from conical_pendulum import Scene
-from conical_pendulum.compiler import load_core
-from conical_pendulum.fmu import DEFAULT_SETTINGS
+from conical_pendulum.build.compiler import load_core
+from conical_pendulum.build.fmu import DEFAULT_SETTINGS
 
 RESULTS = Path(__file__).parent / "results"
 STEP = 1.0 / 60.0
@@ -178,7 +179,8 @@ def main():
 
 def seed_pipeline_rows(times, tolerances, long_horizon):
     """PyDy's own pipeline (Cython RHS from the seed + odeint) on the published model."""
-    from conical_pendulum.seed_pipeline import seed_right_hand_side
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # a test reference
+    from references.seed_pipeline import seed_right_hand_side
 
     scene = Scene.uniform(3, kinematics="pydy-example")
     core = load_core(scene)
@@ -216,7 +218,7 @@ def fmu_row(scene, core, p, reference, ref_outputs, bob_index):
 
     import fmpy
 
-    from conical_pendulum.fmu import build_fmu
+    from conical_pendulum.build.fmu import build_fmu
 
     with tempfile.TemporaryDirectory() as tmp:
         path = build_fmu(scene, Path(tmp) / "ConicalPendulum.fmu").path

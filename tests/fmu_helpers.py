@@ -6,7 +6,7 @@ import shutil
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-from conical_pendulum.check import logging_callbacks
+from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 
 
 class Instance:

@@ -8,8 +8,9 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from conical_pendulum.compiler import load_core
-from conical_pendulum.coupled_demo import SCENE, build_cart_fmu, cart_parameters, main, monolithic
+from conical_pendulum.build.compiler import load_core
+from conical_pendulum.demos.coupled import SCENE, build_cart_fmu, main
+from conical_pendulum.demos.monolithic import cart_parameters, monolithic
 from fmu_helpers import Instance
 
 
@@ -49,7 +50,7 @@ def test_cart_with_a_bad_mass_discards_its_step_and_says_why(cart_fmu):
 def test_monolithic_model_is_the_coupled_pieces_physics():
     """Along the one-model reference, the pendulum's core driven by the cart's acceleration
     gives the same accelerations, and its pivot force is what moves the cart."""
-    reference = monolithic(np.linspace(0.0, 3.0, 31))
+    reference = monolithic(np.linspace(0.0, 3.0, 31), SCENE)
     core = load_core(SCENE)
     m, k, c = cart_parameters().values()
     names, n = SCENE.state_names(), SCENE.n

@@ -9,10 +9,10 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from conical_pendulum import Scene
-from conical_pendulum.check import run_fmu
-from conical_pendulum.compiler import load_core
-from conical_pendulum.fmu import build_fmu
-from conical_pendulum.simulate import simulate
+from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.build.compiler import load_core
+from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.analysis.simulate import simulate
 from fmu_helpers import Instance
 
 COUPLED = Scene.uniform(3, coupling=True)

@@ -5,7 +5,7 @@ import sys
 
 import numpy as np
 
-from conical_pendulum.check import run_fmu
+from conical_pendulum.analysis.fmpy_runs import run_fmu
 
 # Runs in its own process: ecospy needs libtbb loaded first, and pythonfmu 0.7's exit-time
 # destructor can abort an interpreter that still has the FMU library mapped, so the

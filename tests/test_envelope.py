@@ -9,9 +9,9 @@ import pytest
 from fmpy.fmi1 import FMICallException
 
 from conical_pendulum import Link, Scene
-from conical_pendulum.check import run_fmu
-from conical_pendulum.fmu import build_fmu
-from conical_pendulum.simulate import simulate
+from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.analysis.simulate import simulate
 from fmu_helpers import Instance
 
 SEED = Scene.uniform(3)

@@ -14,8 +14,9 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from conical_pendulum import Link, Scene
-from conical_pendulum.check import compare, run_fmu
-from conical_pendulum.fmu import build_fmu
+from conical_pendulum.analysis.compare import compare
+from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.build.fmu import build_fmu
 from fmu_helpers import Instance
 
 
@@ -247,7 +248,7 @@ def test_radau_fallback_matches_native(seed_fmu):
     """solver = 3: scipy's Radau on the compiled right-hand side, inside the FMU."""
     start = {"solver": 3, "rtol": 1e-10, "atol": 1e-10, "alpha1": 0.6}
     result = run_fmu(seed_fmu, stop_time=2.0, output_interval=0.1, start_values=start)
-    from conical_pendulum.simulate import simulate
+    from conical_pendulum.analysis.simulate import simulate
 
     native = simulate(Scene.uniform(3), result["time"], state={"alpha1": 0.6}, rtol=1e-12, atol=1e-12)
     for name in Scene.uniform(3).state_names():

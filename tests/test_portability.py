@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from conical_pendulum.check import run_fmu
+from conical_pendulum.analysis.fmpy_runs import run_fmu
 
 OTHER_PYTHONS = {v: sorted(glob.glob(os.path.expanduser(f"~/.pyenv/versions/{v}.*/bin/python")))
                  for v in ("3.12", "3.13")}

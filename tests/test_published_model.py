@@ -2,8 +2,8 @@
 import numpy as np
 
 from conical_pendulum import Scene
-from conical_pendulum.compiler import load_core
-from conical_pendulum.seed_pipeline import seed_right_hand_side
+from conical_pendulum.build.compiler import load_core
+from references.seed_pipeline import seed_right_hand_side
 
 
 def test_pydy_example_equals_the_seed_pipeline():

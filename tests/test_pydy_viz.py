@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from conical_pendulum import Link, Scene
-from conical_pendulum.check import run_fmu
-from conical_pendulum.pydy_viz import PREFIX, write_pydy_page
+from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.viz.pydy_page import PREFIX, write_pydy_page
 
 
 def test_the_page_carries_the_fmu_trajectories(seed_fmu, tmp_path):
@@ -33,7 +33,7 @@ def test_the_page_carries_the_fmu_trajectories(seed_fmu, tmp_path):
 
 
 def test_a_scene_without_bobs_draws_only_links(seed_fmu, tmp_path, fmu_dir):
-    from conical_pendulum.fmu import build_fmu
+    from conical_pendulum.build.fmu import build_fmu
 
     scene = Scene(links=(Link(has_bob=False), Link(has_bob=False)))
     path = build_fmu(scene, fmu_dir / "NoBobs.fmu").path

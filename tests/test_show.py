@@ -1,4 +1,4 @@
-"""Plots and the animation from an FMU run, as `python -m conical_pendulum.show` makes them."""
+"""Plots and the animation from an FMU run, as `python -m conical_pendulum.viz.plots` makes them."""
 import subprocess
 import sys
 
@@ -7,7 +7,7 @@ import pytest
 from fmpy.util import write_csv
 from PIL import Image
 
-from conical_pendulum.check import run_fmu
+from conical_pendulum.analysis.fmpy_runs import run_fmu
 
 
 @pytest.fixture(scope="module")
@@ -19,7 +19,7 @@ def results_csv(seed_fmu, tmp_path_factory):
 
 
 def show(*args):
-    return subprocess.run([sys.executable, "-m", "conical_pendulum.show", *map(str, args)],
+    return subprocess.run([sys.executable, "-m", "conical_pendulum.viz.plots", *map(str, args)],
                           capture_output=True, text=True, timeout=300)
 
 

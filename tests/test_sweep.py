@@ -1,4 +1,4 @@
-"""conical_pendulum.sweep: Dask runs equal to fmpy's one by one, failures kept with their
+"""conical_pendulum.analysis.sweep: Dask runs equal to fmpy's one by one, failures kept with their
 messages, one Parquet file, the FMU loaded once per worker, and a command that refuses
 what it cannot run."""
 import math
@@ -10,9 +10,9 @@ import pandas as pd
 import pytest
 from distributed import Client, LocalCluster
 
-from conical_pendulum import sweep as sweep_module
-from conical_pendulum.check import run_fmu
-from conical_pendulum.sweep import LoadedFmu, grid, random_samples, sweep
+from conical_pendulum.analysis import sweep as sweep_module
+from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.analysis.sweep import LoadedFmu, grid, random_samples, sweep
 
 # a start that needs more than 25 internal steps in the communication step from 1.5 s to 2 s
 DISCARDED_AT_1_5 = {"alpha0": 1.2, "delta2": 3.0, "max_steps": 25}
@@ -135,7 +135,7 @@ def test_runs_are_made_reproducibly():
 
 
 def command(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "conical_pendulum.sweep", *map(str, args)], cwd=cwd,
+    return subprocess.run([sys.executable, "-m", "conical_pendulum.analysis.sweep", *map(str, args)], cwd=cwd,
                           capture_output=True, text=True, timeout=300)
 
 

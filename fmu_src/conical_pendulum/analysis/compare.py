@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import Scene
+from ..scene import Scene
+from .fmpy_runs import run_fmu
 from .simulate import simulate
 
 
@@ -28,34 +29,6 @@ class Comparison:
         rows = [f"  {'variable':<10} max |FMU - native|"]
         rows += [f"  {n:<10} {d:.3e}" for n, d in zip(self.names, self.max_abs_diff)]
         return "\n".join(rows)
-
-
-def logging_callbacks(on_message):
-    """fmi2CallbackFunctions that hand each log message to on_message(status, text).
-
-    Pass them to fmpy's instantiate with loggingOn=True: pythonfmu forwards messages
-    only then. Keep the returned object alive as long as the instance.
-    """
-    from fmpy.fmi1 import calloc, free
-    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-
-    def log(component, instance, status, category, message):
-        on_message(status, message.decode(errors="replace"))
-
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(log)
-    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    return callbacks
-
-
-def run_fmu(fmu_path, stop_time=10.0, output_interval=1.0 / 60.0, start_values=None, **kwargs):
-    """fmpy.simulate_fmu with the output interval always given (fmpy ignores step_size for CS)."""
-    import fmpy
-
-    return fmpy.simulate_fmu(str(fmu_path), stop_time=stop_time, output_interval=output_interval,
-                             start_values=start_values or {}, **kwargs)
 
 
 def compare(fmu_path, scene: Scene, *, stop_time=10.0, output_interval=1.0 / 60.0,

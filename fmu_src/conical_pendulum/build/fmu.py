@@ -17,10 +17,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .compiler import CoreBuild, build_core
-from .scene import PIVOT_OUTPUTS, Scene
+from ..scene import PIVOT_OUTPUTS, Scene
 
 HERE = Path(__file__).parent
-TEMPLATE = HERE / "slave_template.py"
+TEMPLATE = HERE.parent / "runtime" / "slave.py"
 MODEL_NAME = "ConicalPendulum"
 DEFAULT_SETTINGS = {"rtol": 1e-8, "atol": 1e-8, "max_step": 0.0, "solver": 1, "max_steps": 100_000}
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .scene import Scene
+from ..scene import Scene
 
 PREFIX = "conical_pendulum"
 

@@ -6,7 +6,7 @@ master; one monolithic sympy model of cart and pendulum (kane_reference), integr
 natively at 1e-12, is the truth. The coupling error against the communication step is
 the co-simulation's own face of the speed/accuracy trade.
 
-    python -m conical_pendulum.coupled_demo [--out dist/coupled] [--steps 0.1,0.05,...]
+    python -m conical_pendulum.demos.coupled [--out dist/coupled] [--steps 0.1,0.05,...]
 
 ecospy (the `cosim` extra) runs in a subprocess: it needs libtbb loaded first, and its
 interpreter can abort at exit while pythonfmu's library is mapped.
@@ -23,20 +23,20 @@ from pathlib import Path
 
 import numpy as np
 
-from .scene import Scene
+from ..scene import Scene
+from .monolithic import CART_START, cart_parameters, monolithic
 
-CART_SOURCE = Path(__file__).with_name("cart_slave.py")
+CART_SOURCE = Path(__file__).parents[1] / "runtime" / "cart_slave.py"
 STEPS = (0.2, 0.1, 0.05, 0.02, 0.01, 0.005)
 STOP_TIME = 10.0
 SCENE = Scene.uniform(3, coupling=True)
-CART_START = {"x": 1.0, "v": 0.0}
 EXCHANGED = ["cart::x", "cart::v", "cart::a", "p::F_pivot_x"] + [f"p::{name}" for name in SCENE.state_names()]
 
 
 def build_cart_fmu(output: Path | str) -> Path:
     """Cart.fmu from cart_slave.py, behind the same small entry module as the pendulum."""
-    from .cart_slave import PARAMETERS  # imports pythonfmu: build time only
-    from .fmu import package
+    from ..build.fmu import package
+    from ..runtime.cart_slave import PARAMETERS  # imports pythonfmu
 
     output = Path(output)
     source = CART_SOURCE.read_text()
@@ -44,49 +44,6 @@ def build_cart_fmu(output: Path | str) -> Path:
     starts = {**{name: value for name, (_, value) in PARAMETERS.items()}, **CART_START, "F_x": 0.0}
     package("Cart", f"cart_{digest}", f"cart_slave_{digest}", source, [], output, starts, feedthrough=["a"])
     return output
-
-
-def cart_parameters(**overrides: float) -> dict[str, float]:
-    """The cart's parameters in kane_reference.CART_PARAMETERS order: its FMU's starts, or these."""
-    from .cart_slave import PARAMETERS
-    from .kane_reference import CART_PARAMETERS
-
-    return {name: float(overrides.get(name, PARAMETERS[name][1])) for name in CART_PARAMETERS}
-
-
-def monolithic(times, scene: Scene = SCENE, cart: dict | None = None, rtol: float = 1e-12,
-               atol: float = 1e-12) -> dict:
-    """Cart and pendulum as one sympy model (KanesMethod), integrated by scipy's DOP853.
-
-    Returns {name: array on `times`} for x_cart, v_cart, the pendulum's state, and the
-    accelerations: a_cart and d<speed> for each of the pendulum's speeds.
-    """
-    import sympy as sm
-    from scipy.integrate import solve_ivp
-
-    from .kane_reference import cart_and_pendulum
-
-    M, F, states, params = cart_and_pendulum(scene)
-    mass = sm.lambdify([states, params], M, cse=True)
-    forcing = sm.lambdify([states, params], F, cse=True)
-    p = np.array(scene.parameter_defaults() + list((cart or cart_parameters()).values()))
-    n = len(states) // 2
-    pendulum = dict(zip(scene.state_names(), scene.state_defaults()))
-    start = {"x_cart": CART_START["x"], "v_cart": CART_START["v"], **pendulum}
-    y0 = np.array([start[str(s)] for s in states])
-
-    def rhs(_, y):
-        return np.concatenate([y[n:], np.linalg.solve(mass(y, p), np.ravel(forcing(y, p)))])
-
-    solution = solve_ivp(rhs, (times[0], times[-1]), y0, method="DOP853", t_eval=times,
-                         rtol=rtol, atol=atol)
-    if not solution.success:
-        raise RuntimeError(f"monolithic reference failed: {solution.message}")
-    result = {str(s): row for s, row in zip(states, solution.y)}
-    rates = np.array([rhs(0.0, y)[n:] for y in solution.y.T]).T
-    result["a_cart"] = rates[0]
-    result.update({f"d{s}": row for s, row in zip(states[n + 1:], rates[1:])})
-    return result
 
 
 ECOSPY_SCRIPT = r"""
@@ -179,7 +136,7 @@ def coupling_errors(runs: dict, scene: Scene = SCENE, cart: dict | None = None
 
 def _reference_force(reference: dict, scene: Scene) -> np.ndarray:
     """F_pivot_x along the reference, from the compiled core with the cart's acceleration."""
-    from .compiler import load_core
+    from ..build.compiler import load_core
 
     core = load_core(scene)
     names = scene.state_names()
@@ -223,7 +180,7 @@ def plot(runs: dict, errors: list[CouplingError], reference: dict, path: Path) -
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m conical_pendulum.coupled_demo", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m conical_pendulum.demos.coupled", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, default=Path("dist") / "coupled",
                         help="folder for the FMUs, coupling_error.csv and coupling.png")
@@ -246,7 +203,7 @@ def main(argv=None) -> int:
     if not args.cart_mass > 0:
         parser.error(f"--cart-mass: must be a positive number of kg, got {args.cart_mass!r}")
     cart_values = cart_parameters(m_cart=args.cart_mass)
-    from .fmu import build_fmu
+    from ..build.fmu import build_fmu
 
     args.out.mkdir(parents=True, exist_ok=True)
     pendulum = build_fmu(SCENE, args.out / "ConicalPendulum.fmu").path

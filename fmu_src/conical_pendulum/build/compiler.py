@@ -17,12 +17,11 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .scene import Scene
+from ..scene import Scene
 
 HERE = Path(__file__).parent
-CSRC = HERE / "csrc"
-GENERATOR_SOURCES = [HERE / "model.py", HERE / "kane_reference.py", HERE / "codegen.py",
-                     HERE / "compiler.py", *sorted(CSRC.glob("*.[chp]*"))]
+CSRC = HERE.parent / "runtime" / "csrc"
+GENERATOR_SOURCES = [*sorted(HERE.glob("*.py")), *sorted(CSRC.glob("*.[chp]*"))]
 LIMITED_API = "0x030B0000"  # CPython 3.11: one compiled file serves 3.11 and newer
 
 

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import odeint, solve_ivp
 
-from .compiler import load_core
-from .scene import Scene
+from ..build.compiler import load_core
+from ..scene import Scene
 
 
 @dataclass

@@ -17,7 +17,7 @@ the whole chain, sum m (g - a), so it needs u' (the symbols `rates`).
 
 The published model (kinematics="pydy-example") cannot be formed this way: its
 equations are whatever sympy derives from contradictory kinematics, so they come from
-running the seed's own KanesMethod derivation (see kane_reference).
+running the seed's own KanesMethod derivation (see build.kane).
 """
 from __future__ import annotations
 
@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import sympy as sm
 import sympy.physics.mechanics as me
 
-from .kane_reference import kanes_method
-from .scene import Scene
+from ..scene import Scene
+from .kane import kanes_method
 
 Vec = sm.Matrix
 

@@ -1,7 +1,7 @@
 """Parameter and initial-condition sweeps of an FMU, run as Dask tasks, kept in one Parquet file.
 
-    python -m conical_pendulum.sweep dist/ConicalPendulum.fmu --grid l0=5,10,15 --grid alpha0=0.1,0.2
-    python -m conical_pendulum.sweep dist/ConicalPendulum.fmu --random l0=5:15 --samples 100 --seed 1
+    python -m conical_pendulum.analysis.sweep dist/ConicalPendulum.fmu --grid l0=5,10,15 --grid alpha0=0.1,0.2
+    python -m conical_pendulum.analysis.sweep dist/ConicalPendulum.fmu --random l0=5:15 --samples 100 --seed 1
 
 Each worker process extracts the FMU, reads its model description and loads its library
 once (a WorkerPlugin carries the FMU's bytes, so a remote cluster needs no shared
@@ -38,7 +38,7 @@ from fmpy import read_model_description
 from fmpy.fmi2 import FMU2Slave
 from fmpy.simulation import settable_in_initialization_mode, settable_in_instantiated
 
-from .check import logging_callbacks, run_fmu
+from .fmpy_runs import logging_callbacks, run_fmu
 
 
 def grid(axes: Mapping[str, Sequence[float]]) -> list[dict]:
@@ -343,7 +343,7 @@ class _Parser(argparse.ArgumentParser):
 
 def _parse(argv):
     parser = _Parser(
-        prog="python -m conical_pendulum.sweep", formatter_class=argparse.RawDescriptionHelpFormatter,
+        prog="python -m conical_pendulum.analysis.sweep", formatter_class=argparse.RawDescriptionHelpFormatter,
         description="\n\n".join(__doc__.split("\n\n")[:2]),
         epilog="Variables: the FMU's parameters (l0, m0, M0, Ixx0, g, rtol, solver, ...) and state\n"
                "start values (alpha0, beta0, omega0, delta0, ...). The file has one row per run and\n"
@@ -412,6 +412,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # through the package, so that tasks pickle by reference, not as __main__
-    from conical_pendulum.sweep import main as package_main
+    from conical_pendulum.analysis.sweep import main as package_main
 
     sys.exit(package_main())
