@@ -7,6 +7,7 @@ from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.build.compiler import load_core
 from conical_pendulum.build.kane import kanes_method
 from conical_pendulum.build.model import derive
+from conical_pendulum.runtime.rules import BadValue
 from conical_pendulum.analysis.simulate import simulate
 
 SEED_TIMES = np.linspace(0.0, 10.0, 601)  # the seed's 10 s at 60 samples per second
@@ -165,5 +166,5 @@ def test_bad_scenes_and_values_are_named(make, message):
 def test_bad_values_are_named(parameters, state, message):
     scene = Scene.uniform(3, coupling=True)
     core = load_core(scene)
-    with pytest.raises(core.BadValue, match=message):
+    with pytest.raises(BadValue, match=message):
         simulate(scene, [0.0, 1.0], parameters=parameters, state=state, core=core)

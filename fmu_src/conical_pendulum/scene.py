@@ -3,7 +3,8 @@
 The scene is the single input of the build pipeline. Its structure (which bodies
 exist, which outputs are wanted, which kinematics) decides the generated code;
 its numbers (lengths, masses, radii) are only start values of FMU parameters.
-This module imports no sympy: the FMU and the native simulation use it too.
+This module imports no sympy: the FMU and the native simulation use it too. Its value
+rules are runtime.rules', the same the FMU applies.
 """
 from __future__ import annotations
 
@@ -13,6 +14,8 @@ import math
 import tomllib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+
+from .runtime.rules import LINK_RULES, RULES, satisfies
 
 KINEMATICS = ("consistent", "pydy-example")
 OUTPUT_GROUPS = ("bobs", "poses", "energy")
@@ -89,13 +92,15 @@ class Scene:
                 f"links: {self.n} with kinematics 'pydy-example'; the published derivation is "
                 f"only reproduced up to {MAX_PUBLISHED_LINKS} links (its size grows exponentially)")
         for i, link in enumerate(self.links):
-            for name in ("length", "mass", "radius", "bob_mass", "bob_radius"):
+            for name, rule in LINK_RULES.items():
                 value = getattr(link, name)
-                if not _positive(value):
-                    raise SceneError(f"link {i}: {name} must be a positive finite number, got {value!r}")
+                if not satisfies(rule, value):
+                    raise SceneError(f"link[{i}].{FILE_NAMES.get(name, name)}: must be "
+                                     f"{RULES[rule].wanted}{MASSLESS_HINT if name == 'mass' else ''}, "
+                                     f"got {value!r}")
             if link.moments is not None and not (
-                    len(link.moments) == 3 and all(_positive(m) or m == 0 for m in link.moments)):
-                raise SceneError(f"link {i}: inertia must be three finite numbers >= 0 "
+                    len(link.moments) == 3 and all(satisfies("non-negative", m) for m in link.moments)):
+                raise SceneError(f"link[{i}].inertia: must be three finite numbers >= 0 "
                                  f"(Ixx, Iyy, Izz), got {link.moments!r}")
         if not isinstance(self.coupling, bool):
             raise SceneError(f"coupling: expected true or false, got {self.coupling!r}")
@@ -176,7 +181,7 @@ class Scene:
     def parameters(self, overrides: dict | None = None) -> list[float]:
         """The core's p: the scene's numbers, then inputs at 0, some replaced by name.
 
-        Values are checked where they are used (the compiled core's check_value)."""
+        Values are checked where they are used (runtime.rules.check_value)."""
         defaults = self.parameter_defaults() + [0.0] * len(self.input_names())
         return _merge(self.core_parameter_names(), defaults, overrides, "parameter")
 
@@ -187,10 +192,12 @@ class Scene:
     def to_dict(self) -> dict:
         return asdict(self)
 
-
-def _positive(value) -> bool:
-    return (isinstance(value, (int, float)) and not isinstance(value, bool)
-            and math.isfinite(value) and value > 0)
+    @classmethod
+    def from_dict(cls, data: dict) -> "Scene":
+        """The scene to_dict described."""
+        links = tuple(Link(**{**link, "moments": link["moments"] and tuple(link["moments"])})
+                      for link in data["links"])
+        return cls(**{**data, "links": links, "outputs": tuple(data["outputs"])})
 
 
 def load_scene(path) -> Scene:
@@ -215,6 +222,9 @@ def load_scene(path) -> Scene:
         raise SceneError(f"scene file {str(path)!r}: {exc}") from None
 
 
+DEFAULT_LINK = Link()
+FILE_NAMES = {"bob_mass": "bob.mass", "bob_radius": "bob.radius"}  # Link fields as a file names them
+MASSLESS_HINT = " (or 0 for a massless link: has_mass=False)"
 SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs", "coupling"}
 LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob"}
 BOB_FIELDS = {"mass", "radius"}
@@ -232,24 +242,17 @@ def scene_from_dict(data: dict) -> Scene:
         if not isinstance(entry, dict):
             raise SceneError(f"{where}: expected a table of fields, got {entry!r}")
         _known(entry, LINK_FIELDS, where)
-        mass = entry.get("mass", 10.0)
+        mass = entry.get("mass", DEFAULT_LINK.mass)
         bob = entry.get("bob")
         if bob is not None and not isinstance(bob, dict):
             raise SceneError(f"{where}.bob: expected a table {{ mass = ..., radius = ... }}, got {bob!r}")
         _known(bob or {}, BOB_FIELDS, f"{where}.bob")
         fields = {"has_mass": mass != 0, "has_bob": bob is not None,
-                  "length": entry.get("length", 10.0), "mass": mass if mass != 0 else 10.0,
-                  "radius": entry.get("radius", 0.5)}
-        if bob is not None:
-            fields.update(bob_mass=bob.get("mass", 5.0), bob_radius=bob.get("radius", 1.0))
+                  "mass": mass if mass != 0 else DEFAULT_LINK.mass}
+        fields.update({name: entry[name] for name in ("length", "radius") if name in entry})
+        fields.update({f"bob_{name}": value for name, value in (bob or {}).items()})
         if "inertia" in entry:
             fields["moments"] = tuple(entry["inertia"]) if isinstance(entry["inertia"], list) else entry["inertia"]
-        for name in ("length", "mass", "radius", "bob_mass", "bob_radius"):
-            if name in fields and not _positive(fields[name]):
-                label = {"bob_mass": "bob.mass", "bob_radius": "bob.radius"}.get(name, name)
-                raise SceneError(f"{where}.{label}: must be a positive finite number"
-                                 f"{' (or 0 for a massless link)' if name == 'mass' else ''}, "
-                                 f"got {fields[name]!r}")
         try:
             made.append(Link(**fields))
         except TypeError as exc:

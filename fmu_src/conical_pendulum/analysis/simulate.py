@@ -11,6 +11,7 @@ import numpy as np
 from scipy.integrate import odeint, solve_ivp
 
 from ..build.compiler import load_core
+from ..runtime.rules import check_value
 from ..scene import Scene
 
 
@@ -44,9 +45,9 @@ def simulate(scene: Scene, times, *, parameters: dict | None = None, state: dict
     """
     core = core or load_core(scene)
     times = np.asarray(times, dtype=float)
-    p = np.array([core.check_value(name, value) for name, value in
+    p = np.array([check_value(name, value) for name, value in
                   zip(scene.core_parameter_names(), scene.parameters(parameters))])
-    x0 = np.array([core.check_value(name, value) for name, value in
+    x0 = np.array([check_value(name, value) for name, value in
                    zip(scene.state_names(), scene.initial_state(state))])
     rhs = core.rhs
     if method == "core":

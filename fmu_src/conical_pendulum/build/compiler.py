@@ -21,7 +21,8 @@ from ..scene import Scene
 
 HERE = Path(__file__).parent
 CSRC = HERE.parent / "runtime" / "csrc"
-GENERATOR_SOURCES = [*sorted(HERE.glob("*.py")), *sorted(CSRC.glob("*.[chp]*"))]
+GENERATOR_SOURCES = [*(HERE / name for name in ("kane.py", "model.py", "codegen.py", "compiler.py")),
+                     *sorted(CSRC.glob("*.[chp]*"))]
 LIMITED_API = "0x030B0000"  # CPython 3.11: one compiled file serves 3.11 and newer
 
 

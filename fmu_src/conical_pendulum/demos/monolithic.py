@@ -10,10 +10,11 @@ import sympy as sm
 import sympy.physics.mechanics as me
 
 from ..build.kane import chain
+from ..runtime.cart_slave import PARAMETERS as CART_DEFAULTS
+from ..runtime.cart_slave import START as CART_START
 from ..scene import Scene
 
-CART_PARAMETERS = ("m_cart", "k_cart", "c_cart")
-CART_START = {"x": 1.0, "v": 0.0}
+CART_PARAMETERS = tuple(CART_DEFAULTS)
 
 
 def cart_and_pendulum(scene):
@@ -43,10 +44,8 @@ def cart_and_pendulum(scene):
 
 
 def cart_parameters(**overrides: float) -> dict[str, float]:
-    """The cart's parameters in kane_reference.CART_PARAMETERS order: its FMU's starts, or these."""
-    from ..runtime.cart_slave import PARAMETERS
-
-    return {name: float(overrides.get(name, PARAMETERS[name][1])) for name in CART_PARAMETERS}
+    """The cart's parameters in CART_PARAMETERS order: its FMU's starts, or these."""
+    return {name: float(overrides.get(name, CART_DEFAULTS[name][1])) for name in CART_PARAMETERS}
 
 
 def monolithic(times, scene: Scene, cart: dict | None = None, rtol: float = 1e-12,

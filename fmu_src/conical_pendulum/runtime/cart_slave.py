@@ -12,9 +12,12 @@ from pythonfmu import Fmi2Slave, Real
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 
+from .rules import BadValue, check_value
+
 PARAMETERS = {"m_cart": ("mass of the cart [kg]", 100.0),
               "k_cart": ("stiffness of the spring from the ground to the cart [N/m]", 150.0),
               "c_cart": ("damping from the ground to the cart [N s/m]", 20.0)}
+START = {"x": 1.0, "v": 0.0}  # the cart's state at t = 0 [m, m/s]
 
 
 class Cart(Fmi2Slave):
@@ -27,7 +30,7 @@ class Cart(Fmi2Slave):
         super().__init__(**kwargs)
         for name, (_, value) in PARAMETERS.items():
             setattr(self, name, value)
-        self.x, self.v, self.F_x = 1.0, 0.0, 0.0
+        self.x, self.v, self.F_x = START["x"], START["v"], 0.0
         self._propagators = {}
         fixed, continuous = Fmi2Variability.fixed, Fmi2Variability.continuous
         for name, (text, _) in PARAMETERS.items():
@@ -50,14 +53,11 @@ class Cart(Fmi2Slave):
 
     def _problem(self):
         """What makes the cart unsolvable, or None."""
-        for name in ("m_cart", "k_cart", "c_cart", "x", "v", "F_x"):
-            value = getattr(self, name)
-            if not math.isfinite(value):
-                return f"{name} = {value!r}: must be finite"
-        if self.m_cart <= 0:
-            return f"m_cart = {self.m_cart!r}: a mass must be positive"
-        if self.k_cart < 0 or self.c_cart < 0:
-            return f"k_cart = {self.k_cart!r}, c_cart = {self.c_cart!r}: must not be negative"
+        try:
+            for name in ("m_cart", "k_cart", "c_cart", "x", "v", "F_x"):
+                check_value(name, getattr(self, name))
+        except BadValue as exc:
+            return str(exc)
         return None
 
     def _propagator(self, dt):
@@ -84,3 +84,6 @@ class Cart(Fmi2Slave):
         step = self._propagator(step_size)
         self.x, self.v = step[:2, :2] @ (self.x, self.v) + step[:2, 2] * self.F_x
         return True
+
+
+SLAVE = Cart  # what the FMU's entry module exports (runtime/entry.py)

@@ -1,14 +1,18 @@
 """ConicalPendulum: FMI 2.0 co-simulation slave, thin glue between FMI variables and the compiled core.
 
-Rendered by conical_pendulum.fmu for one scene under a module name unique to the build,
-and imported once per process by the FMU's entry module (fmu.ENTRY). At run time it
-needs numpy and the compiled core in the FMU's resources, nothing else; files are found
-through the `resources` argument, never at import.
+An ordinary module: one class for every scene. What a scene's FMU holds (its variables
+with their start values and descriptions, the compiled core's file) is read at
+instantiation from MODEL_FILE in the FMU's resources, written at build time
+(conical_pendulum.build.fmu). Shipped in each FMU as part of a package with a name
+unique to the runtime's sources, and imported once per process through the FMU's
+entry module (runtime/entry.py). At run time it needs numpy and the compiled core,
+nothing else.
 """
 import ctypes
 import functools
 import importlib.machinery
 import importlib.util
+import json
 import math
 import os
 import sys
@@ -18,35 +22,32 @@ from pythonfmu import Fmi2Slave, Integer, Real
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 
+from .rules import SETTINGS, SOLVERS, STATISTICS, BadValue, check_setting, check_value
 
-# --- rendered by conical_pendulum.fmu ---
-CORE_MODULE = "cp_core"
-CORE_FILE = "cp_core.abi3.so"
-PARAMETER_START = {}
-INPUT_START = {}
-STATE_START = {}
-DESCRIPTION = ""
-SETTINGS_START = {}
-# --- end of rendered values ---
-
-SOLVERS = ("rk4", "rk45", "dop853", "radau")
+MODEL_FILE = "model.json"
 RADAU = SOLVERS.index("radau")
 NEAR_SINGULAR = 1e-8  # pivot ratio worth naming when a step fails for another reason
-REAL_SETTINGS = ("rtol", "atol", "max_step")
-INTEGER_SETTINGS = ("solver", "max_steps")
-STATS = ("n_rhs", "n_steps", "n_rejected")
+REAL_SETTINGS = tuple(name for name, setting in SETTINGS.items() if not setting.integer)
+INTEGER_SETTINGS = tuple(name for name, setting in SETTINGS.items() if setting.integer)
 
 
-def _load_core(resources):
+def read_model(resources: str) -> dict:
+    """The scene's FMU data written at build time: model, core, variables, settings."""
+    with open(os.path.join(resources, MODEL_FILE), encoding="utf-8") as file:
+        return json.load(file)
+
+
+def _load_core(resources, core):
     """The compiled core, from this FMU's resources (one copy per process and build)."""
-    if CORE_MODULE in sys.modules:
-        return sys.modules[CORE_MODULE]
-    path = os.path.join(resources, CORE_FILE)
-    loader = importlib.machinery.ExtensionFileLoader(CORE_MODULE, path)
-    spec = importlib.util.spec_from_file_location(CORE_MODULE, path, loader=loader)
+    name = core["module"]
+    if name in sys.modules:
+        return sys.modules[name]
+    path = os.path.join(resources, core["file"])
+    loader = importlib.machinery.ExtensionFileLoader(name, path)
+    spec = importlib.util.spec_from_file_location(name, path, loader=loader)
     module = importlib.util.module_from_spec(spec)
     loader.exec_module(module)
-    sys.modules[CORE_MODULE] = module
+    sys.modules[name] = module
     return module
 
 
@@ -78,7 +79,6 @@ class Refused(ValueError):
 
 class ConicalPendulum(Fmi2Slave):
     author = "conical-pendulum-fmu"
-    description = DESCRIPTION
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=1.0 / 60.0)
 
     def __init__(self, **kwargs):
@@ -88,55 +88,61 @@ class ConicalPendulum(Fmi2Slave):
         # An exception here would crash the host (pythonfmu 0.7): keep it for later calls.
         self._broken = None
         try:
-            self._core = _load_core(self.resources)
+            model = read_model(self.resources)
+            self._core = _load_core(self.resources, model["core"])
         except Exception as exc:  # noqa: BLE001 - reported at the next FMI call
-            self._broken = f"cannot load the compiled core {CORE_FILE} from {self.resources}: {exc!r}"
+            self._broken = f"cannot load the model from {self.resources}: {exc!r}"
             self.log(self._broken, Fmi2Status.fatal)
             return
-        core = self._core
+        self.description = model["description"]  # the scene's: no class attribute, or it would win
+        variables = model["variables"]
         # One array for every Real variable: parameters, inputs, state, outputs,
-        # statistics, settings; getReal answers from it in one indexing. The core reads
-        # parameters and inputs as one array p.
-        n_p, n_state = len(PARAMETER_START) + len(INPUT_START), len(STATE_START)
+        # statistics, real settings; getReal answers from it in one indexing. The core
+        # reads parameters and inputs as one array p.
+        core_parameters = variables["parameters"] + variables["inputs"]  # the core's p
+        n_p, n_state = len(core_parameters), len(variables["states"])
         self._n_state = n_state
-        stats_vr = n_p + n_state + core.NOUTPUT
-        self._setting_vr = stats_vr + len(STATS)
+        stats_vr = n_p + n_state + len(variables["outputs"])
+        self._setting_vr = stats_vr + len(STATISTICS)
         self._reals = np.zeros(self._setting_vr + len(REAL_SETTINGS))
-        self._reals[:n_p] = list(PARAMETER_START.values()) + list(INPUT_START.values())
-        self._reals[n_p:n_p + n_state] = list(STATE_START.values())
-        self._reals[self._setting_vr:] = [SETTINGS_START[name] for name in REAL_SETTINGS]
-        self._ints = [SETTINGS_START[name] for name in INTEGER_SETTINGS]
+        self._reals[:n_p + n_state] = [v["start"] for v in core_parameters + variables["states"]]
+        self._reals[self._setting_vr:] = [model["settings"][name] for name in REAL_SETTINGS]
+        self._ints = [model["settings"][name] for name in INTEGER_SETTINGS]
         self._state = self._reals[n_p:n_p + n_state]
-        self._stepper = core.Stepper(self._reals[:n_p], self._reals[n_p:stats_vr],
-                                     self._reals[stats_vr:self._setting_vr])
+        self._stepper = self._core.Stepper(self._reals[:n_p], self._reals[n_p:stats_vr],
+                                           self._reals[stats_vr:self._setting_vr])
         self._stepper.update_outputs()
         self._mode = "instantiated"
         self._tolerance = None
-        self._register()
+        self._register(variables)
 
-    def _register(self):
-        """Declare the variables in the order of self._reals, then the Integers.
-
-        Their descriptions are added to the model description at build time."""
+    def _register(self, variables):
+        """Declare the variables in the order of self._reals, then the Integers."""
         fixed, continuous = Fmi2Variability.fixed, Fmi2Variability.continuous
         parameter, output = Fmi2Causality.parameter, Fmi2Causality.output
-        for name in PARAMETER_START:
-            self.register_variable(Real(name, causality=parameter, variability=fixed))
-        for name in INPUT_START:  # held constant over each communication step
-            self.register_variable(Real(name, causality=Fmi2Causality.input, variability=continuous))
-        for name in STATE_START:
-            self.register_variable(Real(name, causality=output, variability=continuous,
-                                        initial=Fmi2Initial.exact))
-        for name in self._core.OUTPUT_NAMES:
-            self.register_variable(Real(name, causality=output, variability=continuous,
-                                        initial=Fmi2Initial.calculated))
-        for name in STATS:  # counts, as Real so that one getReal serves every output
+        kinds = {  # (causality, variability, initial) of each group, in value-reference order
+            "parameters": (parameter, fixed, None),
+            "inputs": (Fmi2Causality.input, continuous, None),  # held over each communication step
+            "states": (output, continuous, Fmi2Initial.exact),
+            "outputs": (output, continuous, Fmi2Initial.calculated),
+        }
+        for group, (causality, variability, initial) in kinds.items():
+            for v in variables[group]:
+                self.register_variable(Real(v["name"], causality=causality, variability=variability,
+                                            initial=initial, description=v["description"]))
+        for name, text in STATISTICS.items():  # counts, as Real so that one getReal serves every output
             self.register_variable(Real(name, causality=output, variability=Fmi2Variability.discrete,
-                                        initial=Fmi2Initial.calculated))
-        for name in REAL_SETTINGS:
-            self.register_variable(Real(name, causality=parameter, variability=fixed))
-        for name in INTEGER_SETTINGS:
-            self.register_variable(Integer(name, causality=parameter, variability=fixed))
+                                        initial=Fmi2Initial.calculated, description=text))
+        for names, kind in ((REAL_SETTINGS, Real), (INTEGER_SETTINGS, Integer)):
+            for name in names:
+                self.register_variable(kind(name, causality=parameter, variability=fixed,
+                                            description=SETTINGS[name].description))
+
+    def _setting(self, name):
+        """A solver setting's current value, by name."""
+        if name in INTEGER_SETTINGS:
+            return self._ints[INTEGER_SETTINGS.index(name)]
+        return float(self._reals[self._setting_vr + REAL_SETTINGS.index(name)])
 
     # --- FMI calls -------------------------------------------------------------------
 
@@ -148,7 +154,8 @@ class ConicalPendulum(Fmi2Slave):
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._check_alive()
         if tolerance is not None:
-            self._tolerance = self._fail_unless_valid("tolerance (from setupExperiment)", tolerance)
+            self._tolerance = self._fail_unless_valid("tolerance (from setupExperiment)", tolerance,
+                                                      quantity="rtol")
 
     @_fmi_call
     def enter_initialization_mode(self):
@@ -159,19 +166,19 @@ class ConicalPendulum(Fmi2Slave):
     def exit_initialization_mode(self):
         self._check_alive()
         if self._tolerance is not None:
-            self._reals[self._setting_vr] = self._tolerance
+            self._reals[self._setting_vr + REAL_SETTINGS.index("rtol")] = self._tolerance
         self._stepper.update_outputs()
         self._configure()
         self._mode = "step"
 
     def _configure(self):
         """Settings are fixed from here on: hand them to the stepper once."""
-        rtol, atol, max_step = self._reals[self._setting_vr:].tolist()
-        self._stepper.configure(self._ints[0], rtol, atol, max_step, self._ints[1])
+        self._stepper.configure(*(self._setting(name) for name in
+                                  ("solver", "rtol", "atol", "max_step", "max_steps")))
 
     @_fmi_call
     def do_step(self, current_time, step_size):
-        if self._ints[0] == RADAU:
+        if self._setting("solver") == RADAU:
             failure = self._radau_step(current_time, step_size)
         else:
             status = self._stepper.advance(current_time, step_size)
@@ -217,13 +224,7 @@ class ConicalPendulum(Fmi2Slave):
                 raise TypeError(f"value reference {vr} is not an Integer variable")
             name = self.vars[vr].name
             self._check_settable(vr, name)
-            value = int(value)
-            if name == "solver" and not 0 <= value < len(SOLVERS):
-                self._fail(f"solver = {value}: choose 0 to {len(SOLVERS) - 1} "
-                           f"({', '.join(f'{k} = {s}' for k, s in enumerate(SOLVERS))})")
-            if name == "max_steps" and value < 1:
-                self._fail(f"max_steps = {value}: must be at least 1")
-            self._ints[vr - first] = value
+            self._ints[vr - first] = self._fail_unless_valid(name, int(value))
 
     def _radau_step(self, t, dt):
         """The stiff fallback: scipy's Radau IIA on the compiled right-hand side.
@@ -234,7 +235,8 @@ class ConicalPendulum(Fmi2Slave):
 
         if not (dt >= 0 and math.isfinite(dt)):
             return self._step_failure(self._core.BAD_STEP, t, dt)
-        rtol, atol, max_step = self._reals[self._setting_vr:].tolist()
+        rtol, atol, max_step, max_steps = (self._setting(name) for name in
+                                           ("rtol", "atol", "max_step", "max_steps"))
         core, stepper = self._core, self._stepper
         state, params = self._state, stepper.params
         options = {"first_step": min(stepper.h, dt)} if stepper.h > 0 else {}
@@ -242,7 +244,7 @@ class ConicalPendulum(Fmi2Slave):
                        atol=atol, max_step=max_step or np.inf, **options)
         steps, problem = 0, None
         try:
-            while solver.status == "running" and steps < self._ints[1]:
+            while solver.status == "running" and steps < max_steps:
                 problem = solver.step()
                 steps += 1
         except core.CoreError as exc:
@@ -250,7 +252,7 @@ class ConicalPendulum(Fmi2Slave):
         stepper.stats[0] += solver.nfev
         stepper.stats[1] += steps
         if solver.status != "finished":
-            problem = problem or f"more than max_steps = {self._ints[1]} internal steps were needed"
+            problem = problem or f"more than max_steps = {max_steps} internal steps were needed"
             return (f"do_step from t = {t:.9g} s by {dt:.3g} s failed (radau): {problem}. "
                     f"The state is kept at t = {t:.9g} s.")
         state[:] = solver.y
@@ -287,17 +289,14 @@ class ConicalPendulum(Fmi2Slave):
         self.log(message, Fmi2Status.error)
         raise Refused(message)
 
-    def _fail_unless_valid(self, name, value):
+    def _fail_unless_valid(self, name, value, quantity=None):
+        """The value as its variable takes it, or a refusal naming it (runtime.rules)."""
         try:
-            value = self._core.check_value(name, value)
-        except self._core.BadValue as exc:
+            if name in SETTINGS:
+                return check_setting(name, value)
+            return check_value(name, value, quantity)
+        except BadValue as exc:
             self._fail(str(exc))
-        if name in ("rtol", "atol") or name.startswith("tolerance"):
-            if value <= 0:
-                self._fail(f"{name} = {value!r}: a tolerance must be positive")
-        if name == "max_step" and value < 0:
-            self._fail(f"max_step = {value!r}: must be positive, or 0 for no limit")
-        return value
 
     def _check_settable(self, vr, name):
         var = self.vars[vr]
@@ -313,7 +312,7 @@ class ConicalPendulum(Fmi2Slave):
         what = core.STATUS.get(status, f"status {status}")
         dof = stepper.bad_dof
         speed = (f"omega{dof}" if dof < n else f"delta{dof - n}") if 0 <= dof < 2 * n else "?"
-        rtol, atol, max_step = self._reals[self._setting_vr:].tolist()
+        rtol, atol, max_steps = (self._setting(name) for name in ("rtol", "atol", "max_steps"))
         link = dof % n if dof >= 0 else "?"
         joint = (f"link {link}'s two-angle joint cannot represent this orientation (it lies "
                  "along its parent's x axis, alpha = +-90 degrees) or a link has too little "
@@ -327,7 +326,7 @@ class ConicalPendulum(Fmi2Slave):
             hint = f"the acceleration of {speed} is not finite; check parameters and state"
         else:
             if status == core.TOO_MANY_STEPS:
-                hint = (f"more than max_steps = {self._ints[1]} internal steps were needed; raise "
+                hint = (f"more than max_steps = {max_steps} internal steps were needed; raise "
                         f"max_steps, loosen rtol = {rtol:g} / atol = {atol:g}, or take shorter "
                         "communication steps")
             else:
@@ -338,3 +337,6 @@ class ConicalPendulum(Fmi2Slave):
                          f"{stepper.pivot_ratio:.2g}, at {speed}): {joint}")
         return (f"do_step from t = {t:.9g} s by {dt:.3g} s failed: {what}. {hint}. "
                 f"The state is kept at t = {t:.9g} s.")
+
+
+SLAVE = ConicalPendulum  # what the FMU's entry module exports (runtime/entry.py)

@@ -6,6 +6,12 @@ Copied to a module name unique to the scene and compiled against the limited API
 """
 import numpy as np
 
+cdef extern from "status.h":
+    int CP_OK, CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_BAD_STEP, CP_SINGULAR, CP_NONFINITE
+    const int cp_status_codes[]
+    int CP_NSTATUS
+    const char *cp_status_message(int status)
+
 cdef extern from "solvers.h":
     ctypedef int (*cp_rhs_fn)(void *ctx, const double *x, double *dx) noexcept nogil
     ctypedef struct cp_system:
@@ -14,7 +20,7 @@ cdef extern from "solvers.h":
         void *ctx
     ctypedef struct cp_stats:
         long nfev, naccept, nreject
-    int CP_OK, CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_RK4, CP_RK45, CP_DOP853
+    int CP_RK4, CP_RK45, CP_DOP853
     int CP_WORK_SIZE(int dim)
     int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double *out,
                        double rtol, double atol, double max_step, long max_steps, double *work,
@@ -24,7 +30,7 @@ cdef extern from "solvers.h":
                      double *h, double *work, int *fsal, cp_stats *stats) noexcept nogil
 
 cdef extern from "dynamics.h":
-    int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT, CP_SINGULAR, CP_NONFINITE
+    int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT
     const char *CP_STATE_NAMES
     const char *CP_PARAMETER_NAMES
     const char *CP_OUTPUT_NAMES
@@ -56,13 +62,11 @@ SINGULAR_RATIO = CP_SINGULAR_RATIO
 STATE_NAMES = tuple(CP_STATE_NAMES.decode().split())
 PARAMETER_NAMES = tuple(CP_PARAMETER_NAMES.decode().split())
 OUTPUT_NAMES = tuple(CP_OUTPUT_NAMES.decode().split())
-TOO_MANY_STEPS, STEP_UNDERFLOW = CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW
-BAD_STEP = 3  # a communication step that is negative or not finite
+TOO_MANY_STEPS, STEP_UNDERFLOW, BAD_STEP = CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_BAD_STEP
 SINGULAR, NONFINITE = CP_SINGULAR, CP_NONFINITE
 METHODS = {"rk4": CP_RK4, "rk45": CP_RK45, "dop853": CP_DOP853}
-STATUS = {CP_OK: "ok", CP_TOO_MANY_STEPS: "too many steps", CP_STEP_UNDERFLOW: "step size underflow",
-          CP_SINGULAR: "singular mass matrix", CP_NONFINITE: "non-finite acceleration",
-          BAD_STEP: "invalid communication step"}
+STATUS = {cp_status_codes[k]: cp_status_message(cp_status_codes[k]).decode()  # status.h's list
+          for k in range(CP_NSTATUS)}
 
 
 class CoreError(RuntimeError):
@@ -72,26 +76,6 @@ class CoreError(RuntimeError):
         self.status, self.dof, self.pivot_ratio = status, dof, pivot_ratio
         super().__init__(f"{STATUS.get(status, status)} at generalized speed {dof} "
                          f"(pivot ratio {pivot_ratio:.3g})")
-
-
-class BadValue(ValueError):
-    """A parameter or start value the model cannot take; the message names it."""
-
-
-def check_value(str name, value):
-    """value as a float, or BadValue naming the variable, its value and the rule."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise BadValue(f"{name}: expected a number, got {value!r}")
-    value = float(value)
-    if value != value or value in (float("inf"), float("-inf")):
-        raise BadValue(f"{name} = {value!r}: must be finite")
-    kind = name.rstrip("0123456789")
-    if kind in ("l", "m", "M") and value <= 0:
-        what = {"l": "a length", "m": "a bob mass", "M": "a link mass"}[kind]
-        raise BadValue(f"{name} = {value!r}: {what} must be positive")
-    if kind in ("Ixx", "Iyy", "Izz") and value < 0:
-        raise BadValue(f"{name} = {value!r}: a moment of inertia cannot be negative")
-    return value
 
 
 cdef void _system(cp_system *system, cp_model *model, const double *p, cp_stats *stats) noexcept nogil:

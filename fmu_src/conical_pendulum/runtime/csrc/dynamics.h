@@ -3,11 +3,10 @@
 #define CP_DYNAMICS_H
 
 #include "model.h"
+#include "status.h"
 
 /* Pivot ratio (smallest over largest |pivot| of the LU) below which M counts as singular. */
 #define CP_SINGULAR_RATIO 1e-13
-
-enum { CP_SINGULAR = 10, CP_NONFINITE = 11 };
 
 typedef struct {
     const double *p;       /* parameters, in the order of the scene's parameter names */

@@ -2,11 +2,13 @@
 #ifndef CP_SOLVERS_H
 #define CP_SOLVERS_H
 
+#include "status.h"
+
 typedef int (*cp_rhs_fn)(void *ctx, const double *x, double *dx);
 
 typedef struct {
     int dim;
-    cp_rhs_fn rhs;   /* returns 0, or a code >= 10 that stops the integration */
+    cp_rhs_fn rhs;   /* returns CP_OK, or a status >= 10 that stops the integration */
     void *ctx;
 } cp_system;
 
@@ -14,8 +16,6 @@ typedef struct {
     long nfev, naccept, nreject;
 } cp_stats;
 
-/* cp_integrate's results; a nonzero code from rhs is passed on as it is. */
-enum { CP_OK = 0, CP_TOO_MANY_STEPS = 1, CP_STEP_UNDERFLOW = 2 };
 enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2 };
 
 /* Doubles of scratch memory cp_integrate needs for a system of size dim. */

@@ -1,0 +1,121 @@
+"""The rules for values and the solver settings, written once for every layer.
+
+The scene checks its numbers with them, the native reference its parameters and start
+values, and each FMU every value a host sets; the messages name the variable, its value
+and the rule, so a user reads the same sentence wherever a value is refused. Shipped
+inside every FMU: standard library only.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Callable
+from dataclasses import dataclass
+
+SOLVERS = ("rk4", "rk45", "dop853", "radau")  # the FMU's `solver`: its index; RK4..DOP853 are in C
+
+
+@dataclass(frozen=True)
+class Rule:
+    holds: Callable[[float], bool]
+    refusal: str   # what a message says when the value breaks the rule
+    wanted: str    # what a scene file's field must be
+
+
+RULES = {
+    "finite": Rule(lambda v: True, "must be finite", "a finite number"),
+    "positive": Rule(lambda v: v > 0, "must be positive", "a positive finite number"),
+    "non-negative": Rule(lambda v: v >= 0, "cannot be negative", "a finite number >= 0"),
+    "count": Rule(lambda v: v >= 1, "must be at least 1", "a whole number >= 1"),
+    "solver": Rule(lambda v: 0 <= v < len(SOLVERS),
+                   f"choose 0 to {len(SOLVERS) - 1} ("
+                   + ", ".join(f"{k} = {name}" for k, name in enumerate(SOLVERS)) + ")",
+                   f"a whole number from 0 to {len(SOLVERS) - 1}"),
+}
+
+# The rule of a variable by its name without the link index: (rule, what it is).
+QUANTITIES = {
+    "l": ("positive", "a length"),
+    "m": ("positive", "a bob mass"),
+    "M": ("positive", "a link mass"),
+    "Ixx": ("non-negative", "a moment of inertia"),
+    "Iyy": ("non-negative", "a moment of inertia"),
+    "Izz": ("non-negative", "a moment of inertia"),
+    "rtol": ("positive", "a tolerance"),
+    "atol": ("positive", "a tolerance"),
+    "max_step": ("non-negative", "the largest internal step"),
+    "max_steps": ("count", ""),
+    "solver": ("solver", ""),
+    "m_cart": ("positive", "a mass"),
+    "k_cart": ("non-negative", "a stiffness"),
+    "c_cart": ("non-negative", "a damping coefficient"),
+}
+
+# The scene's link fields and their rules: those that are parameters follow the parameter's.
+LINK_RULES = {"length": QUANTITIES["l"][0], "mass": QUANTITIES["M"][0],
+               "bob_mass": QUANTITIES["m"][0], "radius": "positive", "bob_radius": "positive"}
+
+
+@dataclass(frozen=True)
+class Setting:
+    default: float | int
+    integer: bool
+    description: str
+
+
+SETTINGS = {
+    "rtol": Setting(1e-8, False, "relative tolerance of the adaptive solvers (replaced by "
+                                 "setupExperiment's tolerance when given)"),
+    "atol": Setting(1e-8, False, "absolute tolerance of the adaptive solvers"),
+    "max_step": Setting(0.0, False, "largest internal step [s]; RK4 splits each communication "
+                                    "step into steps of at most this (0: no limit)"),
+    "solver": Setting(1, True, "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), "
+                               "2 = DOP853, 3 = Radau (scipy, stiff)"),
+    "max_steps": Setting(100_000, True, "most internal steps per do_step: a step needing more "
+                                        "is discarded"),
+}
+
+STATISTICS = {"n_rhs": "right-hand side evaluations so far",
+              "n_steps": "accepted internal steps so far",
+              "n_rejected": "rejected internal steps so far"}
+
+
+class BadValue(ValueError):
+    """A value a variable cannot take; the message names the variable, the value and the rule."""
+
+
+def rule_of(name: str) -> tuple[str, str]:
+    """(rule, what the variable is) for a variable name; anything unnamed must be finite."""
+    return QUANTITIES.get(name.rstrip("0123456789"), ("finite", ""))
+
+
+def satisfies(rule: str, value) -> bool:
+    """Whether value is a finite real number that keeps the rule."""
+    return (not isinstance(value, bool) and isinstance(value, numbers.Real)
+            and math.isfinite(value) and RULES[rule].holds(value))
+
+
+def check_value(name: str, value, quantity: str | None = None) -> float:
+    """value as a float, or BadValue naming the variable, its value and the rule.
+
+    quantity: the name whose rule applies, when `name` only labels the value."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise BadValue(f"{name}: expected a number, got {value!r}")
+    number = float(value)
+    shown = value if isinstance(value, numbers.Integral) else number  # a count reads as one
+    if not math.isfinite(number):
+        raise BadValue(f"{name} = {shown!r}: must be finite")
+    rule, what = rule_of(quantity or name)
+    if not RULES[rule].holds(number):
+        raise BadValue(f"{name} = {shown!r}: {what + ' ' if what else ''}{RULES[rule].refusal}")
+    return number
+
+
+def check_setting(name: str, value):
+    """A solver setting checked as its rule and type say: an int for Integer settings."""
+    if SETTINGS[name].integer:
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise BadValue(f"{name}: expected a whole number, got {value!r}")
+        check_value(name, value)
+        return int(value)
+    return check_value(name, value)
