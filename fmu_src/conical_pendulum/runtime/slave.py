@@ -26,7 +26,6 @@ from .rules import SETTINGS, SOLVERS, STATISTICS, BadValue, check_setting, check
 
 MODEL_FILE = "model.json"
 RADAU = SOLVERS.index("radau")
-NEAR_SINGULAR = 1e-8  # pivot ratio worth naming when a step fails for another reason
 REAL_SETTINGS = tuple(name for name, setting in SETTINGS.items() if not setting.integer)
 INTEGER_SETTINGS = tuple(name for name, setting in SETTINGS.items() if setting.integer)
 
@@ -101,7 +100,6 @@ class ConicalPendulum(Fmi2Slave):
         # reads parameters and inputs as one array p.
         core_parameters = variables["parameters"] + variables["inputs"]  # the core's p
         n_p, n_state = len(core_parameters), len(variables["states"])
-        self._n_state = n_state
         stats_vr = n_p + n_state + len(variables["outputs"])
         self._setting_vr = stats_vr + len(STATISTICS)
         self._reals = np.zeros(self._setting_vr + len(REAL_SETTINGS))
@@ -307,36 +305,10 @@ class ConicalPendulum(Fmi2Slave):
                        "set it before exitInitializationMode, or instantiate again")
 
     def _step_failure(self, status, t, dt):
-        core, n = self._core, self._n_state // 4
+        """The diagnosis of a failed step (the core's, as in every FMU of this package)."""
         stepper = self._stepper
-        what = core.STATUS.get(status, f"status {status}")
-        dof = stepper.bad_dof
-        speed = (f"omega{dof}" if dof < n else f"delta{dof - n}") if 0 <= dof < 2 * n else "?"
-        rtol, atol, max_steps = (self._setting(name) for name in ("rtol", "atol", "max_steps"))
-        link = dof % n if dof >= 0 else "?"
-        joint = (f"link {link}'s two-angle joint cannot represent this orientation (it lies "
-                 "along its parent's x axis, alpha = +-90 degrees) or a link has too little "
-                 "inertia")
-        if status == core.BAD_STEP:
-            hint = f"a communication step must be a non-negative finite number, not {dt!r}"
-        elif status == core.SINGULAR:
-            hint = (f"the mass matrix is singular (pivot ratio {stepper.pivot_ratio:.2g}, at "
-                    f"{speed}): {joint}; give the link inertia or start elsewhere")
-        elif status == core.NONFINITE:
-            hint = f"the acceleration of {speed} is not finite; check parameters and state"
-        else:
-            if status == core.TOO_MANY_STEPS:
-                hint = (f"more than max_steps = {max_steps} internal steps were needed; raise "
-                        f"max_steps, loosen rtol = {rtol:g} / atol = {atol:g}, or take shorter "
-                        "communication steps")
-            else:
-                hint = (f"the step size fell below what time t can resolve; rtol = {rtol:g} / "
-                        f"atol = {atol:g} cannot be met here: loosen them")
-            if stepper.pivot_ratio < NEAR_SINGULAR:
-                hint += (f". The mass matrix came close to singular on the way (pivot ratio "
-                         f"{stepper.pivot_ratio:.2g}, at {speed}): {joint}")
-        return (f"do_step from t = {t:.9g} s by {dt:.3g} s failed: {what}. {hint}. "
-                f"The state is kept at t = {t:.9g} s.")
+        return self._core.diagnose(status, t, dt, stepper.bad_dof, stepper.pivot_ratio,
+                                   *(self._setting(name) for name in ("rtol", "atol", "max_steps")))
 
 
 SLAVE = ConicalPendulum  # what the FMU's entry module exports (runtime/entry.py)

@@ -43,6 +43,15 @@ cdef extern from "dynamics.h":
     void cp_mass_forcing(const double *x, const double *p, double *M, double *F) noexcept nogil
     void cp_eval_outputs(const double *x, const double *p, double *y) noexcept nogil
 
+cdef extern from "diagnosis.h":
+    ctypedef struct cp_failure:
+        double t, dt
+        int bad_dof
+        double pivot_ratio
+        double rtol, atol
+        long max_steps
+    int cp_diagnose(char *buf, size_t size, int status, const cp_failure *failure)
+
 cdef extern from "<math.h>" nogil:
     double INFINITY
 
@@ -76,6 +85,17 @@ class CoreError(RuntimeError):
         self.status, self.dof, self.pivot_ratio = status, dof, pivot_ratio
         super().__init__(f"{STATUS.get(status, status)} at generalized speed {dof} "
                          f"(pivot ratio {pivot_ratio:.3g})")
+
+
+def diagnose(int status, double t, double dt, int bad_dof, double pivot_ratio, double rtol,
+             double atol, long max_steps):
+    """What a user reads when a step fails (diagnosis.c, the same text in every FMU)."""
+    cdef cp_failure failure
+    failure.t, failure.dt, failure.bad_dof, failure.pivot_ratio = t, dt, bad_dof, pivot_ratio
+    failure.rtol, failure.atol, failure.max_steps = rtol, atol, max_steps
+    cdef char text[2048]
+    cp_diagnose(text, sizeof(text), status, &failure)
+    return text.decode()
 
 
 cdef void _system(cp_system *system, cp_model *model, const double *p, cp_stats *stats) noexcept nogil:

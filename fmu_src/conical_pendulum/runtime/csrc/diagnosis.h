@@ -1,0 +1,24 @@
+/* What a user reads when a step fails: what failed, why, and what to do; for every FMU. */
+#ifndef CP_DIAGNOSIS_H
+#define CP_DIAGNOSIS_H
+
+#include <stddef.h>
+
+#include "status.h"
+
+/* Pivot ratio below which a failure for another reason also names the near-singular joint. */
+#define CP_NEAR_SINGULAR 1e-8
+
+typedef struct {
+    double t, dt;         /* the communication step that failed */
+    int bad_dof;          /* cp_model.bad_dof: the generalized speed at fault, or -1 */
+    double pivot_ratio;   /* cp_model.pivot_ratio over the step */
+    double rtol, atol;    /* the settings the step ran with */
+    long max_steps;
+} cp_failure;
+
+/* Writes "do_step from t = ... failed: <status>. <diagnosis>. The state is kept ..." into
+ * buf (NUL-terminated, cut at size bytes); returns the length the whole message needs. */
+int cp_diagnose(char *buf, size_t size, int status, const cp_failure *failure);
+
+#endif
