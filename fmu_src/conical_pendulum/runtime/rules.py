@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Callable
 from dataclasses import dataclass
 
 SOLVERS = ("rk4", "rk45", "dop853", "radau")  # the FMU's `solver`: its index; RK4..DOP853 are in C
@@ -17,20 +16,36 @@ SOLVERS = ("rk4", "rk45", "dop853", "radau")  # the FMU's `solver`: its index; R
 
 @dataclass(frozen=True)
 class Rule:
-    holds: Callable[[float], bool]
+    """A finite value's allowed range, as numbers, so that C glue can apply it too."""
+
     refusal: str   # what a message says when the value breaks the rule
     wanted: str    # what a scene file's field must be
+    low: float = -math.inf
+    low_open: bool = False  # the value must exceed low, not only reach it
+    high: float = math.inf  # the value must stay below high
+
+    def holds(self, value: float) -> bool:
+        return (value > self.low if self.low_open else value >= self.low) and value < self.high
+
+
+NATIVE_SOLVERS = SOLVERS[:3]  # the C solvers; Radau runs on scipy, in the pythonfmu FMU only
+
+
+def _choose(solvers):
+    return (f"choose 0 to {len(solvers) - 1} ("
+            + ", ".join(f"{k} = {name}" for k, name in enumerate(solvers)) + ")")
 
 
 RULES = {
-    "finite": Rule(lambda v: True, "must be finite", "a finite number"),
-    "positive": Rule(lambda v: v > 0, "must be positive", "a positive finite number"),
-    "non-negative": Rule(lambda v: v >= 0, "cannot be negative", "a finite number >= 0"),
-    "count": Rule(lambda v: v >= 1, "must be at least 1", "a whole number >= 1"),
-    "solver": Rule(lambda v: 0 <= v < len(SOLVERS),
-                   f"choose 0 to {len(SOLVERS) - 1} ("
-                   + ", ".join(f"{k} = {name}" for k, name in enumerate(SOLVERS)) + ")",
-                   f"a whole number from 0 to {len(SOLVERS) - 1}"),
+    "finite": Rule("must be finite", "a finite number"),
+    "positive": Rule("must be positive", "a positive finite number", low=0.0, low_open=True),
+    "non-negative": Rule("cannot be negative", "a finite number >= 0", low=0.0),
+    "count": Rule("must be at least 1", "a whole number >= 1", low=1.0),
+    "solver": Rule(_choose(SOLVERS), f"a whole number from 0 to {len(SOLVERS) - 1}",
+                   low=0.0, high=len(SOLVERS)),
+    "native-solver": Rule(_choose(NATIVE_SOLVERS) + "; Radau needs the pythonfmu FMU",
+                          f"a whole number from 0 to {len(NATIVE_SOLVERS) - 1}",
+                          low=0.0, high=len(NATIVE_SOLVERS)),
 }
 
 # The rule of a variable by its name without the link index: (rule, what it is).
@@ -78,6 +93,12 @@ SETTINGS = {
 STATISTICS = {"n_rhs": "right-hand side evaluations so far",
               "n_steps": "accepted internal steps so far",
               "n_rejected": "rejected internal steps so far"}
+
+
+# Why a variable cannot be set: the same words in the pythonfmu slave and the native FMU.
+CALCULATED = "{name} is a calculated output: it cannot be set"
+FIXED = ("{name} cannot be set after initialization (variability fixed); set it before "
+         "exitInitializationMode, or instantiate again")
 
 
 class BadValue(ValueError):

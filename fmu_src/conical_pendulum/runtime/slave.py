@@ -22,7 +22,8 @@ from pythonfmu import Fmi2Slave, Integer, Real
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 
-from .rules import SETTINGS, SOLVERS, STATISTICS, BadValue, check_setting, check_value
+from .rules import (CALCULATED, FIXED, SETTINGS, SOLVERS, STATISTICS, BadValue, check_setting,
+                    check_value)
 
 MODEL_FILE = "model.json"
 RADAU = SOLVERS.index("radau")
@@ -299,10 +300,9 @@ class ConicalPendulum(Fmi2Slave):
     def _check_settable(self, vr, name):
         var = self.vars[vr]
         if var.causality == Fmi2Causality.output and var.initial != Fmi2Initial.exact:
-            self._fail(f"{name} is a calculated output: it cannot be set")
+            self._fail(CALCULATED.format(name=name))
         if self._mode == "step" and var.causality != Fmi2Causality.input:
-            self._fail(f"{name} cannot be set after initialization (variability fixed); "
-                       "set it before exitInitializationMode, or instantiate again")
+            self._fail(FIXED.format(name=name))
 
     def _step_failure(self, status, t, dt):
         """The diagnosis of a failed step (the core's, as in every FMU of this package)."""

@@ -1,0 +1,731 @@
+/* FMI 2.0 glue of the native FMU: Co-Simulation (the core's solvers) and Model Exchange.
+ *
+ * Generic: it knows the model only through model.h (sizes), dynamics.h (x' and the
+ * outputs), solvers.h and fmu_config.h (generated at build time: value references,
+ * start values, names and the value rules of runtime/rules.py). Every entry point checks
+ * its instance, its state and its value references; a refused value is fmi2Error with a
+ * message naming it and is not taken; a step that cannot complete is fmi2Discard with the
+ * diagnosis every FMU of this package gives; messages go through the host's logger.
+ * Nothing is allocated after instantiation but what a host asks for (FMU states).
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+
+#include "diagnosis.h"
+#include "dynamics.h"
+#include "fmu_config.h"
+#include "solvers.h"
+
+/* Where an instance is in FMI 2.0's state machine: one bit per state, so that each entry
+ * point names the states it is allowed in as a mask. */
+enum {
+    INSTANTIATED = 1 << 0, INITIALIZATION = 1 << 1, STEP_COMPLETE = 1 << 2,
+    STEP_FAILED = 1 << 3, EVENT_MODE = 1 << 4, CONTINUOUS_TIME = 1 << 5, TERMINATED = 1 << 6
+};
+#define BEFORE_INIT (INSTANTIATED | INITIALIZATION)
+#define RUNNING (STEP_COMPLETE | EVENT_MODE | CONTINUOUS_TIME)
+#define ANY_STATE (BEFORE_INIT | RUNNING | STEP_FAILED | TERMINATED)
+
+/* Everything fmi2GetFMUstate saves: plain data, copied as a whole. */
+typedef struct {
+    int state;
+    double time;
+    double r[CP_NREAL];           /* Real variables by value reference (fmu_config.h) */
+    fmi2Integer solver, max_steps;
+    double tolerance;             /* from fmi2SetupExperiment; replaces rtol when > 0 */
+    double h;                     /* the solvers' proposed step, carried between steps */
+    int fsal;                     /* work holds x' at x */
+    double work[CP_WORK_SIZE(CP_NSTATE)];
+    double dx[CP_NSTATE];         /* Model Exchange: x' at (time, x) when dx_valid */
+    int dx_valid, outputs_valid;
+    double last_successful_time;
+} Values;
+
+typedef struct {
+    Values v;
+    fmi2CallbackFunctions cb;
+    fmi2Type type;
+    int logging;
+    char name[128];
+} Instance;
+
+#define X(inst) ((inst)->v.r + CP_VR_STATE)
+#define Y(inst) ((inst)->v.r + CP_VR_OUTPUT)
+#define STATS(inst) ((inst)->v.r + CP_VR_STATISTICS)
+
+static void log_message(Instance *inst, fmi2Status status, const char *category,
+                        const char *format, ...)
+{
+    if (!inst->cb.logger || (status == fmi2OK && !inst->logging)) return;
+    char text[2048];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    inst->cb.logger(inst->cb.componentEnvironment, inst->name, status, category, text);
+}
+
+#define REFUSE(inst, ...) (log_message((inst), fmi2Error, "logStatusError", __VA_ARGS__), fmi2Error)
+
+/* The instance behind c if the call is allowed in its state; logs why not otherwise. */
+static Instance *checked(fmi2Component c, int allowed, const char *function)
+{
+    Instance *inst = (Instance *)c;
+    if (!inst) return NULL;
+    if (!(inst->v.state & allowed)) {
+        log_message(inst, fmi2Error, "logStatusError", "%s is not allowed in this state "
+                    "(%s)", function,
+                    inst->v.state == STEP_FAILED ? "after a discarded step: call "
+                    "fmi2SetFMUstate or fmi2Reset first" : "see FMI 2.0's state machine");
+        return NULL;
+    }
+    return inst;
+}
+
+/* A double as Python's repr writes it, so that messages read as the pythonfmu FMU's do. */
+static void python_repr(char *buf, size_t size, double value)
+{
+    if (isnan(value)) { snprintf(buf, size, "nan"); return; }
+    if (isinf(value)) { snprintf(buf, size, value > 0 ? "inf" : "-inf"); return; }
+    int digits = 1;
+    for (; digits < 17; digits++) {
+        snprintf(buf, size, "%.*e", digits - 1, value);
+        if (strtod(buf, NULL) == value) break;
+    }
+    snprintf(buf, size, "%.*e", digits - 1, value);  /* e.g. 1.5e-05, as Python writes it */
+    int exponent = atoi(strchr(buf, 'e') + 1);
+    if (exponent >= -4 && exponent < 16) {  /* Python writes these positionally */
+        int decimals = digits - 1 - exponent;
+        snprintf(buf, size, "%.*f", decimals < 1 ? 1 : decimals, value);
+    }
+}
+
+/* NULL if value keeps the rule, or the message refusing it (shown: the value as written). */
+static const char *refusal(const char *name, const char *shown, double value, const cp_rule *rule,
+                           const char *what, char *message, size_t size)
+{
+    if (!isfinite(value)) {
+        snprintf(message, size, "%s = %s: must be finite", name, shown);
+        return message;
+    }
+    int holds = (rule->low_open ? value > rule->low : value >= rule->low) && value < rule->high;
+    if (holds) return NULL;
+    snprintf(message, size, "%s = %s: %s%s%s", name, shown, what, *what ? " " : "", rule->refusal);
+    return message;
+}
+
+static const char *real_refusal(const char *name, double value, const cp_rule *rule,
+                                const char *what, char *message, size_t size)
+{
+    char shown[40];
+    python_repr(shown, sizeof shown, value);
+    return refusal(name, shown, value, rule, what, message, size);
+}
+
+static void invalidate(Instance *inst)
+{
+    inst->v.fsal = 0;
+    inst->v.dx_valid = 0;
+    inst->v.outputs_valid = 0;
+}
+
+static void update_outputs(Instance *inst)
+{
+    if (!inst->v.outputs_valid && CP_NOUTPUT) cp_eval_outputs(X(inst), inst->v.r, Y(inst));
+    inst->v.outputs_valid = 1;
+}
+
+static void reset_values(Instance *inst)
+{
+    memset(&inst->v, 0, sizeof inst->v);
+    memcpy(inst->v.r, cp_real_start, sizeof cp_real_start);
+    inst->v.solver = CP_SOLVER_START;
+    inst->v.max_steps = CP_MAX_STEPS_START;
+    inst->v.state = INSTANTIATED;
+}
+
+/* ---- common functions ------------------------------------------------------------------ */
+
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[])
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2SetDebugLogging");
+    if (!inst) return fmi2Error;
+    if (nCategories && !categories) return REFUSE(inst, "fmi2SetDebugLogging: categories is NULL");
+    inst->logging = loggingOn;
+    return fmi2OK;
+}
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation,
+                              const fmi2CallbackFunctions *functions, fmi2Boolean visible,
+                              fmi2Boolean loggingOn)
+{
+    (void)fmuResourceLocation;
+    (void)visible;
+    if (!functions || !functions->allocateMemory || !functions->freeMemory) return NULL;
+    Instance *inst = functions->allocateMemory(1, sizeof(Instance));
+    if (!inst) return NULL;
+    inst->cb = *functions;
+    inst->type = fmuType;
+    inst->logging = loggingOn;
+    snprintf(inst->name, sizeof inst->name, "%s", instanceName ? instanceName : "?");
+    const char *problem = NULL;
+    if (!instanceName || !*instanceName) problem = "instanceName is empty";
+    else if (!fmuGUID || strcmp(fmuGUID, CP_GUID) != 0)
+        problem = "fmuGUID is not this FMU's: the model description and binary do not match";
+    else if (fmuType != fmi2ModelExchange && fmuType != fmi2CoSimulation)
+        problem = "fmuType is neither fmi2ModelExchange nor fmi2CoSimulation";
+    if (problem) {
+        log_message(inst, fmi2Error, "logStatusError", "fmi2Instantiate: %s", problem);
+        functions->freeMemory(inst);
+        return NULL;
+    }
+    reset_values(inst);
+    return inst;
+}
+
+void fmi2FreeInstance(fmi2Component c)
+{
+    Instance *inst = (Instance *)c;
+    if (inst) inst->cb.freeMemory(inst);
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
+{
+    (void)stopTimeDefined;
+    (void)stopTime;
+    Instance *inst = checked(c, INSTANTIATED, "fmi2SetupExperiment");
+    if (!inst) return fmi2Error;
+    char message[256];
+    if (toleranceDefined && real_refusal("tolerance (from setupExperiment)", tolerance,
+                                    &cp_rules[cp_real_rule[CP_VR_RTOL]],
+                                    cp_real_what[CP_VR_RTOL], message, sizeof message))
+        return REFUSE(inst, "%s", message);
+    if (!isfinite(startTime)) return REFUSE(inst, "startTime = %g: must be finite", startTime);
+    inst->v.tolerance = toleranceDefined ? tolerance : 0.0;
+    inst->v.time = inst->v.last_successful_time = startTime;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c)
+{
+    Instance *inst = checked(c, INSTANTIATED, "fmi2EnterInitializationMode");
+    if (!inst) return fmi2Error;
+    inst->v.state = INITIALIZATION;
+    return fmi2OK;
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c)
+{
+    Instance *inst = checked(c, INITIALIZATION, "fmi2ExitInitializationMode");
+    if (!inst) return fmi2Error;
+    if (inst->v.tolerance > 0) inst->v.r[CP_VR_RTOL] = inst->v.tolerance;
+    invalidate(inst);
+    update_outputs(inst);
+    inst->v.state = inst->type == fmi2CoSimulation ? STEP_COMPLETE : EVENT_MODE;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Terminate(fmi2Component c)
+{
+    Instance *inst = checked(c, RUNNING | STEP_FAILED, "fmi2Terminate");
+    if (!inst) return fmi2Error;
+    inst->v.state = TERMINATED;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Reset(fmi2Component c)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2Reset");
+    if (!inst) return fmi2Error;
+    reset_values(inst);
+    return fmi2OK;
+}
+
+/* ---- getting and setting values ------------------------------------------------------- */
+
+static int is_derivative(fmi2ValueReference vr)
+{
+    return vr >= CP_VR_DERIVATIVE && vr < CP_VR_DERIVATIVE + CP_NSTATE;
+}
+
+static fmi2Status derivatives(Instance *inst)
+{
+    if (inst->v.dx_valid) return fmi2OK;
+    cp_model model = {inst->v.r, 1.0, -1};
+    int status = cp_rhs(&model, X(inst), inst->v.dx);
+    if (status != CP_OK) {
+        log_message(inst, fmi2Discard, "logStatusDiscard", "derivatives at t = %.9g s: %s at "
+                    "generalized speed %d (pivot ratio %.2g); check parameters and state",
+                    inst->v.time, cp_status_message(status), model.bad_dof, model.pivot_ratio);
+        return fmi2Discard;
+    }
+    inst->v.dx_valid = 1;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                       fmi2Real value[])
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetReal");
+    if (!inst) return fmi2Error;
+    if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2GetReal: vr or value is NULL");
+    for (size_t k = 0; k < nvr; k++) {
+        if (vr[k] < CP_NREAL) {
+            if (vr[k] >= CP_VR_OUTPUT && vr[k] < CP_VR_STATISTICS) update_outputs(inst);
+            value[k] = inst->v.r[vr[k]];
+        } else if (is_derivative(vr[k])) {
+            fmi2Status status = derivatives(inst);
+            if (status != fmi2OK) return status;
+            value[k] = inst->v.dx[vr[k] - CP_VR_DERIVATIVE];
+        } else {
+            return REFUSE(inst, "fmi2GetReal: value reference %u is not a Real variable", vr[k]);
+        }
+    }
+    return fmi2OK;
+}
+
+/* NULL if the variable may be set in the instance's state, or why not. */
+static const char *not_settable(const Instance *inst, fmi2ValueReference vr, char *message,
+                                size_t size)
+{
+    int input = vr >= CP_VR_INPUT && vr < CP_VR_STATE;
+    int calculated = (vr >= CP_VR_OUTPUT && vr < CP_VR_SETTINGS) || is_derivative(vr);
+    if (calculated) snprintf(message, size, CP_CALCULATED_MESSAGE, cp_variable_name(vr));
+    else if (!input && !(inst->v.state & BEFORE_INIT))
+        snprintf(message, size, CP_FIXED_MESSAGE, cp_variable_name(vr));
+    else if (inst->v.state & (TERMINATED | STEP_FAILED))
+        snprintf(message, size, "%s cannot be set now: the simulation has %s",
+                 cp_variable_name(vr), inst->v.state == TERMINATED ? "terminated" : "failed");
+    else return NULL;
+    return message;
+}
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                       const fmi2Real value[])
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2SetReal");
+    if (!inst) return fmi2Error;
+    if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2SetReal: vr or value is NULL");
+    char message[512];
+    for (size_t k = 0; k < nvr; k++) {  /* all checked before any is taken */
+        if (vr[k] >= CP_NREAL && !is_derivative(vr[k]))
+            return REFUSE(inst, "fmi2SetReal: value reference %u is not a Real variable", vr[k]);
+        if (not_settable(inst, vr[k], message, sizeof message)
+            || real_refusal(cp_variable_name(vr[k]), value[k], &cp_rules[cp_real_rule[vr[k]]],
+                       cp_real_what[vr[k]], message, sizeof message))
+            return REFUSE(inst, "%s", message);
+    }
+    for (size_t k = 0; k < nvr; k++) {
+        if (inst->v.r[vr[k]] != value[k]) invalidate(inst);
+        inst->v.r[vr[k]] = value[k];
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          fmi2Integer value[])
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetInteger");
+    if (!inst) return fmi2Error;
+    if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2GetInteger: vr or value is NULL");
+    for (size_t k = 0; k < nvr; k++) {
+        if (vr[k] == CP_VR_SOLVER) value[k] = inst->v.solver;
+        else if (vr[k] == CP_VR_MAX_STEPS) value[k] = inst->v.max_steps;
+        else return REFUSE(inst, "fmi2GetInteger: value reference %u is not an Integer variable",
+                           vr[k]);
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Integer value[])
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2SetInteger");
+    if (!inst) return fmi2Error;
+    if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2SetInteger: vr or value is NULL");
+    char message[512];
+    for (size_t k = 0; k < nvr; k++) {
+        const cp_rule *rule;
+        if (vr[k] == CP_VR_SOLVER) rule = &cp_rules[CP_SOLVER_RULE];
+        else if (vr[k] == CP_VR_MAX_STEPS) rule = &cp_rules[CP_MAX_STEPS_RULE];
+        else return REFUSE(inst, "fmi2SetInteger: value reference %u is not an Integer variable",
+                           vr[k]);
+        const char *name = cp_variable_name(vr[k]);
+        if (!(inst->v.state & BEFORE_INIT)) {
+            snprintf(message, sizeof message, CP_FIXED_MESSAGE, name);
+            return REFUSE(inst, "%s", message);
+        }
+        char shown[16];
+        snprintf(shown, sizeof shown, "%d", (int)value[k]);  /* a count reads as one: 7, not 7.0 */
+        if (refusal(name, shown, value[k], rule, "", message, sizeof message))
+            return REFUSE(inst, "%s", message);
+    }
+    for (size_t k = 0; k < nvr; k++)
+        *(vr[k] == CP_VR_SOLVER ? &inst->v.solver : &inst->v.max_steps) = value[k];
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          fmi2Boolean value[])
+{
+    (void)value;
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetBoolean");
+    if (!inst) return fmi2Error;
+    return nvr ? REFUSE(inst, "fmi2GetBoolean: value reference %u: this FMU has no Boolean "
+                        "variables", vr ? vr[0] : 0) : fmi2OK;
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Boolean value[])
+{
+    (void)value;
+    Instance *inst = checked(c, ANY_STATE, "fmi2SetBoolean");
+    if (!inst) return fmi2Error;
+    return nvr ? REFUSE(inst, "fmi2SetBoolean: value reference %u: this FMU has no Boolean "
+                        "variables", vr ? vr[0] : 0) : fmi2OK;
+}
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                         fmi2String value[])
+{
+    (void)value;
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetString");
+    if (!inst) return fmi2Error;
+    return nvr ? REFUSE(inst, "fmi2GetString: value reference %u: this FMU has no String "
+                        "variables", vr ? vr[0] : 0) : fmi2OK;
+}
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                         const fmi2String value[])
+{
+    (void)value;
+    Instance *inst = checked(c, ANY_STATE, "fmi2SetString");
+    if (!inst) return fmi2Error;
+    return nvr ? REFUSE(inst, "fmi2SetString: value reference %u: this FMU has no String "
+                        "variables", vr ? vr[0] : 0) : fmi2OK;
+}
+
+/* ---- the FMU state ---------------------------------------------------------------------- */
+
+#define STATE_MAGIC 0x43504631u  /* "CPF1": a serialized Values of this build */
+
+typedef struct {
+    unsigned magic;
+    unsigned size;
+    char guid[sizeof CP_GUID];
+} StateHeader;
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetFMUstate");
+    if (!inst) return fmi2Error;
+    if (!FMUstate) return REFUSE(inst, "fmi2GetFMUstate: FMUstate is NULL");
+    Values *copy = *FMUstate ? *FMUstate : inst->cb.allocateMemory(1, sizeof(Values));
+    if (!copy) return REFUSE(inst, "fmi2GetFMUstate: out of memory");
+    *copy = inst->v;
+    *FMUstate = copy;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2SetFMUstate");
+    if (!inst) return fmi2Error;
+    if (!FMUstate) return REFUSE(inst, "fmi2SetFMUstate: FMUstate is NULL");
+    inst->v = *(const Values *)FMUstate;
+    return fmi2OK;
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2FreeFMUstate");
+    if (!inst) return fmi2Error;
+    if (!FMUstate) return REFUSE(inst, "fmi2FreeFMUstate: FMUstate is NULL");
+    if (*FMUstate) inst->cb.freeMemory(*FMUstate);
+    *FMUstate = NULL;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2SerializedFMUstateSize");
+    if (!inst) return fmi2Error;
+    if (!FMUstate || !size) return REFUSE(inst, "fmi2SerializedFMUstateSize: a pointer is NULL");
+    *size = sizeof(StateHeader) + sizeof(Values);
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
+                                 fmi2Byte serializedState[], size_t size)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2SerializeFMUstate");
+    if (!inst) return fmi2Error;
+    if (!FMUstate || !serializedState) return REFUSE(inst, "fmi2SerializeFMUstate: a pointer is NULL");
+    if (size < sizeof(StateHeader) + sizeof(Values))
+        return REFUSE(inst, "fmi2SerializeFMUstate: %zu bytes are too few; "
+                      "fmi2SerializedFMUstateSize says how many", size);
+    StateHeader header = {STATE_MAGIC, (unsigned)sizeof(Values), CP_GUID};
+    memcpy(serializedState, &header, sizeof header);
+    memcpy(serializedState + sizeof header, FMUstate, sizeof(Values));
+    return fmi2OK;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate *FMUstate)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2DeSerializeFMUstate");
+    if (!inst) return fmi2Error;
+    if (!serializedState || !FMUstate) return REFUSE(inst, "fmi2DeSerializeFMUstate: a pointer is NULL");
+    StateHeader header;
+    if (size != sizeof header + sizeof(Values))
+        return REFUSE(inst, "fmi2DeSerializeFMUstate: %zu bytes are not a state of this FMU", size);
+    memcpy(&header, serializedState, sizeof header);
+    if (header.magic != STATE_MAGIC || header.size != sizeof(Values)
+        || memcmp(header.guid, CP_GUID, sizeof CP_GUID) != 0)
+        return REFUSE(inst, "fmi2DeSerializeFMUstate: the bytes are not a state of this FMU "
+                      "(another model, build or version)");
+    Values *copy = *FMUstate ? *FMUstate : inst->cb.allocateMemory(1, sizeof(Values));
+    if (!copy) return REFUSE(inst, "fmi2DeSerializeFMUstate: out of memory");
+    memcpy(copy, serializedState + sizeof header, sizeof(Values));
+    *FMUstate = copy;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
+                                        size_t nUnknown, const fmi2ValueReference vKnown_ref[],
+                                        size_t nKnown, const fmi2Real dvKnown[], fmi2Real dvUnknown[])
+{
+    (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown, (void)dvUnknown;
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetDirectionalDerivative");
+    if (!inst) return fmi2Error;
+    return REFUSE(inst, "fmi2GetDirectionalDerivative: not provided by this FMU "
+                  "(providesDirectionalDerivative is false)");
+}
+
+/* ---- Model Exchange ----------------------------------------------------------------------- */
+
+fmi2Status fmi2EnterEventMode(fmi2Component c)
+{
+    Instance *inst = checked(c, EVENT_MODE | CONTINUOUS_TIME, "fmi2EnterEventMode");
+    if (!inst) return fmi2Error;
+    inst->v.state = EVENT_MODE;
+    return fmi2OK;
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
+{
+    Instance *inst = checked(c, EVENT_MODE, "fmi2NewDiscreteStates");
+    if (!inst) return fmi2Error;
+    if (!eventInfo) return REFUSE(inst, "fmi2NewDiscreteStates: eventInfo is NULL");
+    memset(eventInfo, 0, sizeof *eventInfo);  /* no events: nothing changes, nothing to wait for */
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
+{
+    Instance *inst = checked(c, EVENT_MODE, "fmi2EnterContinuousTimeMode");
+    if (!inst) return fmi2Error;
+    inst->v.state = CONTINUOUS_TIME;
+    return fmi2OK;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
+{
+    (void)noSetFMUStatePriorToCurrentPoint;
+    Instance *inst = checked(c, CONTINUOUS_TIME, "fmi2CompletedIntegratorStep");
+    if (!inst) return fmi2Error;
+    if (!enterEventMode || !terminateSimulation)
+        return REFUSE(inst, "fmi2CompletedIntegratorStep: a pointer is NULL");
+    *enterEventMode = *terminateSimulation = fmi2False;
+    inst->v.last_successful_time = inst->v.time;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
+{
+    Instance *inst = checked(c, EVENT_MODE | CONTINUOUS_TIME, "fmi2SetTime");
+    if (!inst) return fmi2Error;
+    if (!isfinite(time)) return REFUSE(inst, "fmi2SetTime: time = %g must be finite", time);
+    inst->v.time = time;  /* the model is autonomous: x' does not depend on time */
+    return fmi2OK;
+}
+
+static fmi2Status check_states_call(Instance *inst, const void *x, size_t nx, const char *function)
+{
+    if (!x) return REFUSE(inst, "%s: the array is NULL", function);
+    if (nx != CP_NSTATE) return REFUSE(inst, "%s: nx = %zu, but this FMU has %d continuous "
+                                       "states", function, nx, CP_NSTATE);
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
+{
+    Instance *inst = checked(c, EVENT_MODE | CONTINUOUS_TIME, "fmi2SetContinuousStates");
+    if (!inst) return fmi2Error;
+    if (check_states_call(inst, x, nx, "fmi2SetContinuousStates") != fmi2OK) return fmi2Error;
+    for (size_t k = 0; k < nx; k++)
+        if (!isfinite(x[k]))
+            return REFUSE(inst, "fmi2SetContinuousStates: %s = %g: must be finite",
+                          cp_variable_name(CP_VR_STATE + k), x[k]);
+    memcpy(X(inst), x, nx * sizeof x[0]);
+    invalidate(inst);
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx)
+{
+    Instance *inst = checked(c, INITIALIZATION | RUNNING | TERMINATED, "fmi2GetDerivatives");
+    if (!inst) return fmi2Error;
+    if (check_states_call(inst, dx, nx, "fmi2GetDerivatives") != fmi2OK) return fmi2Error;
+    fmi2Status status = derivatives(inst);
+    if (status == fmi2OK) memcpy(dx, inst->v.dx, nx * sizeof dx[0]);
+    return status;
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
+{
+    (void)eventIndicators;
+    Instance *inst = checked(c, INITIALIZATION | RUNNING | TERMINATED, "fmi2GetEventIndicators");
+    if (!inst) return fmi2Error;
+    return ni ? REFUSE(inst, "fmi2GetEventIndicators: ni = %zu, but this FMU has none", ni) : fmi2OK;
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetContinuousStates");
+    if (!inst) return fmi2Error;
+    if (check_states_call(inst, x, nx, "fmi2GetContinuousStates") != fmi2OK) return fmi2Error;
+    memcpy(x, X(inst), nx * sizeof x[0]);
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetNominalsOfContinuousStates");
+    if (!inst) return fmi2Error;
+    if (check_states_call(inst, x_nominal, nx, "fmi2GetNominalsOfContinuousStates") != fmi2OK)
+        return fmi2Error;
+    for (size_t k = 0; k < nx; k++) x_nominal[k] = 1.0;  /* angles and rates: order one */
+    return fmi2OK;
+}
+
+/* ---- Co-Simulation ----------------------------------------------------------------------- */
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[])
+{
+    (void)vr, (void)order, (void)value;
+    Instance *inst = checked(c, ANY_STATE, "fmi2SetRealInputDerivatives");
+    if (!inst) return fmi2Error;
+    return nvr ? REFUSE(inst, "fmi2SetRealInputDerivatives: inputs are held constant over a "
+                        "step (canInterpolateInputs is false)") : fmi2OK;
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                        const fmi2Integer order[], fmi2Real value[])
+{
+    (void)vr, (void)order, (void)value;
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetRealOutputDerivatives");
+    if (!inst) return fmi2Error;
+    return nvr ? REFUSE(inst, "fmi2GetRealOutputDerivatives: not provided "
+                        "(MaxOutputDerivativeOrder is 0)") : fmi2OK;
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
+                      fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
+{
+    (void)noSetFMUStatePriorToCurrentPoint;
+    Instance *inst = checked(c, STEP_COMPLETE, "fmi2DoStep");
+    if (!inst) return fmi2Error;
+    if (inst->type != fmi2CoSimulation)
+        return REFUSE(inst, "fmi2DoStep: instantiated for Model Exchange");
+    const double t = currentCommunicationPoint, dt = communicationStepSize;
+    if (!(fabs(t - inst->v.time) <= 1e-9 * fmax(1.0, fabs(t))))
+        return REFUSE(inst, "fmi2DoStep: currentCommunicationPoint = %.17g s, but the FMU is "
+                      "at t = %.17g s", t, inst->v.time);
+    cp_model model = {inst->v.r, 1.0, -1};
+    cp_system system = {CP_NSTATE, cp_rhs, &model};
+    cp_stats stats = {0, 0, 0};
+    int status = CP_BAD_STEP;
+    if (dt >= 0 && dt < INFINITY)
+        status = cp_integrate(inst->v.solver, &system, t, X(inst), dt, inst->v.r[CP_VR_RTOL],
+                              inst->v.r[CP_VR_ATOL], inst->v.r[CP_VR_MAX_STEP], inst->v.max_steps,
+                              &inst->v.h, inst->v.work, &inst->v.fsal, &stats);
+    STATS(inst)[0] += stats.nfev;
+    STATS(inst)[1] += stats.naccept;
+    STATS(inst)[2] += stats.nreject;
+    if (status != CP_OK) {
+        cp_failure failure = {t, dt, model.bad_dof, model.pivot_ratio, inst->v.r[CP_VR_RTOL],
+                              inst->v.r[CP_VR_ATOL], inst->v.max_steps};
+        char message[2048];
+        cp_diagnose(message, sizeof message, status, &failure);
+        log_message(inst, fmi2Discard, "logStatusDiscard", "%s", message);
+        inst->v.state = STEP_FAILED;
+        return fmi2Discard;
+    }
+    inst->v.time = inst->v.last_successful_time = t + dt;
+    inst->v.dx_valid = inst->v.outputs_valid = 0;
+    update_outputs(inst);
+    return fmi2OK;
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2CancelStep");
+    if (!inst) return fmi2Error;
+    return REFUSE(inst, "fmi2CancelStep: doStep never runs asynchronously here");
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetStatus");
+    if (!inst) return fmi2Error;
+    if (!value) return REFUSE(inst, "fmi2GetStatus: value is NULL");
+    if (s != fmi2DoStepStatus) return fmi2Discard;
+    *value = inst->v.state == STEP_FAILED ? fmi2Discard : fmi2OK;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetRealStatus");
+    if (!inst) return fmi2Error;
+    if (!value) return REFUSE(inst, "fmi2GetRealStatus: value is NULL");
+    if (s != fmi2LastSuccessfulTime) return fmi2Discard;
+    *value = inst->v.last_successful_time;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
+{
+    (void)s, (void)value;
+    return checked(c, ANY_STATE, "fmi2GetIntegerStatus") ? fmi2Discard : fmi2Error;
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
+{
+    Instance *inst = checked(c, ANY_STATE, "fmi2GetBooleanStatus");
+    if (!inst) return fmi2Error;
+    if (!value) return REFUSE(inst, "fmi2GetBooleanStatus: value is NULL");
+    if (s != fmi2Terminated) return fmi2Discard;
+    *value = fmi2False;  /* the model never asks to stop */
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
+{
+    (void)s, (void)value;
+    return checked(c, ANY_STATE, "fmi2GetStringStatus") ? fmi2Discard : fmi2Error;
+}
