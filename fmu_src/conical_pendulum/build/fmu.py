@@ -60,17 +60,22 @@ def model_data(scene: Scene, core: CoreBuild, settings: dict) -> dict:
     }
 
 
+BACKENDS = ("pythonfmu", "native")
+
+
 def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.fmu",
-              settings: dict | None = None, cache: Path | None = None) -> FmuBuild:
+              settings: dict | None = None, cache: Path | None = None,
+              backend: str = "pythonfmu") -> FmuBuild:
+    """The scene's FMU at `output`: the pythonfmu slave (the default), or with
+    backend="native" the same C with FMI glue in C (build.native)."""
+    if backend == "native":
+        from .native import build_native_fmu
+
+        return build_native_fmu(scene, output, settings, cache)
+    if backend != "pythonfmu":
+        raise ValueError(f"backend: {backend!r} is not one of {BACKENDS}")
     start = time.perf_counter()
-    output = Path(output)
-    if output.suffix != ".fmu":
-        raise ValueError(f"output: {str(output)!r} must end in .fmu")
-    unknown = set(settings or {}) - set(SETTINGS)
-    if unknown:
-        raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(SETTINGS)}")
-    settings = {name: check_setting(name, value)
-                for name, value in {**DEFAULT_SETTINGS, **(settings or {})}.items()}
+    output, settings = checked_output(output), checked_settings(settings)
     core = build_core(scene, cache)
     data = model_data(scene, core, settings)
     starts = {v["name"]: v["start"] for group in data["variables"].values() for v in group
@@ -82,6 +87,22 @@ def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.f
                               feedthrough=PIVOT_OUTPUTS if scene.coupling else (),
                               canGetAndSetFMUstate=True, canSerializeFMUstate=True)
     return FmuBuild(output, core, module_name, time.perf_counter() - start)
+
+
+def checked_output(output: Path | str) -> Path:
+    output = Path(output)
+    if output.suffix != ".fmu":
+        raise ValueError(f"output: {str(output)!r} must end in .fmu")
+    return output
+
+
+def checked_settings(settings: dict | None) -> dict:
+    """Every solver setting: the defaults, some replaced; unknown names and bad values refused."""
+    unknown = set(settings or {}) - set(SETTINGS)
+    if unknown:
+        raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(SETTINGS)}")
+    return {name: check_setting(name, value)
+            for name, value in {**DEFAULT_SETTINGS, **(settings or {})}.items()}
 
 
 def runtime_digest() -> str:

@@ -20,12 +20,11 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-from ..runtime.rules import (CALCULATED, FIXED, RULES, SETTINGS, STATISTICS, check_setting,
-                             rule_of)
+from ..runtime.rules import CALCULATED, FIXED, RULES, SETTINGS, STATISTICS, rule_of
 from ..runtime.slave import MODEL_FILE
 from ..scene import Scene
 from .compiler import CSRC, CoreBuild, build_core
-from .fmu import DEFAULT_SETTINGS, MODEL_NAME, FmuBuild, model_data
+from .fmu import MODEL_NAME, FmuBuild, checked_output, checked_settings, model_data
 
 GLUE_SOURCES = ["model.c", "dynamics.c", "solvers.c", "diagnosis.c", "fmi2_glue.c"]
 GLUE_HEADERS = ["model.h", "dynamics.h", "solvers.h", "tableaus.h", "status.h", "diagnosis.h",
@@ -225,14 +224,7 @@ def build_native_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_
                      settings: dict | None = None, cache: Path | None = None) -> FmuBuild:
     """The native FMU of a scene at `output` (moved into place only when complete)."""
     start = time.perf_counter()
-    output = Path(output)
-    if output.suffix != ".fmu":
-        raise ValueError(f"output: {str(output)!r} must end in .fmu")
-    unknown = set(settings or {}) - set(SETTINGS)
-    if unknown:
-        raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(SETTINGS)}")
-    settings = {name: check_setting(name, value)
-                for name, value in {**DEFAULT_SETTINGS, **(settings or {})}.items()}
+    output, settings = checked_output(output), checked_settings(settings)
     if settings["solver"] >= RULES["native-solver"].high:
         raise ValueError(f"solver = {settings['solver']}: {RULES['native-solver'].refusal}")
     core = build_core(scene, cache)

@@ -1,0 +1,310 @@
+"""The native FMU: the same C as the pythonfmu FMU with FMI glue in C, in hosts that are not Python."""
+import os
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+from conical_pendulum import Link, Scene
+from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.analysis.simulate import simulate
+from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.build.native import fmi_headers
+from fmu_helpers import Instance
+
+HOST_SOURCE = Path(__file__).parent / "hosts" / "fmi_host.c"
+SCENES = {"seed": Scene.uniform(3), "coupled": Scene.uniform(3, coupling=True),
+          "mixed": Scene(links=(Link(has_mass=False), Link(has_bob=False), Link(length=4.0)))}
+START = {"l0": 8.0, "alpha0": 0.5, "delta2": 0.3}
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    """{scene name: (native FMU, pythonfmu FMU)}, built on first use."""
+    folder, built = tmp_path_factory.mktemp("native"), {}
+
+    def get(name):
+        if name not in built:
+            built[name] = tuple(build_fmu(SCENES[name], folder / f"{name}_{backend}.fmu",
+                                          backend=backend).path
+                                for backend in ("native", "pythonfmu"))
+        return built[name]
+
+    return get
+
+
+@pytest.fixture(scope="module")
+def native(fmus):
+    return fmus("seed")[0]
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory):
+    """tests/hosts/fmi_host.c compiled: a host that is a plain C program."""
+    program = tmp_path_factory.mktemp("host") / "fmi_host"
+    subprocess.run(["cc", "-std=c99", "-O1", "-Wall", "-Werror", f"-I{fmi_headers()}",
+                    str(HOST_SOURCE), "-o", str(program), "-ldl"], check=True)
+    return program
+
+
+def unzipped(path, folder):
+    with zipfile.ZipFile(path) as archive:
+        archive.extractall(folder)
+    return folder
+
+
+def library(path, folder) -> Path:
+    return unzipped(path, folder) / "binaries" / "linux64" / "ConicalPendulum.so"
+
+
+def vrs(path, names):
+    variables = {v.name: v.valueReference for v in read_model_description(str(path)).modelVariables}
+    return [variables[name] for name in names]
+
+
+def test_fmpy_and_fmutool_validate_it(native):
+    assert validate_fmu(str(native)) == []
+    fmutool = shutil.which("fmutool", path=os.path.dirname(sys.executable)) or shutil.which("fmutool")
+    run = subprocess.run([fmutool, "-input", str(native), "-check"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "compliant with FMI-2.0" in run.stdout and "No semantic error" in run.stdout
+
+
+def test_binary_needs_only_libc_and_libm_and_exports_only_fmi(native, tmp_path):
+    so = library(native, tmp_path)
+    dynamic = subprocess.run(["readelf", "-d", str(so)], capture_output=True, text=True, check=True).stdout
+    needed = {line.split("[")[1].rstrip("]") for line in dynamic.splitlines() if "(NEEDED)" in line}
+    assert needed == {"libc.so.6", "libm.so.6"}
+    symbols = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True,
+                             check=True).stdout.split()[2::3]
+    assert symbols and all(name.startswith("fmi2") for name in symbols)
+
+
+def test_model_description_matches_the_pythonfmu_fmu_and_is_complete(fmus):
+    native, python = fmus("coupled")
+    ours, theirs = (read_model_description(str(path)) for path in (native, python))
+    by_name = {v.name: v for v in ours.modelVariables}
+    for v in theirs.modelVariables:
+        mine = by_name[v.name]
+        assert (mine.valueReference, mine.type, mine.causality, mine.variability, mine.initial,
+                mine.start, mine.description) == (v.valueReference, v.type, v.causality,
+                                                  v.variability, v.initial, v.start, v.description)
+    derivatives = [v for v in ours.modelVariables if v.name.startswith("der(")]
+    assert [d.derivative.name for d in derivatives] == SCENES["coupled"].state_names()
+    assert len(ours.derivatives) == len(derivatives)
+    assert {u.variable.name for u in ours.initialUnknowns} >= {d.name for d in derivatives} | {"energy"}
+    assert ours.coSimulation.canGetAndSetFMUstate and ours.modelExchange.canSerializeFMUstate
+    root = ET.fromstring(zipfile.ZipFile(native).read("modelDescription.xml"))
+    for interface in ("ModelExchange", "CoSimulation"):
+        element = root.find(interface)
+        assert element.get("needsExecutionTool") == "false"
+        assert [f.get("name") for f in element.find("SourceFiles")]
+    feedthrough = {u.variable.name: u.dependencies for u in ours.outputs}
+    assert {d.name for d in feedthrough["F_pivot_x"]} >= {"a_pivot_x", "a_pivot_y", "a_pivot_z"}
+    assert not {d.name for d in feedthrough["energy"]} & {"a_pivot_x", "a_pivot_y", "a_pivot_z"}
+
+
+@pytest.mark.parametrize("scene", list(SCENES))
+@pytest.mark.parametrize("settings", [{}, {"solver": 2, "rtol": 1e-11, "atol": 1e-11},
+                                      {"solver": 0, "max_step": 0.005}])
+def test_co_simulation_equals_the_pythonfmu_fmu_bit_for_bit(fmus, scene, settings):
+    """Same generated C, same solvers, same settings: the same numbers."""
+    native, python = fmus(scene)
+    start = {**{k: v for k, v in START.items() if k in SCENES[scene].parameter_names()
+                + SCENES[scene].state_names()}, **settings}
+    if scene == "coupled":
+        start["a_pivot_x"] = 0.7
+    ours, theirs = (run_fmu(path, stop_time=5.0, start_values=start) for path in (native, python))
+    assert ours.dtype.names == theirs.dtype.names
+    for name in theirs.dtype.names:
+        np.testing.assert_array_equal(ours[name], theirs[name], err_msg=name)
+
+
+def test_model_exchange_matches_the_native_reference(fmus):
+    native, _ = fmus("seed")
+    run = run_fmu(native, stop_time=10.0, fmi_type="ModelExchange", relative_tolerance=1e-10,
+                  start_values=START)
+    reference = simulate(SCENES["seed"], run["time"], parameters={"l0": 8.0},
+                         state={"alpha0": 0.5, "delta2": 0.3}, rtol=1e-12, atol=1e-12)
+    for name in SCENES["seed"].state_names()[:6]:  # the angles
+        assert np.abs(run[name] - reference[name]).max() < 1e-6, name
+    assert np.abs(run["energy"] - reference["energy"]).max() < 1e-6 * abs(reference["energy"][0])
+
+
+def test_a_host_rebuilds_the_binary_from_the_fmus_sources(native, tmp_path):
+    """fmpy's build_platform_binary (CMake) on the FMU's sources/ alone."""
+    from fmpy.build import build_platform_binary
+
+    folder = unzipped(native, tmp_path / "fmu")
+    shutil.rmtree(folder / "binaries")
+    (tmp_path / "build").mkdir()
+    build_platform_binary(folder, build_dir=tmp_path / "build")
+    assert (folder / "binaries" / "linux64" / "ConicalPendulum.so").exists()
+    rebuilt = run_fmu(folder, stop_time=2.0, start_values=START)
+    shipped = run_fmu(native, stop_time=2.0, start_values=START)
+    for name in ("alpha0", "beta2", "energy"):
+        np.testing.assert_allclose(rebuilt[name], shipped[name], rtol=1e-9, atol=1e-12)
+
+
+def test_a_c_host_runs_it_with_a_clean_environment(native, host, tmp_path):
+    """dlopen and the FMI calls from a C program: no Python, no preload, no paths."""
+    md = read_model_description(str(native))
+    names = ["alpha0", "beta2", "bob2_x", "energy"]
+    run = subprocess.run([str(host), str(library(native, tmp_path)), md.guid, "10", repr(1 / 60), "1",
+                          ",".join(map(str, vrs(native, names))), "--", f"{vrs(native, ['l0'])[0]}=8"],
+                         capture_output=True, text=True, env={}, check=True)
+    rows = np.array([[float(x) for x in line.split(",")] for line in run.stdout.split()])
+    ours = run_fmu(native, stop_time=10.0, start_values={"l0": 8.0})
+    assert rows.shape == (601, 1 + len(names))
+    for k, name in enumerate(names, start=1):
+        np.testing.assert_array_equal(rows[:, k], ours[name], err_msg=name)
+
+
+def test_two_instances_side_by_side_keep_their_own_parameters(native, host, tmp_path):
+    md = read_model_description(str(native))
+    l0, alpha0 = vrs(native, ["l0", "alpha0"])
+    run = subprocess.run([str(host), str(library(native, tmp_path)), md.guid, "3", "0.05", "1",
+                          str(alpha0), "--", f"{l0}=5", "--", f"{l0}=12"],
+                         capture_output=True, text=True, env={}, check=True)
+    rows = np.array([[float(x) for x in line.split(",")] for line in run.stdout.split()])
+    for column, length in ((1, 5.0), (2, 12.0)):
+        alone = run_fmu(native, stop_time=3.0, output_interval=0.05, start_values={"l0": length})
+        np.testing.assert_array_equal(rows[:, column], alone["alpha0"])
+
+
+def test_ecos_command_line_engine_runs_it_with_a_clean_environment(native, tmp_path):
+    """ecos' own executable (from the ecospy wheel), 600 steps/s, nothing of Python around it."""
+    import importlib.util
+
+    # not imported: ecospy's module loads its library, which needs libtbb preloaded
+    binaries = Path(importlib.util.find_spec("ecospy").submodule_search_locations[0]) / "binaries"
+    ecos = tmp_path / "ecos"
+    shutil.copy2(binaries / "ecos", ecos)
+    ecos.chmod(0o755)
+    tbb = Path(sys.prefix) / "lib"  # ecos' own dependency, libtbb, from the tbb wheel
+    step = 1 / 600
+    run = subprocess.run([str(ecos), "simulate", "--path", str(native), "--stopTime", "10",
+                          "--stepSize", repr(step), "--noParallel", "-l", "warn"], cwd=tmp_path,
+                         capture_output=True, text=True, env={"LD_LIBRARY_PATH": str(tbb)}, timeout=300)
+    assert run.returncode == 0, run.stdout + run.stderr
+    table = np.genfromtxt(next(tmp_path.glob("*.csv")), delimiter=",", names=True, deletechars="",
+                          autostrip=True)
+    columns = {name.split("::")[-1].split("[")[0]: name for name in table.dtype.names}
+    ours = run_fmu(native, stop_time=10.0, output_interval=step)
+    assert len(table) == 6000  # ecos writes the points before each of its 6000 steps
+    np.testing.assert_allclose(table["time"], ours["time"][:6000], rtol=0, atol=1e-5)
+    for name in ("alpha0", "bob2_x", "energy"):  # ecos writes six decimals
+        np.testing.assert_allclose(table[columns[name]], ours[name][:6000], rtol=1e-6, atol=1e-6,
+                                   err_msg=name)
+
+
+def test_a_thousand_cycles_under_valgrind(native, host, tmp_path):
+    assert shutil.which("valgrind"), "needs Debian's valgrind (.ci/run installs it)"
+    md = read_model_description(str(native))
+    run = subprocess.run(["valgrind", "--error-exitcode=3", "--leak-check=full",
+                          "--errors-for-leak-kinds=definite,indirect,possible", "--quiet",
+                          str(host), str(library(native, tmp_path)), md.guid, "1", repr(1 / 60),
+                          "1000", ",".join(map(str, vrs(native, ["alpha0", "energy"])))],
+                         capture_output=True, text=True, env={}, timeout=1200)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert len(run.stdout.split()) == 61
+
+
+def test_fmu_state_get_set_and_serialize_replay_bit_for_bit(native):
+    fmu = Instance(native, start_values={"alpha0": 0.8})
+    for _ in range(60):
+        fmu.step(1 / 60)
+    saved = fmu.fmu.getFMUstate()
+    data = fmu.fmu.serializeFMUstate(saved)
+    names = ["alpha0", "delta1", "energy", "n_rhs"]
+
+    def run_on(instance):
+        for _ in range(60):
+            instance.step(1 / 60)
+        return instance.get(*names)
+
+    start_time = fmu.time
+    first = run_on(fmu)
+    fmu.fmu.setFMUstate(saved)
+    fmu.time = start_time
+    assert run_on(fmu) == first
+    other = Instance(native, name="other")
+    restored = other.fmu.deSerializeFMUstate(data)
+    other.fmu.setFMUstate(restored)
+    other.time = start_time
+    assert run_on(other) == first
+    fmu.fmu.freeFMUstate(saved)
+    other.fmu.freeFMUstate(restored)
+    fmu.close()
+    other.close()
+
+
+@pytest.mark.parametrize("name, value, message", [
+    ("l0", -1.0, "l0 = -1.0: a length must be positive"),
+    ("M1", 0.0, "M1 = 0.0: a link mass must be positive"),
+    ("Ixx0", -2.0, "Ixx0 = -2.0: a moment of inertia cannot be negative"),
+    ("g", float("nan"), "g = nan: must be finite"),
+    ("alpha0", float("inf"), "alpha0 = inf: must be finite"),
+    ("rtol", 0.0, "rtol = 0.0: a tolerance must be positive"),
+    ("solver", 3, "solver = 3: choose 0 to 2 (0 = rk4, 1 = rk45, 2 = dop853); Radau needs"),
+    ("max_steps", 0, "max_steps = 0: must be at least 1"),
+    ("energy", 1.0, "energy is a calculated output: it cannot be set"),
+])
+def test_a_bad_value_is_an_error_and_the_instance_goes_on(native, name, value, message):
+    fmu = Instance(native, initialize=False)
+    with pytest.raises(FMICallException) as failure:
+        fmu.set({name: value})
+    assert failure.value.status == 3  # fmi2Error: the value is not taken
+    assert any(status == 3 and text.startswith(message) for status, text in fmu.messages)
+    fmu.fmu.reset()
+    fmu.set({"l0": 7.0})
+    fmu.fmu.setupExperiment(startTime=0.0)
+    fmu.fmu.enterInitializationMode()
+    fmu.fmu.exitInitializationMode()
+    fmu.step(0.5)
+    assert np.isfinite(fmu.get("alpha0", "energy")).all()
+    fmu.close()
+
+
+def test_wrong_references_and_states_are_errors_not_crashes(native):
+    fmu = Instance(native, initialize=False)
+    for call in (lambda: fmu.fmu.getReal([10_000]), lambda: fmu.fmu.setInteger([0], [1]),
+                 lambda: fmu.fmu.doStep(0.0, 0.1), lambda: fmu.fmu.getBoolean([0]),
+                 lambda: fmu.fmu.fmi2GetReal(fmu.fmu.component, None, 1, None)):  # null pointers
+        with pytest.raises(FMICallException) as failure:
+            call()
+        assert failure.value.status == 3
+    texts = " ".join(text for _, text in fmu.messages)
+    assert "10000 is not a Real variable" in texts and "fmi2DoStep is not allowed" in texts
+    fmu.close(after_fatal=True)
+
+
+def test_a_failed_step_is_discarded_with_the_diagnosis_and_reset_goes_on(tmp_path):
+    """The singular two-angle joint of the envelope: a massless link along its parent's x axis."""
+    scene = Scene(links=(Link(), Link(has_mass=False)))
+    native = build_fmu(scene, tmp_path / "Singular.fmu", backend="native").path
+    fmu = Instance(native, start_values={"alpha1": np.pi / 2, "beta1": 0.0, "solver": 0})
+    with pytest.raises(FMICallException) as failure:
+        fmu.step(0.1)
+    assert failure.value.status == 2  # fmi2Discard
+    text = " ".join(t for s, t in fmu.messages if s == 2)
+    assert "singular mass matrix" in text and "link 1" in text
+    assert fmu.fmu.getRealStatus(2) == 0.0  # fmi2LastSuccessfulTime: nothing was taken
+    with pytest.raises(FMICallException):  # a discarded step: only reset or a saved state go on
+        fmu.step(0.1)
+    fmu.fmu.reset()
+    fmu.fmu.setupExperiment(startTime=0.0)
+    fmu.fmu.enterInitializationMode()
+    fmu.fmu.exitInitializationMode()
+    fmu.time = 0.0
+    fmu.step(0.1)
+    assert np.isfinite(fmu.get("alpha0")).all()
+    fmu.close()
