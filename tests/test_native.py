@@ -308,3 +308,36 @@ def test_a_failed_step_is_discarded_with_the_diagnosis_and_reset_goes_on(tmp_pat
     fmu.step(0.1)
     assert np.isfinite(fmu.get("alpha0")).all()
     fmu.close()
+
+
+def test_the_windows_binary_runs_under_wine(tmp_path, host):
+    """binaries/win64 cross-compiled with Debian's mingw-w64, run by the same C host built
+    for Windows, under Debian's wine64; it agrees with the Linux binary."""
+    compiler, wine = shutil.which("x86_64-w64-mingw32-gcc"), "/usr/lib/wine/wine64"
+    assert compiler and os.path.exists(wine), "needs mingw-w64 and wine64 (.ci/run installs them)"
+    both = build_fmu(SCENES["seed"], tmp_path / "Both.fmu", backend="native",
+                     platforms=("linux64", "win64")).path
+    assert validate_fmu(str(both)) == []
+    folder = unzipped(both, tmp_path / "fmu")
+    dll = folder / "binaries" / "win64" / "ConicalPendulum.dll"
+    objdump = subprocess.run(["x86_64-w64-mingw32-objdump", "-p", str(dll)], capture_output=True,
+                             text=True, check=True).stdout
+    assert {line.split(":")[1].strip() for line in objdump.splitlines() if "DLL Name" in line} == {
+        "KERNEL32.dll", "msvcrt.dll"}
+    exe = tmp_path / "fmi_host.exe"
+    subprocess.run([compiler, "-std=c99", "-O1", "-Wall", "-Werror", f"-I{fmi_headers()}",
+                    str(HOST_SOURCE), "-o", str(exe), "-static-libgcc"], check=True)
+    shutil.copy2(dll, tmp_path / dll.name)
+    guid = read_model_description(str(both)).guid
+    outputs = ",".join(map(str, vrs(both, ["alpha0", "bob2_x", "energy"])))
+    args = [guid, "10", repr(1 / 60), "1", outputs, "--", f"{vrs(both, ['l0'])[0]}=8"]
+    windows = subprocess.run([wine, str(exe), dll.name, *args], cwd=tmp_path, capture_output=True,
+                             text=True, timeout=600, env={"WINEDEBUG": "-all", "HOME": str(tmp_path),
+                                                          "WINEPREFIX": str(tmp_path / "wine")})
+    assert windows.returncode == 0, windows.stderr[-2000:]
+    linux = subprocess.run([str(host), str(folder / "binaries" / "linux64" / "ConicalPendulum.so"),
+                            *args], capture_output=True, text=True, env={}, check=True)
+    rows = [np.array([[float(x) for x in line.split(",")] for line in run.stdout.split()])
+            for run in (windows, linux)]
+    assert rows[0].shape == rows[1].shape == (601, 4)
+    np.testing.assert_allclose(rows[0], rows[1], rtol=1e-12, atol=1e-12)  # libm differs, not the C

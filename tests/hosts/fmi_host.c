@@ -1,4 +1,5 @@
-/* A small FMI 2.0 Co-Simulation host that is not Python: dlopen, the FMI calls, a fixed step.
+/* A small FMI 2.0 Co-Simulation host that is not Python: load the library, the FMI calls, a
+ * fixed step. POSIX (dlopen) or Windows (LoadLibrary; cross-compiled and run under wine).
  *
  *   fmi_host LIBRARY GUID STOP STEP CYCLES OUT_VRS [-- VR=VALUE ...]...
  *
@@ -7,13 +8,26 @@
  * and prints the last cycle as CSV: time, then the OUT_VRS (comma-separated value
  * references) of each instance. Exit status 1 on any FMI status other than fmi2OK.
  */
-#include <dlfcn.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "fmi2Functions.h"
+
+#ifdef _WIN32
+#include <windows.h>
+#define OPEN(path) LoadLibraryA(path)
+#define SYMBOL(library, name) ((void *)GetProcAddress((HMODULE)(library), name))
+#define CLOSE(library) FreeLibrary((HMODULE)(library))
+#define OPEN_ERROR "LoadLibrary failed"
+#else
+#include <dlfcn.h>
+#define OPEN(path) dlopen(path, RTLD_NOW | RTLD_LOCAL)
+#define SYMBOL(library, name) dlsym(library, name)
+#define CLOSE(library) dlclose(library)
+#define OPEN_ERROR dlerror()
+#endif
 
 #define MAX_INSTANCES 4
 #define MAX_OUTPUTS 64
@@ -26,7 +40,7 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
     fprintf(stderr, "[%s] %s (status %d): %s\n", name, category, status, message);
 }
 
-#define LOAD(name) fmi2##name##TYPE *name = (fmi2##name##TYPE *)dlsym(library, "fmi2" #name); \
+#define LOAD(name) fmi2##name##TYPE *name = (fmi2##name##TYPE *)SYMBOL(library, "fmi2" #name); \
     if (!name) { fprintf(stderr, "missing fmi2" #name "\n"); return 1; }
 #define CHECK(call) do { if ((call) != fmi2OK) { fprintf(stderr, "failed: " #call "\n"); return 1; } } while (0)
 
@@ -37,8 +51,8 @@ int main(int argc, char **argv)
                 argv[0]);
         return 2;
     }
-    void *library = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-    if (!library) { fprintf(stderr, "%s\n", dlerror()); return 1; }
+    void *library = OPEN(argv[1]);
+    if (!library) { fprintf(stderr, "%s: %s\n", argv[1], OPEN_ERROR); return 1; }
     LOAD(Instantiate) LOAD(FreeInstance) LOAD(SetupExperiment) LOAD(EnterInitializationMode)
     LOAD(ExitInitializationMode) LOAD(Terminate) LOAD(SetReal) LOAD(GetReal) LOAD(DoStep)
     const char *guid = argv[2];
@@ -101,6 +115,6 @@ int main(int argc, char **argv)
             FreeInstance(c[i]);
         }
     }
-    dlclose(library);
+    CLOSE(library);
     return 0;
 }

@@ -65,13 +65,17 @@ BACKENDS = ("pythonfmu", "native")
 
 def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.fmu",
               settings: dict | None = None, cache: Path | None = None,
-              backend: str = "pythonfmu") -> FmuBuild:
+              backend: str = "pythonfmu", platforms: tuple[str, ...] = ("linux64",)) -> FmuBuild:
     """The scene's FMU at `output`: the pythonfmu slave (the default), or with
-    backend="native" the same C with FMI glue in C (build.native)."""
+    backend="native" the same C with FMI glue in C (build.native), with a binary for each
+    of `platforms` ("linux64", and "win64" cross-compiled; the pythonfmu FMU is linux64 only)."""
     if backend == "native":
         from .native import build_native_fmu
 
-        return build_native_fmu(scene, output, settings, cache)
+        return build_native_fmu(scene, output, settings, cache, platforms)
+    if tuple(platforms) != ("linux64",):
+        raise ValueError(f"platforms: the pythonfmu FMU runs on linux64 only, not {platforms}; "
+                         "a native FMU (backend='native') can carry win64 too")
     if backend != "pythonfmu":
         raise ValueError(f"backend: {backend!r} is not one of {BACKENDS}")
     start = time.perf_counter()

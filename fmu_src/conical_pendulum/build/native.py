@@ -29,7 +29,6 @@ from .fmu import MODEL_NAME, FmuBuild, checked_output, checked_settings, model_d
 GLUE_SOURCES = ["model.c", "dynamics.c", "solvers.c", "diagnosis.c", "fmi2_glue.c"]
 GLUE_HEADERS = ["model.h", "dynamics.h", "solvers.h", "tableaus.h", "status.h", "diagnosis.h",
                 "rules.h", "fmu_config.h"]
-PLATFORM = "linux64"
 
 
 def fmi_headers() -> Path:
@@ -202,15 +201,31 @@ def model_description(scene: Scene, data: dict, guid: str) -> bytes:
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def compile_binary(sources: Path, library: Path) -> None:
-    """The shared library from the FMU's own sources: libc and libm only, FMI symbols only."""
-    command = ["cc", "-std=c99", "-O2", "-fPIC", "-shared", "-fvisibility=hidden",
-               "-Wall", "-Wextra", "-Werror", f"-I{sources}", f"-I{fmi_headers()}",
-               *(str(sources / name) for name in GLUE_SOURCES),
-               "-o", str(library), "-lm", "-Wl,-z,defs", "-s"]
+# How each platform's binary is compiled from the FMU's sources: Linux natively, Windows
+# cross-compiled with Debian's mingw-w64 (gcc-mingw-w64-x86-64).
+COMPILERS = {
+    "linux64": (["cc", "-fPIC", "-fvisibility=hidden"], ".so", ["-lm", "-Wl,-z,defs"]),
+    "win64": (["x86_64-w64-mingw32-gcc"], ".dll", ["-static-libgcc"]),
+}
+
+
+def compile_binary(sources: Path, folder: Path, platform: str = "linux64") -> Path:
+    """The platform's shared library from the FMU's own sources, exporting only the FMI
+    functions: on Linux it needs libc and libm only, on Windows kernel32 and msvcrt."""
+    if platform not in COMPILERS:
+        raise ValueError(f"platform: {platform!r} is not one of {sorted(COMPILERS)}")
+    compiler, suffix, libraries = COMPILERS[platform]
+    library = folder / f"{MODEL_NAME}{suffix}"
+    command = [*compiler, "-std=c99", "-O2", "-shared", "-Wall", "-Wextra", "-Werror",
+               f"-I{sources}", f"-I{fmi_headers()}", *(str(sources / name) for name in GLUE_SOURCES),
+               "-o", str(library), *libraries, "-s"]
+    if shutil.which(compiler[0]) is None:
+        raise RuntimeError(f"the {platform} binary needs the compiler {compiler[0]}"
+                           + (" (Debian: apt-get install gcc-mingw-w64-x86-64)" if platform == "win64" else ""))
     run = subprocess.run(command, capture_output=True, text=True)
     if run.returncode:
         raise RuntimeError(f"compiling the native FMU failed:\n{' '.join(command)}\n{run.stderr}")
+    return library
 
 
 def guid_of(scene: Scene, core: CoreBuild, settings: dict) -> str:
@@ -221,8 +236,10 @@ def guid_of(scene: Scene, core: CoreBuild, settings: dict) -> str:
 
 
 def build_native_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.fmu",
-                     settings: dict | None = None, cache: Path | None = None) -> FmuBuild:
-    """The native FMU of a scene at `output` (moved into place only when complete)."""
+                     settings: dict | None = None, cache: Path | None = None,
+                     platforms: tuple[str, ...] = ("linux64",)) -> FmuBuild:
+    """The native FMU of a scene at `output` (moved into place only when complete), with a
+    binary for each of `platforms` ("linux64", "win64")."""
     start = time.perf_counter()
     output, settings = checked_output(output), checked_settings(settings)
     if settings["solver"] >= RULES["native-solver"].high:
@@ -240,13 +257,16 @@ def build_native_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_
             if name != "fmu_config.h":
                 shutil.copy2(origin, sources / name)
         (sources / "fmu_config.h").write_text(config_header(scene, data, guid))
-        library = Path(tmp) / f"{MODEL_NAME}.so"
-        compile_binary(sources, library)
+        libraries = {}
+        for platform in dict.fromkeys(platforms):
+            (Path(tmp) / platform).mkdir()
+            libraries[platform] = compile_binary(sources, Path(tmp) / platform, platform)
         staged = Path(tmp) / "staged.fmu"
         with zipfile.ZipFile(staged, "w", zipfile.ZIP_DEFLATED) as archive:
             archive.writestr("modelDescription.xml", model_description(scene, data, guid))
-            archive.write(library, f"binaries/{PLATFORM}/{MODEL_NAME}.so",
-                          compress_type=zipfile.ZIP_STORED)
+            for platform, library in libraries.items():  # stored: hosts extract them at every run
+                archive.write(library, f"binaries/{platform}/{library.name}",
+                              compress_type=zipfile.ZIP_STORED)
             for path in sorted(sources.iterdir()):
                 archive.write(path, f"sources/{path.name}")
             archive.writestr(f"resources/{MODEL_FILE}", json.dumps(data, indent=1))
