@@ -10,7 +10,6 @@ reports the FMU's size, build time cold (fresh core cache) and cached, and the t
 to instantiate.
 """
 import tempfile
-import textwrap
 import time
 from pathlib import Path
 
@@ -22,28 +21,12 @@ from fmpy.fmi2 import FMU2Slave
 from conical_pendulum import Scene
 from conical_pendulum.build.fmu import build_fmu
 
-TRIVIAL = '''
-from pythonfmu import Fmi2Slave, Real, Fmi2Causality
-
-
-class Trivial(Fmi2Slave):
-    def __init__(self, **kwargs):
-        super().__init__(**kwargs)
-        for i in range({count}):
-            setattr(self, f"y{{i}}", float(i))
-            self.register_variable(Real(f"y{{i}}", causality=Fmi2Causality.output))
-
-    def do_step(self, current_time, step_size):
-        return True
-'''
-
 
 def build_trivial(outputs: int, directory: Path) -> Path:
     from pythonfmu import FmuBuilder
 
-    script = directory / "trivial_slave.py"
-    script.write_text(textwrap.dedent(TRIVIAL.format(count=outputs)))
-    return FmuBuilder.build_FMU(script, dest=directory)
+    script = Path(__file__).parent / "trivial_fmu" / "trivial_slave.py"
+    return FmuBuilder.build_FMU(script, dest=directory, newargs={"count": outputs})
 
 
 def median_seconds(*calls, repeats=15):
