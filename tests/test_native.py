@@ -22,7 +22,8 @@ from fmu_helpers import Instance
 
 HOST_SOURCE = Path(__file__).parent / "hosts" / "fmi_host.c"
 SCENES = {"seed": Scene.uniform(3), "coupled": Scene.uniform(3, coupling=True),
-          "mixed": Scene(links=(Link(has_mass=False), Link(has_bob=False), Link(length=4.0)))}
+          "mixed": Scene(links=(Link(has_mass=False), Link(has_bob=False), Link(length=4.0))),
+          "published": Scene.uniform(2, kinematics="pydy-example", outputs=("energy",))}
 START = {"l0": 8.0, "alpha0": 0.5, "delta2": 0.3}
 
 
