@@ -53,7 +53,8 @@ def test_uneven_times_are_refused(tmp_path):
 
 def test_the_page_plays_in_headless_chromium(seed_fmu, tmp_path):
     """Served on localhost, loaded in Debian's chromium through chromedriver (.ci/run
-    installs both): no JavaScript errors, and the WebGL canvas shows the red link."""
+    installs both): no JavaScript errors, and the first frame, as loaded, shows the whole
+    chain: three red links and three blue bobs, each apart, inside the canvas and not specks."""
     import functools
     import http.server
     import shutil
@@ -61,6 +62,7 @@ def test_the_page_plays_in_headless_chromium(seed_fmu, tmp_path):
     import time
 
     from PIL import Image
+    from scipy import ndimage
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
@@ -103,5 +105,17 @@ def test_the_page_plays_in_headless_chromium(seed_fmu, tmp_path):
     assert errors == []
     pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=int)
     inside = pixels[int(box["y"]):int(box["y"] + box["height"]), int(box["x"]):int(box["x"] + box["width"])]
-    red = (inside[..., 0] > 150) & (inside[..., 1] < 80) & (inside[..., 2] < 80)
-    assert red.sum() > 500  # the link's cylinder, not a blank canvas
+    # pydy's Lambert shading draws links in shades of pure red (k, 0, 0) and bobs in shades
+    # of pure blue (0, 0, k) on a grey (155, 155, 151) background. The axes' 1-pixel lines
+    # (red to orange along x, from the pivot to beyond the canvas) go with an opening.
+    r, g, b = np.moveaxis(inside, -1, 0)
+    for colour, mask, count, smallest in [("red", r - np.maximum(g, b) > 50, 3, 60),
+                                          ("blue", b - np.maximum(r, g) > 50, 3, 30)]:
+        labels, found = ndimage.label(ndimage.binary_opening(mask, np.ones((3, 3))))
+        assert found == count, f"{found} {colour} blobs, expected {count}"  # each apart, none hidden
+        for where in ndimage.find_objects(labels):
+            rows, cols = where
+            assert 0 < rows.start and rows.stop < inside.shape[0], f"a {colour} blob at the canvas's edge"
+            assert 0 < cols.start and cols.stop < inside.shape[1], f"a {colour} blob at the canvas's edge"
+        sizes = ndimage.sum_labels(np.ones_like(labels), labels, range(1, found + 1))
+        assert sizes.min() >= smallest, f"{colour} blobs of {sizes} pixels: the chain is too far away"

@@ -15,17 +15,23 @@ from pathlib import Path
 
 import numpy as np
 
+from ..progress import WIDTH, bar
+
 
 def load_results(path) -> dict[str, np.ndarray]:
-    """Columns of an fmpy results CSV by name."""
+    """Columns of an fmpy results CSV by name, read with fmpy's own reader."""
+    from fmpy.util import read_csv
+
     path = Path(path)
     try:
-        data = np.genfromtxt(path, delimiter=",", names=True, deletechars="")
+        data = read_csv(path)
     except OSError as exc:
         raise SystemExit(f"show: {path}: {exc.strerror or exc}") from None
-    if data.dtype.names is None or "time" not in data.dtype.names:
+    except (IndexError, ValueError):  # empty, a header alone, or not numbers
+        data = None
+    if data is None or data.dtype.names is None or "time" not in data.dtype.names:
         raise SystemExit(f"show: {path}: expected fmpy's CSV with a 'time' column")
-    return {name.strip('"'): np.atleast_1d(data[name]) for name in data.dtype.names}
+    return {name: data[name] for name in data.dtype.names}
 
 
 def joints(results: dict) -> np.ndarray:
@@ -113,15 +119,12 @@ def animate(results: dict, path, fps: float = 30.0, size: float = 5.0) -> float:
         label.set_text(f"t = {t[k]:6.2f} s")
         return line, bobs, trail, label
 
-    def progress(i, total):
-        done = int(30 * (i + 1) / total)
-        if i + 1 == total or done != int(30 * i / total):
-            print(f"\r  rendering {path}: [{'#' * done}{'.' * (30 - done)}] {i + 1}/{total}",
-                  end="", file=sys.stderr, flush=True)
+    def progress(i, total):  # redrawn when a # more shows, and at the end
+        if i + 1 == total or WIDTH * (i + 1) // total != WIDTH * i // total:
+            bar(i + 1, total, f"  rendering {path}")
 
     animation = FuncAnimation(fig, draw, frames=frames, blit=False)
     animation.save(path, writer=PillowWriter(fps=fps), progress_callback=progress)
-    print(file=sys.stderr)
     plt.close(fig)
     return time.perf_counter() - start
 

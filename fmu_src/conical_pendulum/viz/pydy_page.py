@@ -15,6 +15,8 @@ import numpy as np
 from ..scene import Scene
 
 PREFIX = "conical_pendulum"
+FOV = 45.0  # pydy's default field of view, degrees (vertical)
+ELEVATION = 20.0  # the camera looks down at the pivot from this many degrees above the horizon
 
 
 def write_pydy_page(scene: Scene, results: dict, directory) -> tuple[Path, str]:
@@ -52,7 +54,7 @@ def write_pydy_page(scene: Scene, results: dict, directory) -> tuple[Path, str]:
             shown.append(VisualizationFrame(f"bob{i}", frame, end, Sphere(
                 name=f"sphere{i}", radius=link.bob_radius, color="blue")))
         parent, joint = frame, end
-    viz = PydyScene(inertial, pivot, *shown)
+    viz = PydyScene(inertial, pivot, *shown, cameras=[_camera(scene, inertial, pivot)])
     viz.times = times
     viz.constants = {}
     viz.states_symbols = q + u
@@ -66,3 +68,30 @@ def write_pydy_page(scene: Scene, results: dict, directory) -> tuple[Path, str]:
     finally:
         os.chdir(cwd)
     return directory / viz.pydy_directory, f"index.html?load={PREFIX}_scene_desc.json"
+
+
+def _camera(scene: Scene, inertial, pivot):
+    """pydy's camera, framing every place the chain can reach.
+
+    The bobs move anywhere in the sphere of radius reach = sum of link lengths + the
+    largest bob radius around the pivot. The page cannot aim the camera elsewhere: each
+    frame its TrackballControls turn the camera to look at their target, the origin (the
+    pivot), with Y (up, against gravity) up on the screen, whatever orientation it was
+    given. A sphere of radius `reach` centred on the line of sight fits the vertical field
+    of view `FOV` (the narrower one while the canvas is wider than tall) from the distance
+    reach / sin(FOV / 2); 10 % more leaves a margin (pydy's default camera, 10 m from the
+    pivot, sits inside the seed's 30 m chain). The camera is raised by `ELEVATION` above the
+    horizontal, on the +Z side, so a bob's cone shows as an ellipse, not a line, and is
+    oriented as the controls will turn it (its -z towards the pivot). The near and far
+    planes keep the chain and zooming in or out with the mouse in view. pydy's
+    `workspaceSize` is not set: its page never reads it (the axes are 100 m whatever it is).
+    """
+    from pydy.viz.camera import PerspectiveCamera
+
+    reach = sum(link.length for link in scene.links) + max(
+        link.bob_radius if link.has_bob else link.radius for link in scene.links)
+    distance = 1.1 * reach / np.sin(np.radians(FOV / 2))
+    tilt = np.radians(ELEVATION)
+    frame = inertial.orientnew("C", "Axis", [-tilt, inertial.x])  # its z points at the camera
+    eye = pivot.locatenew("E", distance * frame.z)
+    return PerspectiveCamera("camera", frame, eye, fov=FOV, near=distance / 100, far=distance * 10)
