@@ -228,10 +228,9 @@ def _client(scheduler: str | None, n_workers: int, timeout: float):
 
 
 def _show_progress(done: int, total: int, failed: int, start: float) -> None:
-    filled = 30 * done // total
-    print(f"\rsweep: [{'#' * filled}{'.' * (30 - filled)}] {done}/{total} runs, {failed} failed, "
-          f"{time.perf_counter() - start:.1f} s", end="\n" if done == total else "",
-          file=sys.stderr, flush=True)
+    from ..progress import bar
+
+    bar(done, total, "sweep", f" runs, {failed} failed, {time.perf_counter() - start:.1f} s")
 
 
 def sweep(fmu, runs: Iterable[Mapping[str, float]], *, stop_time: float = 10.0,
