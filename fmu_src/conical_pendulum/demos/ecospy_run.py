@@ -1,0 +1,133 @@
+"""Co-simulations in ecospy (libecos), one process per job, results as JSON on stdout.
+
+    python -m conical_pendulum.demos.ecospy_run JOB_JSON
+
+JOB_JSON is a JSON object (the text itself):
+
+    {"models": {"p": "dist/Coupled.fmu", "cart": "dist/Cart.fmu"},      # instance name -> FMU
+     "connections": [["cart::a", "p::a_pivot_x"], ["p::F_pivot_x", "cart::F_x"]],  # real, from -> to
+     "parameters": {"cart::m_cart": 30.0},     # one parameter set, applied at initialisation
+     "steps": [0.1, 0.05],                     # communication step sizes [s], one run each
+     "stop_time": 10.0,
+     "record": ["cart::x", "p::alpha0"],       # variables read at every communication point
+     "warm_up": true}                          # first one step at the largest step, not reported
+
+Only "models", "steps", "stop_time" and "record" are required. The last line printed is
+{"runs": [{"step": dt, "seconds": s, "values": {"time": [...], name: [...]}}]}, one run per
+step in the order given; "seconds" is the wall time spent in ecospy's step() (a warm-up
+run pays the first step's imports, a Python slave's scipy for one, outside the timings).
+
+It must be a process of its own: ecospy's library needs libtbb loaded first, globally
+(ctypes RTLD_GLOBAL), and pythonfmu 0.7's exit-time destructor can abort an interpreter
+that still has an FMU's library mapped, so the process leaves with os._exit once the
+results are printed. `cosimulate(job)` runs it and returns the runs.
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+REQUIRED = ("models", "steps", "stop_time", "record")
+
+
+def check_job(job) -> dict:
+    """The job with its defaults filled in; ValueError naming what is wrong."""
+    if not isinstance(job, dict):
+        raise ValueError(f"job: expected a JSON object, got {type(job).__name__}")
+    missing = [key for key in REQUIRED if key not in job]
+    if missing:
+        raise ValueError(f"job: missing {', '.join(missing)}")
+    unknown = sorted(set(job) - {*REQUIRED, "connections", "parameters", "warm_up"})
+    if unknown:
+        raise ValueError(f"job: unknown key(s) {', '.join(unknown)}")
+    if not (isinstance(job["models"], dict) and job["models"]):
+        raise ValueError("job: models must name at least one FMU, as {instance: path}")
+    steps = job["steps"]
+    if not (isinstance(steps, list) and steps and all(
+            isinstance(dt, (int, float)) and not isinstance(dt, bool) and dt > 0 for dt in steps)):
+        raise ValueError(f"job: steps must be a list of positive numbers, got {steps!r}")
+    stop_time = job["stop_time"]
+    if isinstance(stop_time, bool) or not isinstance(stop_time, (int, float)) or not stop_time > 0:
+        raise ValueError(f"job: stop_time must be a positive number, got {stop_time!r}")
+    return {"connections": [], "parameters": {}, "warm_up": False, **job}
+
+
+def cosimulate(job: dict, timeout: float = 1800.0) -> list[dict]:
+    """Run the job in a fresh interpreter; its runs, as printed. RuntimeError when ecospy fails."""
+    job = check_job(job)
+    try:
+        run = subprocess.run([sys.executable, "-m", __name__, json.dumps(job)],
+                             capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        raise RuntimeError(f"ecospy did not finish the co-simulations within {timeout:g} s") from None
+    if run.returncode != 0:
+        if "No module named 'ecospy'" in run.stderr or "libtbb" in run.stderr:
+            raise RuntimeError("ecospy co-simulation needs ecospy and tbb: pip install -e \".[cosim]\"")
+        raise RuntimeError(f"ecospy failed (exit {run.returncode}):\n{run.stderr[-3000:]}")
+    return json.loads(run.stdout.strip().splitlines()[-1])["runs"]
+
+
+def _simulate(job: dict) -> list[dict]:
+    """In this process, with libtbb already loaded: every run of the job."""
+    import time
+
+    from ecospy import EcosLib, EcosSimulation, EcosSimulationStructure
+
+    EcosLib.set_log_level("warn")
+    runs = []
+    plan = [(True, max(job["steps"]))] if job["warm_up"] else []
+    for warm_up, dt in plan + [(False, dt) for dt in job["steps"]]:
+        stepping = 0.0
+        with EcosSimulationStructure() as structure:
+            for name, path in job["models"].items():
+                structure.add_model(name, os.path.abspath(path))
+            for source, target in job["connections"]:
+                structure.make_real_connection(source, target)
+            if job["parameters"]:
+                structure.add_parameter_set("job", job["parameters"])
+            with EcosSimulation(structure=structure, step_size=dt) as sim:
+                if job["parameters"]:
+                    sim.init(parameter_set="job")
+                else:
+                    sim.init()
+                values = {name: [] for name in ["time", *job["record"]]}
+                steps = 1 if warm_up else round(job["stop_time"] / dt)
+                for k in range(steps + 1):
+                    if k:
+                        start = time.perf_counter()
+                        sim.step()
+                        stepping += time.perf_counter() - start
+                    values["time"].append(sim.get_time())
+                    for name in job["record"]:
+                        values[name].append(sim.get_real(name))
+                sim.terminate()
+        if not warm_up:
+            runs.append({"step": dt, "seconds": stepping, "values": values})
+    return runs
+
+
+def main(argv=None) -> None:
+    argv = sys.argv[1:] if argv is None else argv
+    if len(argv) != 1:
+        print(f"usage: python -m {__name__} JOB_JSON", file=sys.stderr)
+        sys.exit(2)
+    try:
+        job = check_job(json.loads(argv[0]))
+    except (json.JSONDecodeError, ValueError) as exc:
+        print(f"ecospy_run: {exc}", file=sys.stderr)
+        sys.exit(2)
+    import ctypes
+
+    # before ecospy: its library needs tbb's symbols, which the tbb wheel does not put on its path
+    ctypes.CDLL(os.path.join(sys.prefix, "lib", "libtbb.so.12"), mode=ctypes.RTLD_GLOBAL)
+    print(json.dumps({"runs": _simulate(job)}))
+    sys.stdout.flush()
+    sys.stderr.flush()
+    # not the interpreter's own exit: pythonfmu's destructor can abort it while an FMU is mapped
+    os._exit(0)
+
+
+if __name__ == "__main__":
+    main()
