@@ -21,8 +21,11 @@ KINEMATICS = ("consistent", "pydy-example")
 OUTPUT_GROUPS = ("bobs", "poses", "energy")
 PIVOT_INPUTS = ("a_pivot_x", "a_pivot_y", "a_pivot_z")
 PIVOT_OUTPUTS = ("F_pivot_x", "F_pivot_y", "F_pivot_z")
-MAX_LINKS = 20
+FORMULATIONS = ("auto", "expanded", "recursive")
+MAX_LINKS = 100
+MAX_EXPANDED_LINKS = 20  # the expanded equations' C grows like n^3: minutes to compile at 20
 MAX_PUBLISHED_LINKS = 4  # the published derivation grows exponentially with n
+RECURSIVE_FROM = 6  # "auto": links from which the recursive formulation is the faster
 SEED_ANGLE = math.radians(10.0)
 
 
@@ -58,6 +61,7 @@ class Scene:
     kinematics: str = "consistent"
     gravity: float = 9.8
     coupling: bool = False  # pivot acceleration inputs and pivot force outputs
+    formulation: str = "auto"  # "expanded" equations, "recursive" loops, or by the number of links
 
     def __post_init__(self):
         unknown = [g for g in self.outputs if g not in OUTPUT_GROUPS]
@@ -87,6 +91,15 @@ class Scene:
             raise SceneError(f"links: a chain has 1 to {MAX_LINKS} links, got {self.n}")
         if self.kinematics not in KINEMATICS:
             raise SceneError(f"kinematics: {self.kinematics!r} is not one of {KINEMATICS}")
+        if self.formulation not in FORMULATIONS:
+            raise SceneError(f"formulation: {self.formulation!r} is not one of {FORMULATIONS}")
+        if self.formulation == "recursive" and self.kinematics != "consistent":
+            raise SceneError("formulation: 'recursive' needs kinematics 'consistent'; the published "
+                             "equations exist only expanded")
+        if self.resolved_formulation() == "expanded" and self.n > MAX_EXPANDED_LINKS:
+            raise SceneError(f"links: {self.n} with formulation 'expanded'; its equations are offered "
+                             f"up to {MAX_EXPANDED_LINKS} links (their C grows like n^3): use "
+                             "'recursive' or 'auto'")
         if self.kinematics == "pydy-example" and self.n > MAX_PUBLISHED_LINKS:
             raise SceneError(
                 f"links: {self.n} with kinematics 'pydy-example'; the published derivation is "
@@ -118,11 +131,20 @@ class Scene:
                     f"links {i}..{self.n - 1} carry no mass (no link mass, no bob): their angles "
                     "would be undetermined; give one of them mass or a bob, or drop them")
 
+    def resolved_formulation(self) -> str:
+        """The formulation the core is generated in: as chosen, or for "auto" the faster one
+        at this number of links (benchmarks/chain_scaling.py measures the crossover)."""
+        if self.formulation != "auto":
+            return self.formulation
+        if self.kinematics != "consistent" or self.n < RECURSIVE_FROM:
+            return "expanded"
+        return "recursive"
+
     def structure(self) -> dict:
         """What the generated code depends on, and nothing else."""
         return {"links": [[link.has_mass, link.has_bob] for link in self.links],
                 "outputs": list(self.outputs), "kinematics": self.kinematics,
-                "coupling": self.coupling}
+                "coupling": self.coupling, "formulation": self.resolved_formulation()}
 
     def key(self, salt: str = "") -> str:
         text = json.dumps(self.structure(), sort_keys=True) + salt
@@ -225,7 +247,7 @@ def load_scene(path) -> Scene:
 DEFAULT_LINK = Link()
 FILE_NAMES = {"bob_mass": "bob.mass", "bob_radius": "bob.radius"}  # Link fields as a file names them
 MASSLESS_HINT = " (or 0 for a massless link: has_mass=False)"
-SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs", "coupling"}
+SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs", "coupling", "formulation"}
 LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob"}
 BOB_FIELDS = {"mass", "radius"}
 
@@ -258,7 +280,7 @@ def scene_from_dict(data: dict) -> Scene:
         except TypeError as exc:
             raise SceneError(f"{where}: {exc}") from None
     scene_fields = {"links": tuple(made)}
-    for name in ("kinematics", "gravity", "outputs", "coupling"):
+    for name in ("kinematics", "gravity", "outputs", "coupling", "formulation"):
         if name in data:
             scene_fields[name] = tuple(data[name]) if name == "outputs" else data[name]
     if "gravity" in data and not isinstance(data["gravity"], (int, float)):

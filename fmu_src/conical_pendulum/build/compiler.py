@@ -80,16 +80,21 @@ def build_core(scene: Scene, cache: Path | None = None) -> CoreBuild:
     seconds = {}
     with tempfile.TemporaryDirectory(dir=directory.parent, prefix=f".{name}.") as tmp:
         work = Path(tmp)
-        start = time.perf_counter()
-        from .model import derive  # sympy: build time only
-        eqs = derive(scene)
-        seconds["derive"] = time.perf_counter() - start
+        from .codegen import generate, generate_recursive  # sympy: build time only
+        from .model import derive
 
         start = time.perf_counter()
-        from .codegen import generate
-        for filename, text in generate(eqs).items():
-            (work / filename).write_text(text)
+        if scene.resolved_formulation() == "recursive":  # nothing to derive: loops over links
+            seconds["derive"] = 0.0
+            files = generate_recursive(scene)
+        else:
+            equations = derive(scene)
+            seconds["derive"] = time.perf_counter() - start
+            start = time.perf_counter()
+            files = generate(equations)
         seconds["codegen"] = time.perf_counter() - start
+        for filename, text in files.items():
+            (work / filename).write_text(text)
 
         start = time.perf_counter()
         for source in CSRC.iterdir():
@@ -112,7 +117,7 @@ def _compile(name: str, work: Path) -> None:
     from Cython.Build import cythonize
     from setuptools import Distribution, Extension
 
-    sources = [f"{name}.pyx", "model.c", "dynamics.c", "solvers.c", "diagnosis.c"]
+    sources = [f"{name}.pyx", "model.c", "dynamics.c", "solvers.c", "diagnosis.c", "chain.c"]
     extension = Extension(
         name, [str(work / s) for s in sources], include_dirs=[str(work)],
         define_macros=[("Py_LIMITED_API", LIMITED_API), ("CYTHON_LIMITED_API", "1")],

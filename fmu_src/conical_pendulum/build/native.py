@@ -26,9 +26,9 @@ from ..scene import Scene
 from .compiler import CSRC, CoreBuild, build_core
 from .fmu import MODEL_NAME, FmuBuild, checked_output, checked_settings, model_data
 
-GLUE_SOURCES = ["model.c", "dynamics.c", "solvers.c", "diagnosis.c", "fmi2_glue.c"]
-GLUE_HEADERS = ["model.h", "dynamics.h", "solvers.h", "tableaus.h", "status.h", "diagnosis.h",
-                "rules.h", "fmu_config.h"]
+GLUE_SOURCES = ["model.c", "dynamics.c", "chain.c", "solvers.c", "diagnosis.c", "fmi2_glue.c"]
+GLUE_HEADERS = ["model.h", "dynamics.h", "chain.h", "solvers.h", "tableaus.h", "status.h",
+                "diagnosis.h", "rules.h", "fmu_config.h"]
 
 
 def fmi_headers() -> Path:

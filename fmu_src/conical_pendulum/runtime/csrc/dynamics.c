@@ -3,6 +3,7 @@
 #include <math.h>
 #include <string.h>
 
+#if !CP_RECURSIVE
 /* Solve M u = F in place (F becomes u) by LU with partial pivoting. */
 static int lu_solve(double *M, double *F, cp_model *model)
 {
@@ -50,10 +51,14 @@ static int lu_solve(double *M, double *F, cp_model *model)
     }
     return 0;
 }
+#endif
 
 int cp_rhs(void *ctx, const double *x, double *dx)
 {
     cp_model *model = (cp_model *)ctx;
+#if CP_RECURSIVE
+    return cp_chain_rhs(model, x, dx);
+#else
     double M[CP_NDOF * CP_NDOF];
     double *F = dx + CP_NDOF;
     cp_mass_forcing(x, model->p, M, F);
@@ -67,6 +72,7 @@ int cp_rhs(void *ctx, const double *x, double *dx)
         }
     }
     return 0;
+#endif
 }
 
 void cp_eval_outputs(const double *x, const double *p, double *y)

@@ -1,11 +1,14 @@
-/* The model's right-hand side x' = f(x, p): generated mass matrix and forcing, dense LU. */
+/* The model's right-hand side x' = f(x, p): in the expanded formulation the generated mass
+ * matrix and forcing solved by dense LU, in the recursive one the articulated-body
+ * algorithm (chain.c). */
 #ifndef CP_DYNAMICS_H
 #define CP_DYNAMICS_H
 
 #include "model.h"
 #include "status.h"
 
-/* Pivot ratio (smallest over largest |pivot| of the LU) below which M counts as singular. */
+/* Pivot ratio below which M counts as singular: smallest over largest |pivot| of the LU
+ * (expanded), or of a joint's 2x2 articulated inertia (recursive). */
 #define CP_SINGULAR_RATIO 1e-13
 
 typedef struct {
@@ -18,6 +21,11 @@ typedef struct {
 
 /* x = (alpha, beta, omega, delta); dx = (omega, delta, M^-1 F). ctx is a cp_model. */
 int cp_rhs(void *ctx, const double *x, double *dx);
+
+#if CP_RECURSIVE
+/* cp_rhs of the recursive formulation (chain.c). */
+int cp_chain_rhs(cp_model *model, const double *x, double *dx);
+#endif
 
 /* The scene's outputs at x. Those needing accelerations (the pivot force) get them from
    cp_rhs, and are NaN where the mass matrix is singular. */
