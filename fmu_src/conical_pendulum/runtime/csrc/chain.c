@@ -204,15 +204,13 @@ int cp_chain_rhs(cp_model *model, const double *x, double *dx)
         for (int r = 0; r < 6; r++)
             for (int c = 0; c < 2; c++)
                 UD[r * 2 + c] = k->U[r * 2] * k->Dinv[c] + k->U[r * 2 + 1] * k->Dinv[2 + c];
-        /* Ia is symmetric; rounding that makes it not so grows by (link length / radius of
-           gyration about the link's axis)^2 per link, so only its mean with its transpose
-           is carried up: without that, 40 seed links lose definiteness. */
+        /* Ia is symmetric, and only its upper triangle is computed: rounding that made it
+           not so would grow by (link length / radius of gyration about the link's axis)^2
+           per link (40 seed links lost definiteness before). */
         for (int r = 0; r < 6; r++)
-            for (int c = r; c < 6; c++) {
-                const double rc = k->IA[r * 6 + c] - UD[r * 2] * k->U[c * 2] - UD[r * 2 + 1] * k->U[c * 2 + 1];
-                const double cr = k->IA[c * 6 + r] - UD[c * 2] * k->U[r * 2] - UD[c * 2 + 1] * k->U[r * 2 + 1];
-                Ia[r * 6 + c] = Ia[c * 6 + r] = 0.5 * (rc + cr);
-            }
+            for (int c = r; c < 6; c++)
+                Ia[r * 6 + c] = Ia[c * 6 + r] = k->IA[r * 6 + c] - UD[r * 2] * k->U[c * 2]
+                                                - UD[r * 2 + 1] * k->U[c * 2 + 1];
         for (int r = 0; r < 6; r++) {
             pa[r] = k->pA[r] + UD[r * 2] * k->uu[0] + UD[r * 2 + 1] * k->uu[1];
             for (int c = 0; c < 6; c++) pa[r] += Ia[r * 6 + c] * k->zeta[c];
