@@ -109,7 +109,7 @@ def test_inputs_are_set_while_stepping_and_the_force_answers_at_once(coupled_fmu
     fmu.set({"a_pivot_x": 3.0, "a_pivot_z": -1.0})
     state = fmu.get(*COUPLED.state_names())
     p = COUPLED.parameters({"a_pivot_x": 3.0, "a_pivot_z": -1.0})
-    expected = core.outputs(state, p)[-3:]
+    expected = core.outputs(state, p)[[COUPLED.output_names().index(f"F_pivot_{c}") for c in "xyz"]]
     assert fmu.get("F_pivot_x", "F_pivot_y", "F_pivot_z") == pytest.approx(expected, rel=1e-14)
     fmu.step(0.5)
     assert fmu.get("a_pivot_x", "a_pivot_z") == [3.0, -1.0]

@@ -21,6 +21,8 @@ KINEMATICS = ("consistent", "pydy-example")
 OUTPUT_GROUPS = ("bobs", "poses", "energy")
 PIVOT_INPUTS = ("a_pivot_x", "a_pivot_y", "a_pivot_z")
 PIVOT_OUTPUTS = ("F_pivot_x", "F_pivot_y", "F_pivot_z")
+# The chain's apparent mass at the pivot, F_pivot = F_free - M_app a_pivot: its upper triangle.
+APPARENT_MASS = ("M_pivot_xx", "M_pivot_xy", "M_pivot_xz", "M_pivot_yy", "M_pivot_yz", "M_pivot_zz")
 FORMULATIONS = ("auto", "expanded", "recursive")
 MAX_LINKS = 100
 MAX_EXPANDED_LINKS = 20  # the expanded equations' C grows like n^3: minutes to compile at 20
@@ -197,7 +199,7 @@ class Scene:
         if "energy" in self.outputs:
             names.append("energy")
         if self.coupling:
-            names += PIVOT_OUTPUTS
+            names += PIVOT_OUTPUTS + APPARENT_MASS
         return names
 
     def parameters(self, overrides: dict | None = None) -> list[float]:

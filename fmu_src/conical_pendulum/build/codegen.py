@@ -127,7 +127,7 @@ def generate(eqs: Equations) -> dict[str, str]:
     symbols = set().union(*(sm.sympify(e).free_symbols for e in eqs.outputs),
                           *(e.free_symbols for _, e in needed))
     needs_rates = bool(symbols & set(eqs.rates))
-    header = _header(eqs.scene, len(eqs.params), len(eqs.outputs), needs_rates,
+    header = _header(eqs.scene, len(eqs.params), len(eqs.scene.output_names()), needs_rates,
                      ["#define CP_RECURSIVE 0"])
     upper = [(f"M[{r * ndof + c}]", eqs.mass_matrix[r, c]) for r in range(ndof) for c in range(r, ndof)]
     forcing = [(f"F[{r}]", eqs.forcing[r]) for r in range(ndof)]

@@ -75,6 +75,40 @@ int cp_rhs(void *ctx, const double *x, double *dx)
 #endif
 }
 
+#if CP_NINPUT
+/* The pivot force of the state x with the parameters and inputs q: the scene's outputs
+ * after F_pivot are the six of M_app, so F_pivot ends 6 before the last. */
+static void pivot_force(const double *x, const double *q, double force[3])
+{
+    double dx[CP_NSTATE], y[CP_NOUTPUT];
+    cp_model model = {q, 1.0, -1};
+    if (cp_rhs(&model, x, dx))
+        for (int i = 0; i < CP_NSTATE; i++) dx[i] = NAN;
+    cp_outputs(x, q, dx, y);
+    memcpy(force, y + CP_NOUTPUT - 9, 3 * sizeof(double));
+}
+
+/* M_app: F_pivot is affine in the pivot's acceleration (the inputs, last in p), so its
+ * columns are exactly the force's changes from a = 0 to each unit acceleration. */
+static void apparent_mass(const double *x, const double *p, double *out)
+{
+    double q[CP_NPARAM], free_force[3], force[3][3];
+    memcpy(q, p, sizeof q);
+    double *a = q + CP_NPARAM - CP_NINPUT;
+    a[0] = a[1] = a[2] = 0.0;
+    pivot_force(x, q, free_force);
+    for (int j = 0; j < 3; j++) {
+        a[j] = 1.0;
+        pivot_force(x, q, force[j]);
+        a[j] = 0.0;
+    }
+    int k = 0;
+    for (int r = 0; r < 3; r++)  /* the upper triangle of the symmetric mean */
+        for (int c = r; c < 3; c++)
+            out[k++] = 0.5 * ((free_force[r] - force[c][r]) + (free_force[c] - force[r][c]));
+}
+#endif
+
 void cp_eval_outputs(const double *x, const double *p, double *y)
 {
 #if CP_OUTPUTS_NEED_RATES
@@ -85,5 +119,8 @@ void cp_eval_outputs(const double *x, const double *p, double *y)
     cp_outputs(x, p, dx, y);
 #else
     cp_outputs(x, p, NULL, y);
+#endif
+#if CP_NINPUT
+    apparent_mass(x, p, y + CP_NOUTPUT - 6);
 #endif
 }
