@@ -6,15 +6,14 @@ Cold builds go to a fresh cache directory; the cached figure is a second build_c
 the same scene. Prints a table and writes benchmarks/results/build_times.csv.
 """
 import argparse
-import csv
 import tempfile
 import time
 from pathlib import Path
 
 from conical_pendulum import Scene
 from conical_pendulum.build.compiler import build_core
+from results_csv import write_rows
 
-RESULTS = Path(__file__).parent / "results"
 
 
 def main():
@@ -38,11 +37,7 @@ def main():
                          "compile_s": s["compile"], "cold_s": cold, "cached_s": cached, "c_lines": lines})
             print(f"{n:>3} {s['derive']:>9.2f} {s['codegen']:>10.2f} {s['compile']:>10.2f} "
                   f"{cold:>7.2f} {cached:>9.4f} {lines:>8}")
-    RESULTS.mkdir(exist_ok=True)
-    with open(RESULTS / "build_times.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_rows("build_times", rows)
 
 
 if __name__ == "__main__":

@@ -10,7 +10,6 @@ reasonable time, in both (the crossover); and MuJoCo's mj_forward on the same ch
 from Python less the cost of an empty call into MuJoCo's bindings. Medians of repeats.
 Writes benchmarks/results/chain_scaling.csv and chain_scaling.png.
 """
-import csv
 import tempfile
 import time
 from pathlib import Path
@@ -19,8 +18,8 @@ import numpy as np
 
 from conical_pendulum import Scene
 from conical_pendulum.build.compiler import build_core
+from results_csv import RESULTS, write_rows
 
-RESULTS = Path(__file__).parent / "results"
 LINKS = (1, 2, 3, 5, 10, 20, 50, 100)
 EXPANDED_UP_TO = 10  # the expanded equations build in minutes beyond (374 s at 20 links)
 
@@ -88,11 +87,7 @@ def main():
         row["auto_over_mujoco"] = round(auto / row["mj_forward_us"], 2)
         rows.append(row)
         print(row, flush=True)
-    RESULTS.mkdir(exist_ok=True)
-    with open(RESULTS / "chain_scaling.csv", "w", newline="") as file:
-        writer = csv.DictWriter(file, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_rows("chain_scaling", rows)
     plot(rows)
 
 

@@ -17,7 +17,6 @@ Medians of repeats, the FMUs interleaved, in one run. The physics floor is the r
 sides per step (the FMU's n_rhs) times one right-hand side timed in a C loop.
 Writes benchmarks/results/native_overhead.csv.
 """
-import csv
 import importlib.util
 import shutil
 import subprocess
@@ -36,9 +35,9 @@ from conical_pendulum import Scene
 from conical_pendulum.build.compiler import load_core
 from conical_pendulum.build.fmu import build_fmu
 from conical_pendulum.build.native import fmi_headers
+from results_csv import write_rows
 
 HERE = Path(__file__).parent
-RESULTS = HERE / "results"
 REPEATS = 7
 STOP = 10.0
 BASE = 10  # steps of the ecos run whose time is subtracted as start-up
@@ -128,11 +127,7 @@ def main():
                              "us_per_step": round(seconds * 1e6, 2),
                              "ratio_to_trivial": round(seconds / per_step["trivial C"], 2),
                              "physics_floor_us": round(physics * 1e6, 2)})
-    RESULTS.mkdir(exist_ok=True)
-    with open(RESULTS / "native_overhead.csv", "w", newline="") as file:
-        writer = csv.DictWriter(file, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_rows("native_overhead", rows)
     print(f"one right-hand side: {rhs_seconds * 1e6:.2f} us (C loop); medians of {REPEATS}")
     print(f"{'master':<22} {'FMU':<10} {'us/step':>9} {'x trivial':>10} {'physics floor us':>17}")
     for row in rows:

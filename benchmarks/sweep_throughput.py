@@ -18,7 +18,6 @@ Every method must give bit-identical results; the methods take turns, in rounds,
 medians are reported. Writes benchmarks/results/sweep_throughput.csv.
 """
 import argparse
-import csv
 import shutil
 import tempfile
 import time
@@ -33,9 +32,9 @@ from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.build.fmu import build_fmu
 from conical_pendulum.analysis.sweep import LoadedFmu, random_samples, sweep
+from results_csv import write_rows
 
 STOP, INTERVAL = 10.0, 1.0 / 60.0
-RESULTS = Path(__file__).parent / "results" / "sweep_throughput.csv"
 
 
 def timed(call):
@@ -131,12 +130,8 @@ def main():
         print(f"{name:<45} {workers:>7} {args.runs / median:>8.1f} {median:>8.2f}"
               + ("" if start is None else f"   (cluster start {start:.1f} s)"))
     print(f"every method bit-identical to the plain loop: {'yes' if identical else 'NO'}")
-    RESULTS.parent.mkdir(exist_ok=True)
-    with open(RESULTS, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    print(f"wrote {RESULTS}")
+    path = write_rows("sweep_throughput", rows)
+    print(f"wrote {path}")
     return 0 if identical else 1
 
 

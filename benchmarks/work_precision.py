@@ -19,7 +19,6 @@ Writes benchmarks/results/work_precision.csv and work_precision_<scenario>.png.
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import sys
 import time
@@ -31,8 +30,8 @@ from scipy.integrate import odeint, solve_ivp
 from conical_pendulum import Scene
 from conical_pendulum.build.compiler import load_core
 from conical_pendulum.build.fmu import DEFAULT_SETTINGS
+from results_csv import RESULTS, write_rows
 
-RESULTS = Path(__file__).parent / "results"
 STEP = 1.0 / 60.0
 
 
@@ -169,11 +168,7 @@ def main():
         if name == "seed":
             rows += seed_pipeline_rows(times, tolerances, long_horizon)
             rows.append(fmu_row(scene, core, p, reference, ref_outputs, bob_index))
-    RESULTS.mkdir(exist_ok=True)
-    with open(RESULTS / "work_precision.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_rows("work_precision", rows)
     plot(rows)
 
 

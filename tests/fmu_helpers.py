@@ -9,6 +9,20 @@ from fmpy.fmi2 import FMU2Slave
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 
 
+# Values every FMU of the package refuses, whatever its backend, with these words (runtime.rules).
+BAD_VALUES = [
+    ("l0", -1.0, "l0 = -1.0: a length must be positive"),
+    ("M1", 0.0, "M1 = 0.0: a link mass must be positive"),
+    ("m2", 0.0, "m2 = 0.0: a bob mass must be positive"),
+    ("Ixx0", -2.0, "Ixx0 = -2.0: a moment of inertia cannot be negative"),
+    ("g", float("nan"), "g = nan: must be finite"),
+    ("alpha0", float("inf"), "alpha0 = inf: must be finite"),
+    ("rtol", 0.0, "rtol = 0.0: a tolerance must be positive"),
+    ("max_steps", 0, "max_steps = 0: must be at least 1"),
+    ("energy", 1.0, "energy is a calculated output: it cannot be set"),
+]
+
+
 class Instance:
     """One instantiated FMU; `messages` collects (status, text) from its logger."""
 

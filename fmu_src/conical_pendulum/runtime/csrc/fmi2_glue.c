@@ -376,45 +376,27 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     return fmi2OK;
 }
 
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          fmi2Boolean value[])
+/* Booleans and Strings: this FMU has none, so any value reference is refused. */
+static fmi2Status no_variables(fmi2Component c, const char *function, const char *type,
+                               const fmi2ValueReference vr[], size_t nvr)
 {
-    (void)value;
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetBoolean");
+    Instance *inst = checked(c, ANY_STATE, function);
     if (!inst) return fmi2Error;
-    return nvr ? REFUSE(inst, "fmi2GetBoolean: value reference %u: this FMU has no Boolean "
-                        "variables", vr ? vr[0] : 0) : fmi2OK;
+    return nvr ? REFUSE(inst, "%s: value reference %u: this FMU has no %s variables", function,
+                        vr ? vr[0] : 0, type) : fmi2OK;
 }
 
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Boolean value[])
-{
-    (void)value;
-    Instance *inst = checked(c, ANY_STATE, "fmi2SetBoolean");
-    if (!inst) return fmi2Error;
-    return nvr ? REFUSE(inst, "fmi2SetBoolean: value reference %u: this FMU has no Boolean "
-                        "variables", vr ? vr[0] : 0) : fmi2OK;
-}
-
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                         fmi2String value[])
-{
-    (void)value;
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetString");
-    if (!inst) return fmi2Error;
-    return nvr ? REFUSE(inst, "fmi2GetString: value reference %u: this FMU has no String "
-                        "variables", vr ? vr[0] : 0) : fmi2OK;
-}
-
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                         const fmi2String value[])
-{
-    (void)value;
-    Instance *inst = checked(c, ANY_STATE, "fmi2SetString");
-    if (!inst) return fmi2Error;
-    return nvr ? REFUSE(inst, "fmi2SetString: value reference %u: this FMU has no String "
-                        "variables", vr ? vr[0] : 0) : fmi2OK;
-}
+#define NO_VARIABLES(function, type, value_type)                                              \
+    fmi2Status function(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,            \
+                        value_type value[])                                                   \
+    {                                                                                          \
+        (void)value;                                                                           \
+        return no_variables(c, #function, type, vr, nvr);                                      \
+    }
+NO_VARIABLES(fmi2GetBoolean, "Boolean", fmi2Boolean)
+NO_VARIABLES(fmi2SetBoolean, "Boolean", const fmi2Boolean)
+NO_VARIABLES(fmi2GetString, "String", fmi2String)
+NO_VARIABLES(fmi2SetString, "String", const fmi2String)
 
 /* ---- the FMU state ---------------------------------------------------------------------- */
 
