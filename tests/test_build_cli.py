@@ -1,4 +1,5 @@
-"""build_fmu.py: what it builds, and clear refusals of options it cannot build."""
+"""build_fmu.py and `conical-pendulum build`: what they build, and clear refusals of options
+they cannot build."""
 import subprocess
 import sys
 from pathlib import Path
@@ -6,14 +7,22 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
+# the same code behind two names; messages start with the name
+ENTRY_POINTS = {"build_fmu.py": [sys.executable, str(ROOT / "build_fmu.py")],
+                "conical-pendulum build": [str(Path(sys.executable).with_name("conical-pendulum")), "build"]}
 
 
-def build(*args, cwd=ROOT):
-    return subprocess.run([sys.executable, str(ROOT / "build_fmu.py"), *args], cwd=cwd,
-                          capture_output=True, text=True, timeout=600)
+@pytest.fixture(params=list(ENTRY_POINTS))
+def build(request):
+    def run(*args, cwd=ROOT):
+        result = subprocess.run([*ENTRY_POINTS[request.param], *args], cwd=cwd,
+                                capture_output=True, text=True, timeout=600)
+        result.name = request.param
+        return result
+    return run
 
 
-def test_builds_the_requested_scene(tmp_path):
+def test_builds_the_requested_scene(tmp_path, build):
     out = tmp_path / "Two.fmu"
     run = build("--links", "2", "--no-bobs", "--output", str(out), "--no-check")
     assert run.returncode == 0, run.stderr
@@ -33,10 +42,12 @@ def test_builds_the_requested_scene(tmp_path):
     (["--scene", str(ROOT / "scenes" / "seed.toml"), "--links", "2"],
      "--scene describes the whole scene; drop --links"),
     (["--scene", "missing.toml"], "scene file 'missing.toml': No such file or directory"),
+    (["--win64"], "--win64: only the native FMU carries a Windows binary; add --native"),
 ])
-def test_refuses_what_it_cannot_build(tmp_path, args, message):
+def test_refuses_what_it_cannot_build(tmp_path, build, args, message):
     run = build(*args, "--no-check", cwd=tmp_path)
     assert run.returncode == 2
     assert message in run.stderr
+    assert run.stderr.startswith(f"{run.name}: ") and run.stderr.count("\n") == 1  # one line
     assert "Traceback" not in run.stderr
     assert not list(tmp_path.rglob("*.fmu"))

@@ -9,7 +9,8 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from conical_pendulum.build.compiler import load_core
-from conical_pendulum.demos.coupled import SCENE, build_cart_fmu, main
+from conical_pendulum.cli import main as cli
+from conical_pendulum.demos.coupled import SCENE, build_cart_fmu
 from conical_pendulum.demos.monolithic import cart_parameters, monolithic
 from fmu_helpers import Instance
 
@@ -67,7 +68,7 @@ def test_monolithic_model_is_the_coupled_pieces_physics():
 
 
 def test_the_demo_command_converges_at_first_order(tmp_path):
-    assert main(["--out", str(tmp_path), "--steps", "0.1,0.05,0.025", "--stop-time", "4"]) == 0
+    assert cli(["demo", "--out", str(tmp_path), "--steps", "0.1,0.05,0.025", "--stop-time", "4"]) == 0
     with open(tmp_path / "coupling_error.csv") as f:
         rows = {float(r["step_s"]): r for r in csv.DictReader(f)}
     assert sorted(rows) == [0.025, 0.05, 0.1]
@@ -84,15 +85,16 @@ def test_the_demo_command_converges_at_first_order(tmp_path):
     (["--steps", "0.1,0.15"], "multiple of the smallest"),
     (["--cart-mass", "-1"], "--cart-mass: must be a positive number of kg, got -1.0"),
 ])
-def test_bad_demo_options_are_named(argv, message, capsys):
-    with pytest.raises(SystemExit) as exit_:
-        main(argv)
-    assert exit_.value.code == 2
-    assert message in capsys.readouterr().err
+def test_bad_demo_options_are_named(argv, message, capsys, tmp_path):
+    assert cli(["demo", "--out", str(tmp_path / "out"), *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err
+    assert err.startswith("conical-pendulum demo: ") and err.count("\n") == 1  # one line
+    assert not (tmp_path / "out").exists()
 
 
 def test_a_too_light_cart_is_reported_as_diverged(tmp_path, capsys):
     """The added-mass limit: a 2 kg cart under the 45 kg chain, explicit exchange."""
-    assert main(["--out", str(tmp_path), "--steps", "0.01", "--stop-time", "0.2", "--cart-mass", "2"]) == 0
+    assert cli(["demo", "--out", str(tmp_path), "--steps", "0.01", "--stop-time", "0.2", "--cart-mass", "2"]) == 0
     assert "step 0.01 s: the exchange diverged" in capsys.readouterr().out
     assert (tmp_path / "coupling.png").exists()

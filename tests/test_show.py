@@ -1,6 +1,7 @@
-"""Plots and the animation from an FMU run, as `python -m conical_pendulum.viz.plots` makes them."""
+"""Plots and the animation from an FMU run, as `conical-pendulum show` makes them."""
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ def results_csv(seed_fmu, tmp_path_factory):
 
 
 def show(*args):
-    return subprocess.run([sys.executable, "-m", "conical_pendulum.viz.plots", *map(str, args)],
+    return subprocess.run([str(Path(sys.executable).with_name("conical-pendulum")), "show", *map(str, args)],
                           capture_output=True, text=True, timeout=300)
 
 
@@ -46,8 +47,9 @@ def test_plot_and_animation(results_csv, tmp_path):
 ])
 def test_refusals(results_csv, args, message):
     run = show(*[results_csv if a == "RESULTS" else a for a in args])
-    assert run.returncode != 0
+    assert run.returncode == 2
     assert message in run.stderr
+    assert run.stderr.startswith("conical-pendulum show: ") and run.stderr.count("\n") == 1  # one line
     assert "Traceback" not in run.stderr
 
 
@@ -56,4 +58,5 @@ def test_results_without_positions_are_refused(tmp_path, seed_fmu):
     write_csv(str(path), run_fmu(seed_fmu, stop_time=0.1, output=["alpha0", "beta0", "alpha1",
                                                                     "beta1", "alpha2", "beta2"]))
     run = show(path, "--plot", tmp_path / "p.png")
-    assert run.returncode != 0 and "need link poses" in run.stderr
+    assert run.returncode == 2 and "need link poses" in run.stderr
+    assert "Traceback" not in run.stderr

@@ -4,6 +4,7 @@ what it cannot run."""
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -135,8 +136,9 @@ def test_runs_are_made_reproducibly():
 
 
 def command(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "conical_pendulum.analysis.sweep", *map(str, args)], cwd=cwd,
-                          capture_output=True, text=True, timeout=300)
+    """`conical-pendulum sweep ...`, the installed command."""
+    return subprocess.run([str(Path(sys.executable).with_name("conical-pendulum")), "sweep", *map(str, args)],
+                          cwd=cwd, capture_output=True, text=True, timeout=300)
 
 
 def test_command_writes_the_sweep(seed_fmu, tmp_path):
@@ -176,6 +178,7 @@ def test_command_refuses_what_it_cannot_run(seed_fmu, tmp_path, args, message):
     run = command(seed_fmu, *args, cwd=tmp_path)
     assert run.returncode == 2
     assert message in run.stderr
+    assert run.stderr.startswith("conical-pendulum sweep: ") and run.stderr.count("\n") == 1  # one line
     assert "Traceback" not in run.stderr
     assert not list(tmp_path.iterdir())
 
@@ -183,5 +186,6 @@ def test_command_refuses_what_it_cannot_run(seed_fmu, tmp_path, args, message):
 def test_command_refuses_a_missing_fmu(tmp_path):
     run = command("Missing.fmu", "--grid", "l0=5", cwd=tmp_path)
     assert run.returncode == 2
+    assert run.stderr.count("\n") == 1
     assert "Missing.fmu: cannot read the FMU (No such file or directory)" in run.stderr
     assert "Traceback" not in run.stderr

@@ -1,7 +1,7 @@
 """Parameter and initial-condition sweeps of an FMU, run as Dask tasks, kept in one Parquet file.
 
-    python -m conical_pendulum.analysis.sweep dist/ConicalPendulum.fmu --grid l0=5,10,15 --grid alpha0=0.1,0.2
-    python -m conical_pendulum.analysis.sweep dist/ConicalPendulum.fmu --random l0=5:15 --samples 100 --seed 1
+    conical-pendulum sweep dist/ConicalPendulum.fmu --grid l0=5,10,15 --grid alpha0=0.1,0.2
+    conical-pendulum sweep dist/ConicalPendulum.fmu --random l0=5:15 --samples 100 --seed 1
 
 Each worker process extracts the FMU, reads its model description and loads its library
 once (a WorkerPlugin carries the FMU's bytes, so a remote cluster needs no shared
@@ -334,22 +334,18 @@ def _positive_int(text: str) -> int:
     return value
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):
-        """One line, not the usage block: it is long."""
-        self.exit(2, f"sweep: {message} (see --help)\n")
+EPILOG = """Variables: the FMU's parameters (l0, m0, M0, Ixx0, g, rtol, solver, ...) and state
+start values (alpha0, beta0, omega0, delta0, ...). The file has one row per run and
+time: run, the inputs (a state's start value as <name>_start), status ('ok' or
+'failed'), message, time, the outputs.
+Exit status: 0 when every run succeeded, 1 when some failed (they are in the file),
+2 for bad options or when the sweep could not run."""
 
 
-def _parse(argv):
-    parser = _Parser(
-        prog="python -m conical_pendulum.analysis.sweep", formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="\n\n".join(__doc__.split("\n\n")[:2]),
-        epilog="Variables: the FMU's parameters (l0, m0, M0, Ixx0, g, rtol, solver, ...) and state\n"
-               "start values (alpha0, beta0, omega0, delta0, ...). The file has one row per run and\n"
-               "time: run, the inputs (a state's start value as <name>_start), status ('ok' or\n"
-               "'failed'), message, time, the outputs.\n"
-               "Exit status: 0 when every run succeeded, 1 when some failed (they are in the file),\n"
-               "2 for bad options or when the sweep could not run.")
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The sweep's options (`conical-pendulum sweep`)."""
+    parser.description = "\n\n".join(__doc__.split("\n\n")[:2])
+    parser.epilog = EPILOG
     parser.add_argument("fmu", type=Path, help="the FMU (FMI 2.0 co-simulation)")
     runs = parser.add_mutually_exclusive_group(required=True)
     runs.add_argument("--grid", type=_grid_axis, action="append", metavar="NAME=V1,V2,...",
@@ -371,21 +367,29 @@ def _parse(argv):
     parser.add_argument("--batch", type=_positive_int, help="runs per task (default: automatic)")
     parser.add_argument("--out", type=Path, default=Path("sweep.parquet"), help="Parquet file (sweep.parquet)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
-    args = parser.parse_args(argv)
+
+
+def _check_options(args) -> None:
+    """What argparse cannot say alone: options that go together or exclude each other."""
+    from ..cli import UsageError
+
     given = args.grid or args.random
     if len({name for name, _ in given}) < len(given):
-        parser.error("a variable is given twice")
+        raise UsageError("a variable is given twice")
     if args.random and args.samples is None:
-        parser.error("--random needs --samples")
+        raise UsageError("--random needs --samples")
     if args.grid and (args.samples is not None or args.seed is not None):
-        parser.error("--samples and --seed go with --random")
+        raise UsageError("--samples and --seed go with --random")
     if args.scheduler and args.workers is not None:
-        parser.error("--workers is for the local cluster; drop it with --scheduler")
-    return args
+        raise UsageError("--workers is for the local cluster; drop it with --scheduler")
 
 
-def main(argv=None) -> int:
-    args = _parse(argv)
+def run(args) -> int:
+    """The sweep of `conical-pendulum sweep`: 0 when every run succeeded, 1 when some failed;
+    UsageError (exit 2) for bad options or when the sweep could not run."""
+    from ..cli import UsageError
+
+    _check_options(args)
     try:
         runs = (grid(dict(args.grid)) if args.grid
                 else random_samples(dict(args.random), args.samples, args.seed))
@@ -395,8 +399,7 @@ def main(argv=None) -> int:
                         batch=args.batch, out=args.out, progress=not args.no_progress,
                         timeout=args.connect_timeout)
     except (ValueError, ConnectionError) as exc:
-        print(f"sweep: {exc}", file=sys.stderr)
-        return 2
+        raise UsageError(str(exc)) from None
     seconds = time.perf_counter() - start
     by_run = results.drop_duplicates("run").set_index("run")
     failed = by_run[by_run["status"] == "failed"]
@@ -408,9 +411,3 @@ def main(argv=None) -> int:
     if len(failed) > 5:
         print(f"  ... and {len(failed) - 5} more: status == 'failed' in the file")
     return 1 if len(failed) else 0
-
-
-if __name__ == "__main__":  # through the package, so that tasks pickle by reference, not as __main__
-    from conical_pendulum.analysis.sweep import main as package_main
-
-    sys.exit(package_main())

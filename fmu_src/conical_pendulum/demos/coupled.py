@@ -6,16 +6,15 @@ master; one monolithic sympy model of cart and pendulum (kane_reference), integr
 natively at 1e-12, is the truth. The coupling error against the communication step is
 the co-simulation's own face of the speed/accuracy trade.
 
-    python -m conical_pendulum.demos.coupled [--out dist/coupled] [--steps 0.1,0.05,...]
+    conical-pendulum demo [--out dist/coupled] [--steps 0.1,0.05,...] [--stop-time 10] [--cart-mass KG]
 
-ecospy (the `cosim` extra) runs in a subprocess: it needs libtbb loaded first, and its
-interpreter can abort at exit while pythonfmu's library is mapped.
+ecospy (the `cosim` extra) runs in a subprocess (demos/ecospy_run.py): it needs libtbb
+loaded first, and its interpreter can abort at exit while pythonfmu's library is mapped.
 """
 from __future__ import annotations
 
 import argparse
-import json
-import subprocess
+import csv
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..scene import Scene
+from . import ecospy_run
 from .monolithic import CART_START, cart_parameters, monolithic
 
 STEPS = (0.2, 0.1, 0.05, 0.02, 0.01, 0.005)
@@ -42,62 +42,17 @@ def build_cart_fmu(output: Path | str) -> Path:
     return output
 
 
-ECOSPY_SCRIPT = r"""
-import ctypes, json, os, sys, time
-ctypes.CDLL(os.path.join(sys.prefix, "lib", "libtbb.so.12"), mode=ctypes.RTLD_GLOBAL)
-from ecospy import EcosLib, EcosSimulation, EcosSimulationStructure
-
-job = json.loads(sys.argv[1])
-EcosLib.set_log_level("warn")
-runs = {}
-for warm_up, dt in [(True, max(job["steps"]))] + [(False, dt) for dt in job["steps"]]:
-    stepping = 0.0
-    with EcosSimulationStructure() as structure:
-        structure.add_model("p", job["pendulum"])
-        structure.add_model("cart", job["cart"])
-        structure.make_real_connection("cart::a", "p::a_pivot_x")
-        structure.make_real_connection("p::F_pivot_x", "cart::F_x")
-        structure.add_parameter_set("cart", {"cart::" + k: v for k, v in job["cart_parameters"].items()})
-        with EcosSimulation(structure=structure, step_size=dt) as sim:
-            sim.init(parameter_set="cart")
-            run = {name: [] for name in ["time"] + job["record"]}
-            steps = 1 if warm_up else round(job["stop_time"] / dt)
-            for k in range(steps + 1):
-                if k:
-                    start = time.perf_counter()
-                    sim.step()
-                    stepping += time.perf_counter() - start
-                run["time"].append(sim.get_time())
-                for name in job["record"]:
-                    run[name].append(sim.get_real(name))
-            sim.terminate()
-    run["seconds"] = stepping
-    if not warm_up:  # the first run pays the imports (the cart's scipy)
-        runs[repr(dt)] = run
-print(json.dumps(runs))
-sys.stdout.flush()
-os._exit(0)
-"""
-
-
 def cosimulate(pendulum_fmu: Path, cart_fmu: Path, steps=STEPS, stop_time: float = STOP_TIME,
                cart: dict | None = None) -> dict:
-    """{step: {variable: array}} from ecospy's fixed-step master, one run per step size."""
-    job = {"pendulum": str(Path(pendulum_fmu).resolve()), "cart": str(Path(cart_fmu).resolve()),
-           "cart_parameters": cart or cart_parameters(),
-           "steps": list(steps), "stop_time": stop_time, "record": EXCHANGED}
-    try:
-        run = subprocess.run([sys.executable, "-c", ECOSPY_SCRIPT, json.dumps(job)],
-                             capture_output=True, text=True, timeout=1800)
-    except subprocess.TimeoutExpired:
-        raise RuntimeError("ecospy did not finish the co-simulations within 30 minutes") from None
-    if run.returncode != 0:
-        if "No module named 'ecospy'" in run.stderr or "libtbb" in run.stderr:
-            raise RuntimeError("the coupled demo needs ecospy and tbb: pip install -e \".[cosim]\"")
-        raise RuntimeError(f"ecospy failed (exit {run.returncode}):\n{run.stderr[-3000:]}")
-    runs = json.loads(run.stdout.strip().splitlines()[-1])
-    return {float(dt): {name.split("::")[-1]: np.array(values) for name, values in result.items()}
-            for dt, result in runs.items()}  # "seconds": wall time in ecospy's step()
+    """{step: {variable: array}} from ecospy's fixed-step master, one run per step size
+    (demos/ecospy_run.py, in a process of its own), after a warm-up run that pays the
+    imports (the cart's scipy); "seconds" is the wall time in ecospy's step()."""
+    job = {"models": {"p": str(pendulum_fmu), "cart": str(cart_fmu)},
+           "connections": [["cart::a", "p::a_pivot_x"], ["p::F_pivot_x", "cart::F_x"]],
+           "parameters": {f"cart::{name}": value for name, value in (cart or cart_parameters()).items()},
+           "steps": list(steps), "stop_time": stop_time, "record": EXCHANGED, "warm_up": True}
+    return {run["step"]: {**{name.split("::")[-1]: np.array(values) for name, values in run["values"].items()},
+                          "seconds": run["seconds"]} for run in ecospy_run.cosimulate(job)}
 
 
 @dataclass
@@ -175,29 +130,41 @@ def plot(runs: dict, errors: list[CouplingError], reference: dict, path: Path) -
     plt.close(fig)
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m conical_pendulum.demos.coupled", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=Path, default=Path("dist") / "coupled",
-                        help="folder for the FMUs, coupling_error.csv and coupling.png")
-    parser.add_argument("--steps", default=",".join(map(str, STEPS)),
-                        help="communication steps [s], comma-separated; each must divide the stop "
-                             "time and be a multiple of the smallest")
-    parser.add_argument("--stop-time", type=float, default=STOP_TIME)
-    parser.add_argument("--cart-mass", type=float, default=cart_parameters()["m_cart"],
-                        help="m_cart [kg]; below a few kg the explicit exchange diverges at any step")
-    args = parser.parse_args(argv)
+def _steps(text: str) -> list[float]:
     try:
-        steps = sorted({float(s) for s in args.steps.split(",")})
+        return sorted({float(s) for s in text.split(",")})
     except ValueError:
-        parser.error(f"--steps: expected numbers separated by commas, got {args.steps!r}")
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The demo's options (`conical-pendulum demo`)."""
+    parser.description = __doc__
+    parser.add_argument("--out", type=Path, default=Path("dist") / "coupled",
+                        help="folder for the FMUs, coupling_error.csv and coupling.png (dist/coupled)")
+    parser.add_argument("--steps", type=_steps, default=sorted(STEPS), metavar="DT,DT,...",
+                        help="communication steps [s], comma-separated; each must divide the stop "
+                             f"time and be a multiple of the smallest ({','.join(map(str, STEPS))})")
+    parser.add_argument("--stop-time", type=float, default=STOP_TIME, metavar="SECONDS",
+                        help=f"simulated seconds ({STOP_TIME:g})")
+    parser.add_argument("--cart-mass", type=float, default=cart_parameters()["m_cart"], metavar="KG",
+                        help="m_cart [kg]; below a few kg the explicit exchange diverges at any step "
+                             f"({cart_parameters()['m_cart']:g})")
+
+
+def run(args) -> int:
+    """Build both FMUs, co-simulate at each step, compare with the monolithic model, write
+    coupling_error.csv and coupling.png. 0, or 1 when ecospy failed."""
+    from ..cli import UsageError
+
+    steps = args.steps
     for dt in steps:
         if not (dt > 0 and abs(args.stop_time / dt - round(args.stop_time / dt)) < 1e-9
                 and abs(dt / steps[0] - round(dt / steps[0])) < 1e-9):
-            parser.error(f"--steps: {dt:g} must be positive, divide --stop-time {args.stop_time:g} "
-                         f"and be a multiple of the smallest step {steps[0]:g}")
+            raise UsageError(f"--steps: {dt:g} must be positive, divide --stop-time {args.stop_time:g} "
+                             f"and be a multiple of the smallest step {steps[0]:g}")
     if not args.cart_mass > 0:
-        parser.error(f"--cart-mass: must be a positive number of kg, got {args.cart_mass!r}")
+        raise UsageError(f"--cart-mass: must be a positive number of kg, got {args.cart_mass!r}")
     cart_values = cart_parameters(m_cart=args.cart_mass)
     from ..build.fmu import build_fmu
 
@@ -210,19 +177,16 @@ def main(argv=None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     errors, reference = coupling_errors(runs, SCENE, cart_values)
-    rows = ["step_s,cart_error_m,angle_error_rad,force_error_N,ecospy_seconds"]
-    rows += [f"{e.step:g},{e.cart_error:.3e},{e.angle_error:.3e},{e.force_error:.3e},{e.seconds:.3f}"
-             for e in errors]
-    (args.out / "coupling_error.csv").write_text("\n".join(rows) + "\n")
+    header = ["step_s", "cart_error_m", "angle_error_rad", "force_error_N", "ecospy_seconds"]
+    rows = [[f"{e.step:g}", f"{e.cart_error:.3e}", f"{e.angle_error:.3e}", f"{e.force_error:.3e}",
+             f"{e.seconds:.3f}"] for e in errors]
+    with open(args.out / "coupling_error.csv", "w", newline="") as f:
+        csv.writer(f, lineterminator="\n").writerows([header, *rows])
     plot(runs, errors, reference, args.out / "coupling.png")
-    print("\n".join(rows).replace(",", "\t"))
+    print("\n".join("\t".join(row) for row in [header, *rows]))
     for e in errors:
         if e.diverged:
             print(f"step {e.step:g} s: the exchange diverged (cart error {e.cart_error:.2g} m): the "
                   "cart is too light for an explicit exchange, at any step (added-mass effect)")
     print(f"wrote {args.out / 'coupling_error.csv'} and {args.out / 'coupling.png'}")
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -29,6 +29,7 @@ import os
 import subprocess
 import sys
 
+MODULE = "conical_pendulum.demos.ecospy_run"  # run as python -m MODULE, also when this is __main__
 REQUIRED = ("models", "steps", "stop_time", "record")
 
 
@@ -58,7 +59,7 @@ def cosimulate(job: dict, timeout: float = 1800.0) -> list[dict]:
     """Run the job in a fresh interpreter; its runs, as printed. RuntimeError when ecospy fails."""
     job = check_job(job)
     try:
-        run = subprocess.run([sys.executable, "-m", __name__, json.dumps(job)],
+        run = subprocess.run([sys.executable, "-m", MODULE, json.dumps(job)],
                              capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
         raise RuntimeError(f"ecospy did not finish the co-simulations within {timeout:g} s") from None
@@ -111,11 +112,14 @@ def _simulate(job: dict) -> list[dict]:
 def main(argv=None) -> None:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
-        print(f"usage: python -m {__name__} JOB_JSON", file=sys.stderr)
+        print(f"usage: python -m {MODULE} JOB_JSON (see its docstring)", file=sys.stderr)
         sys.exit(2)
     try:
         job = check_job(json.loads(argv[0]))
-    except (json.JSONDecodeError, ValueError) as exc:
+    except json.JSONDecodeError as exc:
+        print(f"ecospy_run: JOB_JSON is not JSON: {exc}", file=sys.stderr)
+        sys.exit(2)
+    except ValueError as exc:
         print(f"ecospy_run: {exc}", file=sys.stderr)
         sys.exit(2)
     import ctypes

@@ -1,6 +1,6 @@
 """Plots and an animation of simulation results, with matplotlib.
 
-    python -m conical_pendulum.viz.plots dist/results.csv --plot dist/pendulum.png --gif dist/pendulum.gif
+    conical-pendulum show dist/results.csv --plot dist/pendulum.png --gif dist/pendulum.gif
 
 The CSV is fmpy's (`fmpy.util.write_csv`): a `time` column and one per variable. Links
 are drawn from their mass-centre positions (`link<i>_x/y/z`, the midpoint of each link),
@@ -9,7 +9,6 @@ or from the bob positions when the scene has a bob on every link.
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
@@ -129,26 +128,33 @@ def animate(results: dict, path, fps: float = 30.0, size: float = 5.0) -> float:
     return time.perf_counter() - start
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("results", type=Path, help="fmpy results CSV")
-    parser.add_argument("--plot", type=Path, help="PNG of angles, paths from above and energy")
-    parser.add_argument("--gif", type=Path, help="animated GIF of the chain in 3D")
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of `conical-pendulum show`."""
+    parser.add_argument("results", type=Path, metavar="RESULTS.csv",
+                        help="fmpy results CSV (fmpy.util.write_csv), e.g. build's dist/results.csv")
+    parser.add_argument("--plot", type=Path, metavar="PNG", help="PNG of angles, paths from above and energy")
+    parser.add_argument("--gif", type=Path, metavar="GIF", help="animated GIF of the chain in 3D")
     parser.add_argument("--fps", type=float, default=30.0, help="frames per simulated second (30)")
-    args = parser.parse_args(argv)
+
+
+def run(args) -> int:
+    """`conical-pendulum show`: the plot and/or the animation of a results CSV."""
+    from ..cli import UsageError
+
     if not (args.plot or args.gif):
-        parser.error("give --plot and/or --gif")
+        raise UsageError("give --plot and/or --gif")
     if not args.fps > 0:
-        parser.error(f"--fps must be positive, got {args.fps}")
-    results = load_results(args.results)
-    if args.plot:
-        plot(results, args.plot)
-        print(f"wrote {args.plot}")
-    if args.gif:
-        seconds = animate(results, args.gif, fps=args.fps)
-        print(f"wrote {args.gif} in {seconds:.1f} s")
+        raise UsageError(f"--fps: must be positive, got {args.fps:g}")
+    try:  # this module's refusals (an unreadable CSV, no link poses) are SystemExit("show: ...")
+        results = load_results(args.results)
+        if args.plot:
+            plot(results, args.plot)
+            print(f"wrote {args.plot}")
+        if args.gif:
+            seconds = animate(results, args.gif, fps=args.fps)
+            print(f"wrote {args.gif} in {seconds:.1f} s")
+    except SystemExit as exc:
+        if not isinstance(exc.code, str):
+            raise
+        raise UsageError(exc.code.removeprefix("show: ")) from None
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
