@@ -16,7 +16,14 @@ if "SLAVE" in globals():  # executed again by pythonfmu, at each instantiation
     __import__("ctypes").pythonapi.Py_IncRef(__import__("ctypes").py_object(globals()))
 else:
     import importlib
+    import os
+    import sys
 
     _slave_module, _, _digest = __name__.rpartition("_")
-    SLAVE = importlib.import_module(f"cp_runtime_{_digest}.{_slave_module}").SLAVE
+    _package = f"cp_runtime_{_digest}"
+    if _package in sys.modules:  # imported by another FMU, whose files may be gone by now:
+        _here = os.path.join(os.path.dirname(os.path.abspath(__file__)), _package)
+        if _here not in sys.modules[_package].__path__:  # the same sources, from this FMU
+            sys.modules[_package].__path__.insert(0, _here)
+    SLAVE = importlib.import_module(f"{_package}.{_slave_module}").SLAVE
     globals()[SLAVE.__name__] = SLAVE
