@@ -53,7 +53,8 @@ def test_compiled_core_equals_lambdify(scene):
         assert relative_error(M, mass(x, p)) < 1e-12
         assert relative_error(F, np.ravel(forcing(x, p))) < 1e-12
         expected_accel = np.linalg.solve(np.array(mass(x, p), float), np.ravel(forcing(x, p)))
-        assert relative_error(core.outputs(x, p), outputs(x, p, expected_accel)) < 1e-10
+        # the symbolic outputs; the apparent mass after them is the core's (test_apparent_mass)
+        assert relative_error(core.outputs(x, p)[:len(eqs.outputs)], outputs(x, p, expected_accel)) < 1e-10
         assert relative_error(core.rhs(x, p)[2 * scene.n:], expected_accel) < 1e-10
         np.testing.assert_array_equal(core.rhs(x, p)[:2 * scene.n], x[2 * scene.n:])
 
