@@ -23,7 +23,7 @@ from pathlib import Path
 from ..runtime.rules import CALCULATED, FIXED, RULES, SETTINGS, STATISTICS, rule_of
 from ..runtime.slave import MODEL_FILE
 from ..scene import Scene
-from .compiler import CSRC, CoreBuild, build_core
+from .compiler import CSRC, build_core
 from .fmu import MODEL_NAME, FmuBuild, checked_output, checked_settings, model_data
 
 GLUE_SOURCES = ["model.c", "dynamics.c", "chain.c", "solvers.c", "diagnosis.c", "fmi2_glue.c"]
@@ -56,7 +56,7 @@ def _c_double(value: float) -> str:
                                                       else repr(float(value)))
 
 
-def config_header(scene: Scene, data: dict, guid: str) -> str:
+def config_header(data: dict, guid: str) -> str:
     """fmu_config.h: value references, start values, names and rules for fmi2_glue.c."""
     reals = real_variables(data)
     groups = data["variables"]
@@ -113,7 +113,7 @@ def config_header(scene: Scene, data: dict, guid: str) -> str:
     return "\n".join(lines)
 
 
-def model_description(scene: Scene, data: dict, guid: str) -> bytes:
+def model_description(data: dict, guid: str) -> bytes:
     """modelDescription.xml for both interfaces, with a complete ModelStructure."""
     reals = real_variables(data)
     groups = data["variables"]
@@ -228,10 +228,12 @@ def compile_binary(sources: Path, folder: Path, platform: str = "linux64") -> Pa
     return library
 
 
-def guid_of(scene: Scene, core: CoreBuild, settings: dict) -> str:
-    """A GUID that changes with the scene, the generator, the glue and the start values."""
+def guid_of(data: dict) -> str:
+    """A GUID that changes with anything the model description or binary says: the scene's
+    variables and start values, the core's build (scene structure and generator), the
+    settings, and the glue."""
     glue = (CSRC / "fmi2_glue.c").read_bytes() + Path(__file__).read_bytes()
-    text = core.module_name + json.dumps(settings, sort_keys=True) + glue.hex()
+    text = json.dumps(data, sort_keys=True) + glue.hex()
     return "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, text)) + "}"
 
 
@@ -247,7 +249,7 @@ def build_native_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_
     core = build_core(scene, cache)
     data = model_data(scene, core, settings)
     data["feedthrough"] = [name for name in scene.output_names() if name.startswith("F_pivot")]
-    guid = guid_of(scene, core, settings)
+    guid = guid_of(data)
     output.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_native_") as tmp:
         sources = Path(tmp) / "sources"
@@ -256,14 +258,14 @@ def build_native_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_
             origin = core.directory / name if name.startswith("model.") else CSRC / name
             if name != "fmu_config.h":
                 shutil.copy2(origin, sources / name)
-        (sources / "fmu_config.h").write_text(config_header(scene, data, guid))
+        (sources / "fmu_config.h").write_text(config_header(data, guid))
         libraries = {}
         for platform in dict.fromkeys(platforms):
             (Path(tmp) / platform).mkdir()
             libraries[platform] = compile_binary(sources, Path(tmp) / platform, platform)
         staged = Path(tmp) / "staged.fmu"
         with zipfile.ZipFile(staged, "w", zipfile.ZIP_DEFLATED) as archive:
-            archive.writestr("modelDescription.xml", model_description(scene, data, guid))
+            archive.writestr("modelDescription.xml", model_description(data, guid))
             for platform, library in libraries.items():  # stored: hosts extract them at every run
                 archive.write(library, f"binaries/{platform}/{library.name}",
                               compress_type=zipfile.ZIP_STORED)
