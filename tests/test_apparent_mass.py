@@ -1,4 +1,5 @@
-"""The chain's apparent mass at the pivot, M_app in F_pivot = F_free - M_app a_pivot (issue 14)."""
+"""The pivot force's split, F_pivot = F_free - M_app a_pivot: the chain's apparent mass at the
+pivot and the force at rest (issue 14)."""
 import numpy as np
 import pytest
 
@@ -7,7 +8,7 @@ from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.build.compiler import load_core
 from conical_pendulum.build.fmu import build_fmu
 from conical_pendulum.build.model import joint_kinematics
-from conical_pendulum.scene import APPARENT_MASS, PIVOT_OUTPUTS
+from conical_pendulum.scene import APPARENT_MASS, FREE_FORCE, PIVOT_OUTPUTS
 from fmu_helpers import Instance
 
 AXES = "xyz"
@@ -47,7 +48,8 @@ def test_one_rigid_link_by_hand(formulation):
 
 @pytest.mark.parametrize("backend", ["pythonfmu", "native"])
 def test_it_is_the_pivot_forces_answer_to_the_inputs_through_fmpy(backend, fmu_dir):
-    """Finite differences of F_pivot over the inputs, through fmpy: exact, F_pivot being affine."""
+    """Finite differences of F_pivot over the inputs, through fmpy: exact, F_pivot being
+    affine; F_free is the force at a_pivot = 0, the same whatever the inputs."""
     path = build_fmu(Scene.uniform(3, coupling=True), fmu_dir / f"Apparent_{backend}.fmu",
                      backend=backend).path
     fmu = Instance(path, start_values={"alpha1": 0.7, "delta2": 1.5, "omega0": -0.4})
@@ -55,12 +57,15 @@ def test_it_is_the_pivot_forces_answer_to_the_inputs_through_fmpy(backend, fmu_d
         fmu.step(1 / 60)
     base = {"a_pivot_x": 0.2, "a_pivot_y": -1.0, "a_pivot_z": 0.5}
     fmu.set(base)
-    force = np.array(fmu.get(*PIVOT_OUTPUTS))
+    force, free = np.array(fmu.get(*PIVOT_OUTPUTS)), np.array(fmu.get(*FREE_FORCE))
     M = matrix(dict(zip(APPARENT_MASS, fmu.get(*APPARENT_MASS))))
+    a = np.array(list(base.values()))
+    np.testing.assert_allclose(force, free - M @ a, rtol=0, atol=1e-10 * np.abs(force).max())
     for j, axis in enumerate(AXES):
         fmu.set({**base, f"a_pivot_{axis}": base[f"a_pivot_{axis}"] + 0.5})
         column = (force - np.array(fmu.get(*PIVOT_OUTPUTS))) / 0.5
         np.testing.assert_allclose(column, M[:, j], rtol=1e-10, atol=1e-10 * np.abs(M).max())
+        assert fmu.get(*FREE_FORCE) == list(free)  # not a function of the inputs
     fmu.close()
 
 

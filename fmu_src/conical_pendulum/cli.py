@@ -194,7 +194,7 @@ def _build_arguments(parser: argparse.ArgumentParser) -> None:
                             "(default: consistent)")
     scene.add_argument("--coupling", action="store_true",
                        help="inputs a_pivot_x/y/z (the support's acceleration) and outputs "
-                            "F_pivot_x/y/z (the force on it)")
+                            "F_pivot_x/y/z (the force on it), with its split F_free_x/y/z, M_pivot_xx..zz")
     parser.add_argument("--output", type=Path, default=Path("dist/ConicalPendulum.fmu"), metavar="PATH",
                         help="the FMU to write, ending in .fmu (dist/ConicalPendulum.fmu)")
     parser.add_argument("--native", action="store_true",

@@ -21,7 +21,9 @@ KINEMATICS = ("consistent", "pydy-example")
 OUTPUT_GROUPS = ("bobs", "poses", "energy")
 PIVOT_INPUTS = ("a_pivot_x", "a_pivot_y", "a_pivot_z")
 PIVOT_OUTPUTS = ("F_pivot_x", "F_pivot_y", "F_pivot_z")
-# The chain's apparent mass at the pivot, F_pivot = F_free - M_app a_pivot: its upper triangle.
+# The pivot force split by its dependence on the support's acceleration, F_pivot = F_free -
+# M_app a_pivot: the force at a_pivot = 0, and the chain's apparent mass (its upper triangle).
+FREE_FORCE = ("F_free_x", "F_free_y", "F_free_z")
 APPARENT_MASS = ("M_pivot_xx", "M_pivot_xy", "M_pivot_xz", "M_pivot_yy", "M_pivot_yz", "M_pivot_zz")
 FORMULATIONS = ("auto", "expanded", "recursive")
 MAX_LINKS = 100
@@ -199,7 +201,7 @@ class Scene:
         if "energy" in self.outputs:
             names.append("energy")
         if self.coupling:
-            names += PIVOT_OUTPUTS + APPARENT_MASS
+            names += PIVOT_OUTPUTS + FREE_FORCE + APPARENT_MASS
         return names
 
     def parameters(self, overrides: dict | None = None) -> list[float]:

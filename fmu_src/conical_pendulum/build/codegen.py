@@ -75,6 +75,8 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
         f'#define CP_PARAMETER_NAMES "{" ".join(scene.core_parameter_names())}"',
         f'#define CP_OUTPUT_NAMES "{" ".join(scene.output_names())}"',
         f"#define CP_OUTPUTS_NEED_RATES {int(needs_rates)}",
+        "/* Where F_pivot is in the outputs (-1: no coupling); F_free and M_app follow it. */",
+        f"#define CP_FORCE_OUTPUT {_index(scene.output_names(), 'F_pivot_x')}",
         *lines,
         "/* M is row-major CP_NDOF x CP_NDOF; M u' = F. */",
         "void cp_mass_forcing(const double *x, const double *p, double *M, double *F);",
@@ -83,13 +85,17 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
         "#endif", ""])
 
 
+def _index(names: list[str], name: str) -> int:
+    return names.index(name) if name in names else -1
+
+
 def generate_recursive(scene: Scene) -> dict[str, str]:
     """C sources of the recursive formulation: the link table, and one joint's kinematics
     from sympy (the loops over the links are runtime/csrc/chain.c)."""
     names = scene.core_parameter_names()
 
     def index(name):
-        return names.index(name) if name in names else -1
+        return _index(names, name)
 
     links = [f"    {{{index(f'l{i}')}, {index(f'm{i}')}, {index(f'M{i}')}, {index(f'Ixx{i}')}, "
              f"{index(f'Iyy{i}')}, {index(f'Izz{i}')}}},  /* link {i} */" for i in range(scene.n)]

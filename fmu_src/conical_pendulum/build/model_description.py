@@ -63,7 +63,8 @@ def model_description_text(scene: Scene) -> str:
     kinematics = ("" if scene.kinematics == "consistent"
                   else "; PUBLISHED pydy-example kinematics (does not conserve energy)")
     coupling = ("; hangs from a moving support: inputs a_pivot_x/y/z (held constant over each "
-                "communication step), outputs F_pivot_x/y/z and the apparent mass M_pivot_xx..zz"
+                "communication step), outputs F_pivot_x/y/z = F_free_x/y/z - M_app a_pivot "
+                "with the apparent mass M_pivot_xx..zz"
                 if scene.coupling else "")
     return f"{scene.n}-link conical pendulum ({links}){kinematics}{coupling}"
 
@@ -94,6 +95,9 @@ def describe(name: str) -> str:
     if name.startswith("M_pivot_"):
         return (f"apparent mass of the chain at the pivot, entry {name[-2:]} of the symmetric "
                 "M_app in F_pivot = F_free - M_app a_pivot [kg]; depends on the state only")
+    if name.startswith("F_free_"):
+        return (f"force the pendulum would exert on a support at rest (a_pivot = 0), inertial "
+                f"{name[-1]} (Y up) [N]: F_pivot = F_free - M_app a_pivot; depends on the state only")
     if name.startswith("F_pivot_"):
         return (f"force the pendulum exerts on its support, inertial {name[-1]} (Y up) [N]; "
                 "depends at once on the a_pivot inputs")

@@ -76,8 +76,8 @@ int cp_rhs(void *ctx, const double *x, double *dx)
 }
 
 #if CP_NINPUT
-/* The pivot force of the state x with the parameters and inputs q: the scene's outputs
- * after F_pivot are the six of M_app, so F_pivot ends 6 before the last. */
+/* The pivot force of the state x with the parameters and inputs q (model.h: where it is
+ * in the outputs). */
 static void pivot_force(const double *x, const double *q, double force[3])
 {
     double dx[CP_NSTATE], y[CP_NOUTPUT];
@@ -85,16 +85,18 @@ static void pivot_force(const double *x, const double *q, double force[3])
     if (cp_rhs(&model, x, dx))
         for (int i = 0; i < CP_NSTATE; i++) dx[i] = NAN;
     cp_outputs(x, q, dx, y);
-    memcpy(force, y + CP_NOUTPUT - 9, 3 * sizeof(double));
+    memcpy(force, y + CP_FORCE_OUTPUT, 3 * sizeof(double));
 }
 
-/* M_app: F_pivot is affine in the pivot's acceleration (the inputs, last in p), so its
- * columns are exactly the force's changes from a = 0 to each unit acceleration. */
-static void apparent_mass(const double *x, const double *p, double *out)
+/* F_pivot = F_free - M_app a_pivot: F_pivot is affine in the pivot's acceleration (the
+ * inputs, last in p), so F_free is the force at a = 0 and M_app's columns are exactly the
+ * force's changes from a = 0 to each unit acceleration. out: F_free, then the upper
+ * triangle of M_app. */
+static void free_force_and_apparent_mass(const double *x, const double *p, double *out)
 {
-    double q[CP_NPARAM], free_force[3], force[3][3];
+    double q[CP_NPARAM], force[3][3];
     memcpy(q, p, sizeof q);
-    double *a = q + CP_NPARAM - CP_NINPUT;
+    double *a = q + CP_NPARAM - CP_NINPUT, *free_force = out;
     a[0] = a[1] = a[2] = 0.0;
     pivot_force(x, q, free_force);
     for (int j = 0; j < 3; j++) {
@@ -102,7 +104,7 @@ static void apparent_mass(const double *x, const double *p, double *out)
         pivot_force(x, q, force[j]);
         a[j] = 0.0;
     }
-    int k = 0;
+    int k = 3;
     for (int r = 0; r < 3; r++)  /* the upper triangle of the symmetric mean */
         for (int c = r; c < 3; c++)
             out[k++] = 0.5 * ((free_force[r] - force[c][r]) + (free_force[c] - force[r][c]));
@@ -121,6 +123,6 @@ void cp_eval_outputs(const double *x, const double *p, double *y)
     cp_outputs(x, p, NULL, y);
 #endif
 #if CP_NINPUT
-    apparent_mass(x, p, y + CP_NOUTPUT - 6);
+    free_force_and_apparent_mass(x, p, y + CP_FORCE_OUTPUT + 3);
 #endif
 }
