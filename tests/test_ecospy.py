@@ -38,6 +38,8 @@ def test_seed_scenario_in_ecospy_matches_fmpy(seed_fmu):
     ({"models": {"p": "P.fmu"}, "steps": [0], "stop_time": 1, "record": []}, "steps must be a list of positive"),
     ({"models": {"p": "P.fmu"}, "steps": [0.1], "stop_time": 1, "record": [], "warmup": True},
      "unknown key(s) warmup"),
+    ({"models": {"p": "P.fmu"}, "steps": [0.1], "stop_time": 1, "record": ["p::x"], "limits": {"p::y": 1.0}},
+     "limits must map recorded variables to positive numbers, got {'p::y': 1.0}"),
 ])
 def test_bad_jobs_are_refused(job, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):

@@ -10,12 +10,15 @@ JOB_JSON is a JSON object (the text itself):
      "steps": [0.1, 0.05],                     # communication step sizes [s], one run each
      "stop_time": 10.0,
      "record": ["cart::x", "p::alpha0"],       # variables read at every communication point
+     "limits": {"cart::x": 1000.0},            # a run ends where a recorded |value| exceeds its
+                                               # limit or is not finite (a diverging exchange)
      "warm_up": true}                          # first one step at the largest step, not reported
 
 Only "models", "steps", "stop_time" and "record" are required. The last line printed is
-{"runs": [{"step": dt, "seconds": s, "values": {"time": [...], name: [...]}}]}, one run per
-step in the order given; "seconds" is the wall time spent in ecospy's step() (a warm-up
-run pays the first step's imports, a Python slave's scipy for one, outside the timings).
+{"runs": [{"step": dt, "seconds": s, "ended": why or null, "values": {"time": [...], name:
+[...]}}]}, one run per step in the order given; "seconds" is the wall time spent in ecospy's
+step() (a warm-up run pays the first step's imports, a Python slave's scipy for one, outside
+the timings); "ended" says why a run stopped before stop_time (its values end there).
 
 It must be a process of its own: ecospy's library needs libtbb loaded first, globally
 (ctypes RTLD_GLOBAL), and pythonfmu 0.7's exit-time destructor can abort an interpreter
@@ -40,7 +43,7 @@ def check_job(job) -> dict:
     missing = [key for key in REQUIRED if key not in job]
     if missing:
         raise ValueError(f"job: missing {', '.join(missing)}")
-    unknown = sorted(set(job) - {*REQUIRED, "connections", "parameters", "warm_up"})
+    unknown = sorted(set(job) - {*REQUIRED, "connections", "parameters", "limits", "warm_up"})
     if unknown:
         raise ValueError(f"job: unknown key(s) {', '.join(unknown)}")
     if not (isinstance(job["models"], dict) and job["models"]):
@@ -52,7 +55,20 @@ def check_job(job) -> dict:
     stop_time = job["stop_time"]
     if isinstance(stop_time, bool) or not isinstance(stop_time, (int, float)) or not stop_time > 0:
         raise ValueError(f"job: stop_time must be a positive number, got {stop_time!r}")
-    return {"connections": [], "parameters": {}, "warm_up": False, **job}
+    limits = job.get("limits", {})
+    if not (isinstance(limits, dict) and set(limits) <= set(job["record"]) and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 for v in limits.values())):
+        raise ValueError(f"job: limits must map recorded variables to positive numbers, got {limits!r}")
+    return {"connections": [], "parameters": {}, "limits": {}, "warm_up": False, **job}
+
+
+def _beyond_limits(values: dict, limits: dict) -> str | None:
+    """Why the last recorded values end the run, or None."""
+    for name, limit in limits.items():
+        value = values[name][-1]
+        if not abs(value) <= limit:
+            return f"{name} = {value:.3g} beyond its limit {limit:g} at t = {values['time'][-1]:.6g} s"
+    return None
 
 
 def cosimulate(job: dict, timeout: float = 1800.0) -> list[dict]:
@@ -95,6 +111,7 @@ def _simulate(job: dict) -> list[dict]:
                     sim.init()
                 values = {name: [] for name in ["time", *job["record"]]}
                 steps = 1 if warm_up else round(job["stop_time"] / dt)
+                ended = None
                 for k in range(steps + 1):
                     if k:
                         start = time.perf_counter()
@@ -103,9 +120,12 @@ def _simulate(job: dict) -> list[dict]:
                     values["time"].append(sim.get_time())
                     for name in job["record"]:
                         values[name].append(sim.get_real(name))
+                    ended = _beyond_limits(values, job["limits"])
+                    if ended:
+                        break
                 sim.terminate()
         if not warm_up:
-            runs.append({"step": dt, "seconds": stepping, "values": values})
+            runs.append({"step": dt, "seconds": stepping, "ended": ended, "values": values})
     return runs
 
 

@@ -46,6 +46,8 @@ RULES = {
     "native-solver": Rule(_choose(NATIVE_SOLVERS) + "; Radau needs the pythonfmu FMU",
                           f"a whole number from 0 to {len(NATIVE_SOLVERS) - 1}",
                           low=0.0, high=len(NATIVE_SOLVERS)),
+    "hold-order": Rule("choose 0 (held over the step) or 1 (extrapolated linearly)", "0 or 1",
+                       low=0.0, high=2.0),
 }
 
 # The rule of a variable by its name without the link index: (rule, what it is).
@@ -64,6 +66,8 @@ QUANTITIES = {
     "m_cart": ("positive", "a mass"),
     "k_cart": ("non-negative", "a stiffness"),
     "c_cart": ("non-negative", "a damping coefficient"),
+    "M_x": ("non-negative", "an apparent mass"),
+    "F_x_order": ("hold-order", ""),
 }
 
 # The scene's link fields and their rules: those that are parameters follow the parameter's.
