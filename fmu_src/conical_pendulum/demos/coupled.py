@@ -185,8 +185,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"simulated seconds ({STOP_TIME:g})")
     parser.add_argument("--cart-mass", type=_numbers, default=sorted(CART_MASSES, reverse=True),
                         metavar="KG,KG,...",
-                        help="m_cart [kg], comma-separated; below a few kg the explicit exchange "
-                             f"diverges at any step ({','.join(f'{m:g}' for m in CART_MASSES)})")
+                        help="m_cart [kg], comma-separated; lighter than the chain's apparent mass "
+                             "(3 to 5 kg) the explicit exchange diverges at any step "
+                             f"({','.join(f'{m:g}' for m in CART_MASSES)})")
     parser.add_argument("--scheme", type=_schemes, default=list(SCHEMES), metavar="NAME,NAME,...",
                         help="how the FMUs exchange the pivot force: explicit (F_pivot_x) or "
                              "apparent-mass (F_free_x and M_pivot_xx, the cart moving the "
@@ -237,7 +238,7 @@ def run(args) -> int:
         if e.diverged:
             why = ended.get((e.scheme, e.cart_mass, e.step)) or f"cart error {e.cart_error:.2g} m"
             print(f"{e.scheme}, cart {e.cart_mass:g} kg, step {e.step:g} s: the exchange diverged ({why})"
-                  + ("; the cart is too light for an explicit exchange, at any step (added-mass "
-                     "effect): --scheme apparent-mass" if e.scheme == "explicit" else ""))
+                  + ("; the cart is too light against the chain's apparent mass for an explicit "
+                     "exchange (added-mass effect): --scheme apparent-mass" if e.scheme == "explicit" else ""))
     print(f"wrote {args.out / 'coupling_error.csv'} and {args.out / 'coupling.png'}")
     return 0

@@ -206,7 +206,8 @@ def seconds_per_call(str what, x_in, p_in, long calls):
     if what not in ("rhs", "outputs"):
         raise ValueError(f"what: 'rhs' or 'outputs', not {what!r}")
     cdef bint outputs = what == "outputs"
-    cdef double out[512]
+    cdef double[::1] buffer = np.zeros(max(CP_NSTATE, CP_NOUTPUT, 1))
+    cdef double *out = &buffer[0]
     cdef cp_model model
     cdef cp_system system
     cdef cp_stats stats
