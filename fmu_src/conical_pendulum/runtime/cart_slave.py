@@ -59,6 +59,7 @@ class Cart(Fmi2Slave):
             setattr(self, name, value)
         self.F_x_order = 0
         self.x, self.v, self.M_x = START["x"], START["v"], 0.0
+        self._input = 0.0  # F_x as last set
         self._force = 0.0  # the force in effect now: F_x as set, or as extrapolated to now
         self._last_input = None  # (time, F_x) at the last step, for the extrapolation
         fixed, continuous = Fmi2Variability.fixed, Fmi2Variability.continuous
@@ -87,7 +88,6 @@ class Cart(Fmi2Slave):
                                     initial=Fmi2Initial.calculated, getter=self._acceleration,
                                     description="acceleration of the cart along X [m/s2] (the "
                                                 "pendulum's a_pivot_x); depends at once on F_x and M_x"))
-        self._input = 0.0
 
     def _set_force(self, value):
         self._input = self._force = value
