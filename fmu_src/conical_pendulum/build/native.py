@@ -26,9 +26,10 @@ from ..scene import Scene
 from .compiler import CSRC, build_core
 from .fmu import MODEL_NAME, FmuBuild, checked_output, checked_settings, model_data
 
-GLUE_SOURCES = ["model.c", "dynamics.c", "chain.c", "solvers.c", "diagnosis.c", "fmi2_glue.c"]
-GLUE_HEADERS = ["model.h", "dynamics.h", "chain.h", "solvers.h", "tableaus.h", "status.h",
-                "diagnosis.h", "rules.h", "fmu_config.h"]
+GLUE_SOURCES = ["model.c", "dynamics.c", "chain.c", "solvers.c", "diagnosis.c", "directional.c",
+                "fmi2_glue.c"]
+GLUE_HEADERS = ["model.h", "real.h", "dynamics.h", "chain.h", "solvers.h", "tableaus.h", "status.h",
+                "diagnosis.h", "directional.h", "rules.h", "fmu_config.h"]
 
 
 def fmi_headers() -> Path:
@@ -130,7 +131,7 @@ def model_description(data: dict, guid: str) -> bytes:
         "variableNamingConvention": "structured", "numberOfEventIndicators": "0"})
     common = {"modelIdentifier": MODEL_NAME, "needsExecutionTool": "false",
               "canBeInstantiatedOnlyOncePerProcess": "false", "canGetAndSetFMUstate": "true",
-              "canSerializeFMUstate": "true", "providesDirectionalDerivative": "false"}
+              "canSerializeFMUstate": "true", "providesDirectionalDerivative": "true"}
     for kind, extra in (("ModelExchange", {"completedIntegratorStepNotNeeded": "true"}),
                         ("CoSimulation", {"canHandleVariableCommunicationStepSize": "true",
                                           "canInterpolateInputs": "false",
@@ -193,9 +194,11 @@ def model_description(data: dict, guid: str) -> bytes:
         ET.SubElement(outputs, "Unknown", index=index, dependencies=" ".join(depends))
         if vr >= first_output:
             ET.SubElement(initial, "Unknown", index=index)
+    n_dof = n_state // 2  # x = (angles, rates): an angle's derivative is its rate
     for k in range(n_state):
         index = str(first_derivative + k + 1)
-        ET.SubElement(derivatives, "Unknown", index=index)
+        depends = [states[n_dof + k]] if k < n_dof else states + inputs
+        ET.SubElement(derivatives, "Unknown", index=index, dependencies=" ".join(depends))
         ET.SubElement(initial, "Unknown", index=index)
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)

@@ -5,6 +5,10 @@
  * joint (the top of the link); accelerations are classical (of the reference point), so
  * a rigid body's force is f = I a + b, with b the velocity terms. Gravity enters as an
  * upward acceleration of the pivot, so the force through joint 0 is the support's force.
+ *
+ * Every value computed from x and p is a cp_real (real.h): double, or double complex in
+ * directional.c's complex-step copy; what is not analytic (the pivot check) looks at real
+ * parts only.
  */
 #include "model.h"
 
@@ -17,60 +21,60 @@
 #include "dynamics.h"
 
 typedef struct {
-    double R[9];      /* the link's axes in inertial components (columns), row-major */
-    double E[6];      /* the joint's angular velocity per angle rate, inertial (3x2) */
-    double w[3];      /* angular velocity */
-    double pos[3];    /* joint position, relative to the pivot */
-    double vel[3];    /* joint velocity, relative to the pivot */
-    double d[3];      /* from the parent's joint to this one */
-    double r[3];      /* from this joint to the next (along the link) */
-    double zeta[6];   /* acceleration at zero rates' rates, less the parent's carried over */
-    double I[36];     /* spatial inertia of link and bob about the joint */
-    double b[6];      /* velocity-dependent force of link and bob about the joint */
-    double IA[36], pA[6], U[12], Dinv[4], uu[2];
+    cp_real R[9];      /* the link's axes in inertial components (columns), row-major */
+    cp_real E[6];      /* the joint's angular velocity per angle rate, inertial (3x2) */
+    cp_real w[3];      /* angular velocity */
+    cp_real pos[3];    /* joint position, relative to the pivot */
+    cp_real vel[3];    /* joint velocity, relative to the pivot */
+    cp_real d[3];      /* from the parent's joint to this one */
+    cp_real r[3];      /* from this joint to the next (along the link) */
+    cp_real zeta[6];   /* acceleration at zero rates' rates, less the parent's carried over */
+    cp_real I[36];     /* spatial inertia of link and bob about the joint */
+    cp_real b[6];      /* velocity-dependent force of link and bob about the joint */
+    cp_real IA[36], pA[6], U[12], Dinv[4], uu[2];
 } Link;
 
-static void cross(const double *a, const double *b, double *out)
+static void cross(const cp_real *a, const cp_real *b, cp_real *out)
 {
-    double c0 = a[1] * b[2] - a[2] * b[1], c1 = a[2] * b[0] - a[0] * b[2];
-    double c2 = a[0] * b[1] - a[1] * b[0];
+    cp_real c0 = a[1] * b[2] - a[2] * b[1], c1 = a[2] * b[0] - a[0] * b[2];
+    cp_real c2 = a[0] * b[1] - a[1] * b[0];
     out[0] = c0, out[1] = c1, out[2] = c2;
 }
 
 /* out = A (3x3) B (3xk), row-major. */
-static void mul3(const double *A, const double *B, int k, double *out)
+static void mul3(const cp_real *A, const cp_real *B, int k, cp_real *out)
 {
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < k; j++)
             out[i * k + j] = A[i * 3] * B[j] + A[i * 3 + 1] * B[k + j] + A[i * 3 + 2] * B[2 * k + j];
 }
 
-static void mul32(const double E[6], const double u[2], double out[3])
+static void mul32(const cp_real E[6], const cp_real u[2], cp_real out[3])
 {
     for (int i = 0; i < 3; i++) out[i] = E[2 * i] * u[0] + E[2 * i + 1] * u[1];
 }
 
 /* Adds a body (mass, centre c relative to the joint, central inertia Ic in inertial
  * components) moving with angular velocity w to the link's spatial inertia and bias. */
-static void add_body(Link *k, double mass, const double c[3], const double Ic[9])
+static void add_body(Link *k, cp_real mass, const cp_real c[3], const cp_real Ic[9])
 {
-    const double cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
-    const double cx[9] = {0, -c[2], c[1], c[2], 0, -c[0], -c[1], c[0], 0};
+    const cp_real cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    const cp_real cx[9] = {0, -c[2], c[1], c[2], 0, -c[0], -c[1], c[0], 0};
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) {
-            double rot = (Ic ? Ic[i * 3 + j] : 0.0) + mass * ((i == j) * cc - c[i] * c[j]);
+            cp_real rot = (Ic ? Ic[i * 3 + j] : 0.0) + mass * ((i == j) * cc - c[i] * c[j]);
             k->I[i * 6 + j] += rot;
             k->I[i * 6 + 3 + j] += mass * cx[i * 3 + j];
             k->I[(3 + i) * 6 + j] -= mass * cx[i * 3 + j];
             k->I[(3 + i) * 6 + 3 + j] += mass * (i == j);
         }
-    double wc[3], wwc[3], force[3], moment[3];
+    cp_real wc[3], wwc[3], force[3], moment[3];
     cross(k->w, c, wc);
     cross(k->w, wc, wwc);
     for (int i = 0; i < 3; i++) force[i] = mass * wwc[i];
     cross(c, force, moment);
     if (Ic) {
-        double Iw[3], wIw[3];
+        cp_real Iw[3], wIw[3];
         for (int i = 0; i < 3; i++) Iw[i] = Ic[i * 3] * k->w[0] + Ic[i * 3 + 1] * k->w[1] + Ic[i * 3 + 2] * k->w[2];
         cross(k->w, Iw, wIw);
         for (int i = 0; i < 3; i++) moment[i] += wIw[i];
@@ -79,9 +83,9 @@ static void add_body(Link *k, double mass, const double c[3], const double Ic[9]
 }
 
 /* The link's central inertia in inertial components: R diag(Ixx, Iyy, Izz) R^T. */
-static void central_inertia(const Link *k, const double *p, const cp_link_params *lp, double Ic[9])
+static void central_inertia(const Link *k, const cp_real *p, const cp_link_params *lp, cp_real Ic[9])
 {
-    const double diag[3] = {p[lp->Ixx], p[lp->Iyy], p[lp->Izz]};
+    const cp_real diag[3] = {p[lp->Ixx], p[lp->Iyy], p[lp->Izz]};
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
             Ic[i * 3 + j] = k->R[i * 3] * diag[0] * k->R[j * 3] + k->R[i * 3 + 1] * diag[1] * k->R[j * 3 + 1]
@@ -89,18 +93,18 @@ static void central_inertia(const Link *k, const double *p, const cp_link_params
 }
 
 /* Positions, velocities, joint axes, bias accelerations, and each link's inertia. */
-static void kinematics(const double *x, const double *p, Link *links)
+static void kinematics(const cp_real *x, const cp_real *p, Link *links)
 {
     const int n = CP_NLINK;
-    static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    static const cp_real identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
     for (int i = 0; i < n; i++) {
         Link *k = &links[i];
         const Link *parent = i ? &links[i - 1] : NULL;
-        const double *Rp = parent ? parent->R : identity;
-        const double zero[3] = {0, 0, 0};
-        const double *wp = parent ? parent->w : zero;
-        const double u[2] = {x[2 * n + i], x[3 * n + i]};
-        double C[9], J[6], Ja[6], Jb[6], rate[6], wrel[3], dE[3], t[3];
+        const cp_real *Rp = parent ? parent->R : identity;
+        const cp_real zero[3] = {0, 0, 0};
+        const cp_real *wp = parent ? parent->w : zero;
+        const cp_real u[2] = {x[2 * n + i], x[3 * n + i]};
+        cp_real C[9], J[6], Ja[6], Jb[6], rate[6], wrel[3], dE[3], t[3];
         cp_joint(x[i], x[n + i], C, J, Ja, Jb);
         mul3(Rp, C, 3, k->R);
         mul3(Rp, J, 2, k->E);
@@ -113,7 +117,7 @@ static void kinematics(const double *x, const double *p, Link *links)
         for (int j = 0; j < 3; j++) k->zeta[j] = t[j] + dE[j];
         if (parent) {
             memcpy(k->d, parent->r, sizeof k->d);
-            double wd[3];
+            cp_real wd[3];
             cross(wp, k->d, wd);
             cross(wp, wd, t);
             for (int j = 0; j < 3; j++) {
@@ -125,15 +129,15 @@ static void kinematics(const double *x, const double *p, Link *links)
             memset(k->d, 0, sizeof k->d);
             memset(k->pos, 0, sizeof k->pos);
             memset(k->vel, 0, sizeof k->vel);
-            memset(k->zeta + 3, 0, 3 * sizeof(double));
+            memset(k->zeta + 3, 0, 3 * sizeof(cp_real));
         }
         const cp_link_params *lp = &cp_links[i];
-        const double l = p[lp->l];
+        const cp_real l = p[lp->l];
         for (int j = 0; j < 3; j++) k->r[j] = -l * k->R[j * 3 + 1];
         memset(k->I, 0, sizeof k->I);
         memset(k->b, 0, sizeof k->b);
         if (lp->M >= 0) {
-            double Ic[9], half[3] = {k->r[0] / 2, k->r[1] / 2, k->r[2] / 2};
+            cp_real Ic[9], half[3] = {k->r[0] / 2, k->r[1] / 2, k->r[2] / 2};
             central_inertia(k, p, lp, Ic);
             add_body(k, p[lp->M], half, Ic);
         }
@@ -142,9 +146,9 @@ static void kinematics(const double *x, const double *p, Link *links)
 }
 
 /* The pivot's acceleration seen by the chain: its input (if any) plus g upwards. */
-static void base_acceleration(const double *p, int with_gravity, double a[6])
+static void base_acceleration(const cp_real *p, int with_gravity, cp_real a[6])
 {
-    memset(a, 0, 6 * sizeof(double));
+    memset(a, 0, 6 * sizeof(cp_real));
 #if CP_PIVOT_INDEX >= 0
     for (int j = 0; j < 3; j++) a[3 + j] = p[CP_PIVOT_INDEX + j];
 #endif
@@ -152,9 +156,9 @@ static void base_acceleration(const double *p, int with_gravity, double a[6])
 }
 
 /* The child's acceleration carried to its joint: [a_ang; a_lin - d x a_ang] + zeta. */
-static void carry(const Link *k, const double parent[6], double out[6])
+static void carry(const Link *k, const cp_real parent[6], cp_real out[6])
 {
-    double t[3];
+    cp_real t[3];
     cross(k->d, parent, t);
     for (int j = 0; j < 3; j++) {
         out[j] = parent[j] + k->zeta[j];
@@ -162,10 +166,10 @@ static void carry(const Link *k, const double parent[6], double out[6])
     }
 }
 
-int cp_chain_rhs(cp_model *model, const double *x, double *dx)
+int cp_chain_rhs(cp_model *model, const cp_real *x, cp_real *dx)
 {
     const int n = CP_NLINK;
-    const double *p = model->p;
+    const cp_real *p = model->p;
     Link links[CP_NLINK];
     kinematics(x, p, links);
     for (int i = 0; i < n; i++) {
@@ -174,7 +178,7 @@ int cp_chain_rhs(cp_model *model, const double *x, double *dx)
     }
     for (int i = n - 1; i >= 0; i--) {
         Link *k = &links[i];
-        double D[4] = {0, 0, 0, 0};
+        cp_real D[4] = {0, 0, 0, 0};
         for (int r = 0; r < 6; r++)
             for (int c = 0; c < 2; c++)
                 k->U[r * 2 + c] = k->IA[r * 6] * k->E[c] + k->IA[r * 6 + 1] * k->E[2 + c]
@@ -187,20 +191,22 @@ int cp_chain_rhs(cp_model *model, const double *x, double *dx)
                 k->uu[r] -= k->E[j * 2 + r] * k->pA[j];
             }
         }
-        /* LDL^T pivots of this joint's 2x2 articulated inertia: a cheap condition estimate */
-        const double d1 = D[0], d2 = d1 > 0 ? D[3] - D[1] * D[2] / d1 : 0.0;
+        /* LDL^T pivots of this joint's 2x2 articulated inertia: a cheap condition estimate,
+           of the real parts (real.h) */
+        const double d1 = CP_RE(D[0]),
+                     d2 = d1 > 0 ? CP_RE(D[3]) - CP_RE(D[1]) * CP_RE(D[2]) / d1 : 0.0;
         const double ratio = d1 > 0 && d2 > 0 ? fmin(d1, d2) / fmax(d1, d2) : 0.0;
         if (!(ratio >= model->pivot_ratio)) {
             model->pivot_ratio = ratio;
             model->bad_dof = d2 < d1 ? n + i : i;
         }
         if (!(ratio >= CP_SINGULAR_RATIO)) return CP_SINGULAR;
-        const double det = D[0] * D[3] - D[1] * D[2];
+        const cp_real det = D[0] * D[3] - D[1] * D[2];
         k->Dinv[0] = D[3] / det, k->Dinv[1] = -D[1] / det;
         k->Dinv[2] = -D[2] / det, k->Dinv[3] = D[0] / det;
         if (!i) break;
         /* Ia = IA - U Dinv U^T, pa = pA + Ia zeta + U Dinv uu, then carried to the parent */
-        double UD[12], Ia[36], pa[6], T[36];
+        cp_real UD[12], Ia[36], pa[6], T[36];
         for (int r = 0; r < 6; r++)
             for (int c = 0; c < 2; c++)
                 UD[r * 2 + c] = k->U[r * 2] * k->Dinv[c] + k->U[r * 2 + 1] * k->Dinv[2 + c];
@@ -217,46 +223,46 @@ int cp_chain_rhs(cp_model *model, const double *x, double *dx)
         }
         /* X^T Ia X with X = [[1, 0], [-d^, 1]], X^T = [[1, d^], [0, 1]]: first T = Ia X,
            whose angular columns are Ia's plus d x (its linear columns), row by row */
-        const double *d = k->d;
+        const cp_real *d = k->d;
         for (int r = 0; r < 6; r++) {
-            const double *row = Ia + r * 6;
-            double t[3];
+            const cp_real *row = Ia + r * 6;
+            cp_real t[3];
             cross(d, row + 3, t);
             for (int j = 0; j < 3; j++) T[r * 6 + j] = row[j] + t[j], T[r * 6 + 3 + j] = row[3 + j];
         }
         Link *up = &links[i - 1];
         for (int c = 0; c < 6; c++) {
-            double lin[3] = {T[18 + c], T[24 + c], T[30 + c]}, t[3];
+            cp_real lin[3] = {T[18 + c], T[24 + c], T[30 + c]}, t[3];
             cross(d, lin, t);
             for (int j = 0; j < 3; j++) {
                 up->IA[j * 6 + c] += T[j * 6 + c] + t[j];
                 up->IA[(3 + j) * 6 + c] += lin[j];
             }
         }
-        double t[3];
+        cp_real t[3];
         cross(d, pa + 3, t);
         for (int j = 0; j < 3; j++) up->pA[j] += pa[j] + t[j], up->pA[3 + j] += pa[3 + j];
     }
-    double a[6];
+    cp_real a[6];
     base_acceleration(p, 1, a);
-    memcpy(dx, x + 2 * n, 2 * n * sizeof(double));
+    memcpy(dx, x + 2 * n, 2 * n * sizeof(cp_real));
     for (int i = 0; i < n; i++) {
         const Link *k = &links[i];
-        double ai[6], rhs[2];
+        cp_real ai[6], rhs[2];
         carry(k, a, ai);
         for (int r = 0; r < 2; r++) {
             rhs[r] = k->uu[r];
             for (int j = 0; j < 6; j++) rhs[r] -= k->U[j * 2 + r] * ai[j];
         }
-        const double ud[2] = {k->Dinv[0] * rhs[0] + k->Dinv[1] * rhs[1],
+        const cp_real ud[2] = {k->Dinv[0] * rhs[0] + k->Dinv[1] * rhs[1],
                               k->Dinv[2] * rhs[0] + k->Dinv[3] * rhs[1]};
-        double Eu[3];
+        cp_real Eu[3];
         mul32(k->E, ud, Eu);
         for (int j = 0; j < 3; j++) ai[j] += Eu[j];
         memcpy(a, ai, sizeof a);
         dx[2 * n + i] = ud[0], dx[3 * n + i] = ud[1];
-        if (!isfinite(ud[0]) || !isfinite(ud[1])) {
-            model->bad_dof = isfinite(ud[0]) ? n + i : i;
+        if (!CP_FINITE(ud[0]) || !CP_FINITE(ud[1])) {
+            model->bad_dof = CP_FINITE(ud[0]) ? n + i : i;
             return CP_NONFINITE;
         }
     }
@@ -264,15 +270,15 @@ int cp_chain_rhs(cp_model *model, const double *x, double *dx)
 }
 
 /* Generalized forces that give the rates' rates ud (recursive Newton-Euler). */
-static void inverse_dynamics(const Link *links, const double *p, const double *ud, double *tau)
+static void inverse_dynamics(const Link *links, const cp_real *p, const cp_real *ud, cp_real *tau)
 {
     const int n = CP_NLINK;
-    double a[6], f[CP_NLINK][6];
+    cp_real a[6], f[CP_NLINK][6];
     base_acceleration(p, 1, a);
     for (int i = 0; i < n; i++) {
         const Link *k = &links[i];
-        double ai[6], Eu[3];
-        const double u2[2] = {ud[i], ud[n + i]};
+        cp_real ai[6], Eu[3];
+        const cp_real u2[2] = {ud[i], ud[n + i]};
         carry(k, a, ai);
         mul32(k->E, u2, Eu);
         for (int j = 0; j < 3; j++) ai[j] += Eu[j];
@@ -287,17 +293,17 @@ static void inverse_dynamics(const Link *links, const double *p, const double *u
         tau[i] = tau[n + i] = 0;
         for (int j = 0; j < 3; j++) tau[i] += k->E[j * 2] * f[i][j], tau[n + i] += k->E[j * 2 + 1] * f[i][j];
         if (i) {
-            double t[3];
+            cp_real t[3];
             cross(k->d, f[i] + 3, t);
             for (int j = 0; j < 3; j++) f[i - 1][j] += f[i][j] + t[j], f[i - 1][3 + j] += f[i][3 + j];
         }
     }
 }
 
-void cp_mass_forcing(const double *x, const double *p, double *M, double *F)
+void cp_mass_forcing(const cp_real *x, const cp_real *p, cp_real *M, cp_real *F)
 {
     Link links[CP_NLINK];
-    double ud[CP_NDOF] = {0}, tau[CP_NDOF];
+    cp_real ud[CP_NDOF] = {0}, tau[CP_NDOF];
     kinematics(x, p, links);
     inverse_dynamics(links, p, ud, F);
     for (int k = 0; k < CP_NDOF; k++) F[k] = -F[k];
@@ -311,12 +317,12 @@ void cp_mass_forcing(const double *x, const double *p, double *M, double *F)
 
 #if CP_OUTPUT_POSES
 /* Orientation quaternion (w, x, y, z) of a link: its parent's times qx(beta) qz(alpha). */
-static void quaternion(const double parent[4], double a, double b, double q[4])
+static void quaternion(const cp_real parent[4], cp_real a, cp_real b, cp_real q[4])
 {
-    const double ca = cos(a / 2), sa = sin(a / 2), cb = cos(b / 2), sb = sin(b / 2);
-    const double rel[4] = {cb * ca, sb * ca, -sb * sa, cb * sa};
-    const double w1 = parent[0], x1 = parent[1], y1 = parent[2], z1 = parent[3];
-    const double w2 = rel[0], x2 = rel[1], y2 = rel[2], z2 = rel[3];
+    const cp_real ca = cos(a / 2), sa = sin(a / 2), cb = cos(b / 2), sb = sin(b / 2);
+    const cp_real rel[4] = {cb * ca, sb * ca, -sb * sa, cb * sa};
+    const cp_real w1 = parent[0], x1 = parent[1], y1 = parent[2], z1 = parent[3];
+    const cp_real w2 = rel[0], x2 = rel[1], y2 = rel[2], z2 = rel[3];
     q[0] = w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2;
     q[1] = w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2;
     q[2] = w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2;
@@ -324,12 +330,12 @@ static void quaternion(const double parent[4], double a, double b, double q[4])
 }
 #endif
 
-void cp_outputs(const double *x, const double *p, const double *dx, double *y)
+void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *y)
 {
     const int n = CP_NLINK;
     Link links[CP_NLINK];
     kinematics(x, p, links);
-    double *out = y;
+    cp_real *out = y;
     (void)n, (void)out, (void)dx;
 #if CP_OUTPUT_BOBS
     for (int i = 0; i < n; i++)
@@ -337,7 +343,7 @@ void cp_outputs(const double *x, const double *p, const double *dx, double *y)
             for (int j = 0; j < 3; j++) *out++ = links[i].pos[j] + links[i].r[j];
 #endif
 #if CP_OUTPUT_POSES
-    double q[4] = {1, 0, 0, 0};
+    cp_real q[4] = {1, 0, 0, 0};
     for (int i = 0; i < n; i++) {
         for (int j = 0; j < 3; j++) *out++ = links[i].pos[j] + links[i].r[j] / 2;
         quaternion(q, x[i], x[n + i], q);
@@ -345,15 +351,15 @@ void cp_outputs(const double *x, const double *p, const double *dx, double *y)
     }
 #endif
 #if CP_OUTPUT_ENERGY
-    const double g = p[CP_G_INDEX];
-    double energy = 0;
+    const cp_real g = p[CP_G_INDEX];
+    cp_real energy = 0;
     for (int i = 0; i < n; i++) {
         const Link *k = &links[i];
         const cp_link_params *lp = &cp_links[i];
-        double wr[3];
+        cp_real wr[3];
         cross(k->w, k->r, wr);
         if (lp->M >= 0) {
-            double Ic[9], v[3], Iw[3], mass = p[lp->M];
+            cp_real Ic[9], v[3], Iw[3], mass = p[lp->M];
             central_inertia(k, p, lp, Ic);
             for (int j = 0; j < 3; j++) v[j] = k->vel[j] + wr[j] / 2;
             mul3(Ic, k->w, 1, Iw);
@@ -362,7 +368,7 @@ void cp_outputs(const double *x, const double *p, const double *dx, double *y)
                       + mass * g * (k->pos[1] + k->r[1] / 2);
         }
         if (lp->m >= 0) {
-            double v[3], mass = p[lp->m];
+            cp_real v[3], mass = p[lp->m];
             for (int j = 0; j < 3; j++) v[j] = k->vel[j] + wr[j];
             energy += 0.5 * mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
                       + mass * g * (k->pos[1] + k->r[1]);
@@ -372,13 +378,13 @@ void cp_outputs(const double *x, const double *p, const double *dx, double *y)
 #endif
 #if CP_PIVOT_INDEX >= 0
     /* Newton's law for the whole chain: sum m (g - a), with the rates' rates from dx. */
-    double a[6], force[3] = {0, 0, 0};
+    cp_real a[6], force[3] = {0, 0, 0};
     base_acceleration(p, 0, a);
     for (int i = 0; i < n; i++) {
         const Link *k = &links[i];
         const cp_link_params *lp = &cp_links[i];
-        double ai[6], Eu[3];
-        const double u2[2] = {dx[2 * n + i], dx[3 * n + i]};
+        cp_real ai[6], Eu[3];
+        const cp_real u2[2] = {dx[2 * n + i], dx[3 * n + i]};
         carry(k, a, ai);
         mul32(k->E, u2, Eu);
         for (int j = 0; j < 3; j++) ai[j] += Eu[j];
@@ -386,8 +392,8 @@ void cp_outputs(const double *x, const double *p, const double *dx, double *y)
         for (int body = 0; body < 2; body++) {
             const int index = body ? lp->m : lp->M;
             if (index < 0) continue;
-            const double share = body ? 1.0 : 0.5;  /* bob at the end, link's centre halfway */
-            double c[3] = {k->r[0] * share, k->r[1] * share, k->r[2] * share}, t[3], wc[3], wwc[3];
+            const cp_real share = body ? 1.0 : 0.5;  /* bob at the end, link's centre halfway */
+            cp_real c[3] = {k->r[0] * share, k->r[1] * share, k->r[2] * share}, t[3], wc[3], wwc[3];
             cross(ai, c, t);
             cross(k->w, c, wc);
             cross(k->w, wc, wwc);

@@ -10,6 +10,8 @@
 #ifndef CP_CHAIN_H
 #define CP_CHAIN_H
 
+#include "real.h"
+
 typedef struct {
     int l, m, M, Ixx, Iyy, Izz;  /* indices into p; m: -1 without a bob, M..Izz: -1 massless */
 } cp_link_params;
@@ -17,6 +19,6 @@ typedef struct {
 /* One 'Space' 'ZXY' joint at angles (a, b): C, the child's axes in parent components
  * (3x3, row-major), and J, the relative angular velocity per angle rate in parent
  * components (3x2, row-major), with its derivatives dJ/da and dJ/db. */
-void cp_joint(double a, double b, double C[9], double J[6], double Ja[6], double Jb[6]);
+void cp_joint(cp_real a, cp_real b, cp_real C[9], cp_real J[6], cp_real Ja[6], cp_real Jb[6]);
 
 #endif

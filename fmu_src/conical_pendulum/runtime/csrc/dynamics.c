@@ -5,26 +5,26 @@
 
 #if !CP_RECURSIVE
 /* Solve M u = F in place (F becomes u) by LU with partial pivoting. */
-static int lu_solve(double *M, double *F, cp_model *model)
+static int lu_solve(cp_real *M, cp_real *F, cp_model *model)
 {
     const int n = CP_NDOF;
     double largest = 0.0, smallest = INFINITY;
     int weakest = 0;
-    for (int k = 0; k < n; k++) {
+    for (int k = 0; k < n; k++) {  /* pivots chosen and judged by their real parts */
         int pivot = k;
         for (int i = k + 1; i < n; i++)
-            if (fabs(M[i * n + k]) > fabs(M[pivot * n + k])) pivot = i;
+            if (fabs(CP_RE(M[i * n + k])) > fabs(CP_RE(M[pivot * n + k]))) pivot = i;
         if (pivot != k) {
             for (int j = 0; j < n; j++) {
-                double tmp = M[k * n + j];
+                cp_real tmp = M[k * n + j];
                 M[k * n + j] = M[pivot * n + j];
                 M[pivot * n + j] = tmp;
             }
-            double tmp = F[k];
+            cp_real tmp = F[k];
             F[k] = F[pivot];
             F[pivot] = tmp;
         }
-        double d = fabs(M[k * n + k]);
+        double d = fabs(CP_RE(M[k * n + k]));
         if (d > largest) largest = d;
         if (d < smallest) {
             smallest = d;
@@ -32,8 +32,8 @@ static int lu_solve(double *M, double *F, cp_model *model)
         }
         if (d == 0.0) break;
         for (int i = k + 1; i < n; i++) {
-            double factor = M[i * n + k] / M[k * n + k];
-            if (factor == 0.0) continue;
+            cp_real factor = M[i * n + k] / M[k * n + k];
+            if (factor == 0.0) continue;  /* both parts zero: nothing to eliminate */
             for (int j = k + 1; j < n; j++) M[i * n + j] -= factor * M[k * n + j];
             F[i] -= factor * F[k];
         }
@@ -45,7 +45,7 @@ static int lu_solve(double *M, double *F, cp_model *model)
     }
     if (!(ratio >= CP_SINGULAR_RATIO)) return CP_SINGULAR;
     for (int k = n - 1; k >= 0; k--) {
-        double s = F[k];
+        cp_real s = F[k];
         for (int j = k + 1; j < n; j++) s -= M[k * n + j] * F[j];
         F[k] = s / M[k * n + k];
     }
@@ -53,20 +53,20 @@ static int lu_solve(double *M, double *F, cp_model *model)
 }
 #endif
 
-int cp_rhs(void *ctx, const double *x, double *dx)
+int cp_rhs(void *ctx, const cp_real *x, cp_real *dx)
 {
     cp_model *model = (cp_model *)ctx;
 #if CP_RECURSIVE
     return cp_chain_rhs(model, x, dx);
 #else
-    double M[CP_NDOF * CP_NDOF];
-    double *F = dx + CP_NDOF;
+    cp_real M[CP_NDOF * CP_NDOF];
+    cp_real *F = dx + CP_NDOF;
     cp_mass_forcing(x, model->p, M, F);
-    memcpy(dx, x + CP_NDOF, CP_NDOF * sizeof(double));
+    memcpy(dx, x + CP_NDOF, CP_NDOF * sizeof(cp_real));
     int status = lu_solve(M, F, model);
     if (status) return status;
     for (int i = 0; i < CP_NDOF; i++) {
-        if (!isfinite(F[i])) {
+        if (!CP_FINITE(F[i])) {
             model->bad_dof = i;
             return CP_NONFINITE;
         }
@@ -78,25 +78,25 @@ int cp_rhs(void *ctx, const double *x, double *dx)
 #if CP_NINPUT
 /* The pivot force of the state x with the parameters and inputs q (model.h: where it is
  * in the outputs). */
-static void pivot_force(const double *x, const double *q, double force[3])
+static void pivot_force(const cp_real *x, const cp_real *q, cp_real force[3])
 {
-    double dx[CP_NSTATE], y[CP_NOUTPUT];
+    cp_real dx[CP_NSTATE], y[CP_NOUTPUT];
     cp_model model = {q, 1.0, -1};
     if (cp_rhs(&model, x, dx))
         for (int i = 0; i < CP_NSTATE; i++) dx[i] = NAN;
     cp_outputs(x, q, dx, y);
-    memcpy(force, y + CP_FORCE_OUTPUT, 3 * sizeof(double));
+    memcpy(force, y + CP_FORCE_OUTPUT, 3 * sizeof(cp_real));
 }
 
 /* F_pivot = F_free - M_app a_pivot: F_pivot is affine in the pivot's acceleration (the
  * inputs, last in p), so F_free is the force at a = 0 and M_app's columns are exactly the
  * force's changes from a = 0 to each unit acceleration. out: F_free, then the upper
  * triangle of M_app. */
-static void free_force_and_apparent_mass(const double *x, const double *p, double *out)
+static void free_force_and_apparent_mass(const cp_real *x, const cp_real *p, cp_real *out)
 {
-    double q[CP_NPARAM], force[3][3];
+    cp_real q[CP_NPARAM], force[3][3];
     memcpy(q, p, sizeof q);
-    double *a = q + CP_NPARAM - CP_NINPUT, *free_force = out;
+    cp_real *a = q + CP_NPARAM - CP_NINPUT, *free_force = out;
     a[0] = a[1] = a[2] = 0.0;
     pivot_force(x, q, free_force);
     for (int j = 0; j < 3; j++) {
@@ -111,10 +111,10 @@ static void free_force_and_apparent_mass(const double *x, const double *p, doubl
 }
 #endif
 
-void cp_eval_outputs(const double *x, const double *p, double *y)
+void cp_eval_outputs(const cp_real *x, const cp_real *p, cp_real *y)
 {
 #if CP_OUTPUTS_NEED_RATES
-    double dx[CP_NSTATE];
+    cp_real dx[CP_NSTATE];
     cp_model model = {p, 1.0, -1};
     if (cp_rhs(&model, x, dx))
         for (int i = 0; i < CP_NSTATE; i++) dx[i] = NAN;

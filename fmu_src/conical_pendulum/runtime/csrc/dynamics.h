@@ -11,8 +11,10 @@
  * (expanded), or of a joint's 2x2 articulated inertia (recursive). */
 #define CP_SINGULAR_RATIO 1e-13
 
+/* Every value computed from x and p is a cp_real (real.h, included by model.h): double
+ * here, double complex in directional.c's complex-step copy of this code. */
 typedef struct {
-    const double *p;       /* parameters, in the order of the scene's parameter names */
+    const cp_real *p;      /* parameters, in the order of the scene's parameter names */
     double pivot_ratio;    /* smallest over largest |pivot| of the LUs since the caller set it
                               to 1: a cheap inverse condition estimate */
     int bad_dof;           /* generalized speed (column of M) of that smallest pivot, or of a
@@ -20,15 +22,15 @@ typedef struct {
 } cp_model;
 
 /* x = (alpha, beta, omega, delta); dx = (omega, delta, M^-1 F). ctx is a cp_model. */
-int cp_rhs(void *ctx, const double *x, double *dx);
+int cp_rhs(void *ctx, const cp_real *x, cp_real *dx);
 
 #if CP_RECURSIVE
 /* cp_rhs of the recursive formulation (chain.c). */
-int cp_chain_rhs(cp_model *model, const double *x, double *dx);
+int cp_chain_rhs(cp_model *model, const cp_real *x, cp_real *dx);
 #endif
 
 /* The scene's outputs at x. Those needing accelerations (the pivot force) get them from
    cp_rhs, and are NaN where the mass matrix is singular. */
-void cp_eval_outputs(const double *x, const double *p, double *y);
+void cp_eval_outputs(const cp_real *x, const cp_real *p, cp_real *y);
 
 #endif

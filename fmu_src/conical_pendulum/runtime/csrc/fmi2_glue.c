@@ -7,6 +7,7 @@
  * message naming it and is not taken; a step that cannot complete is fmi2Discard with the
  * diagnosis every FMU of this package gives; messages go through the host's logger.
  * Nothing is allocated after instantiation but what a host asks for (FMU states).
+ * Directional derivatives come from directional.c: the model's C again, complex-step.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -17,6 +18,7 @@
 #include "fmi2Functions.h"
 
 #include "diagnosis.h"
+#include "directional.h"
 #include "dynamics.h"
 #include "fmu_config.h"
 #include "solvers.h"
@@ -259,17 +261,22 @@ static int is_derivative(fmi2ValueReference vr)
     return vr >= CP_VR_DERIVATIVE && vr < CP_VR_DERIVATIVE + CP_NSTATE;
 }
 
+/* fmi2Discard, logged: x' cannot be had at the instance's state (status from cp_rhs or from
+ * its complex-step copy, with the weakest generalized speed and pivot ratio it found). */
+static fmi2Status no_derivatives(Instance *inst, int status, int bad_dof, double pivot_ratio)
+{
+    log_message(inst, fmi2Discard, "logStatusDiscard", "derivatives at t = %.9g s: %s at "
+                "generalized speed %d (pivot ratio %.2g); check parameters and state",
+                inst->v.time, cp_status_message(status), bad_dof, pivot_ratio);
+    return fmi2Discard;
+}
+
 static fmi2Status derivatives(Instance *inst)
 {
     if (inst->v.dx_valid) return fmi2OK;
     cp_model model = {inst->v.r, 1.0, -1};
     int status = cp_rhs(&model, X(inst), inst->v.dx);
-    if (status != CP_OK) {
-        log_message(inst, fmi2Discard, "logStatusDiscard", "derivatives at t = %.9g s: %s at "
-                    "generalized speed %d (pivot ratio %.2g); check parameters and state",
-                    inst->v.time, cp_status_message(status), model.bad_dof, model.pivot_ratio);
-        return fmi2Discard;
-    }
+    if (status != CP_OK) return no_derivatives(inst, status, model.bad_dof, model.pivot_ratio);
     inst->v.dx_valid = 1;
     return fmi2OK;
 }
@@ -484,15 +491,67 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     return fmi2OK;
 }
 
+/* ---- directional derivatives -------------------------------------------------------------- */
+
+/* dvUnknown = J dvKnown (FMI 2.0, section 2.1.9), J the Jacobian of the unknowns (state
+ * derivatives and outputs) with respect to the knowns (states and inputs) at the current
+ * values, from directional.c: the model's own C evaluated in complex arithmetic, exact to
+ * rounding. A state as unknown is an output of its own value; the statistics depend on
+ * nothing (ModelStructure). Nothing of the instance changes. */
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
                                         size_t nUnknown, const fmi2ValueReference vKnown_ref[],
                                         size_t nKnown, const fmi2Real dvKnown[], fmi2Real dvUnknown[])
 {
-    (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown, (void)dvUnknown;
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetDirectionalDerivative");
+    static const char *const function = "fmi2GetDirectionalDerivative";
+    Instance *inst = checked(c, INITIALIZATION | RUNNING | STEP_FAILED | TERMINATED, function);
     if (!inst) return fmi2Error;
-    return REFUSE(inst, "fmi2GetDirectionalDerivative: not provided by this FMU "
-                  "(providesDirectionalDerivative is false)");
+    if ((nUnknown && (!vUnknown_ref || !dvUnknown)) || (nKnown && (!vKnown_ref || !dvKnown)))
+        return REFUSE(inst, "%s: a pointer is NULL", function);
+    double dx_seed[CP_NSTATE] = {0}, dp_seed[CP_NPARAM] = {0};
+    for (size_t k = 0; k < nKnown; k++) {
+        const fmi2ValueReference vr = vKnown_ref[k];
+        if (vr < CP_VR_INPUT || vr >= CP_VR_STATE + CP_NSTATE)
+            return REFUSE(inst, "%s: value reference %u (%s) as a known: only states and "
+                          "inputs are", function, vr, cp_variable_name(vr));
+        if (!isfinite(dvKnown[k]))
+            return REFUSE(inst, "%s: dvKnown of %s = %g: must be finite", function,
+                          cp_variable_name(vr), dvKnown[k]);
+        if (vr < CP_VR_STATE) dp_seed[vr] += dvKnown[k];  /* the inputs end p (fmu_config.h) */
+        else dx_seed[vr - CP_VR_STATE] += dvKnown[k];
+    }
+    int want_derivatives = 0, want_outputs = 0;
+    for (size_t k = 0; k < nUnknown; k++) {
+        const fmi2ValueReference vr = vUnknown_ref[k];
+        if (is_derivative(vr)) want_derivatives = 1;
+        else if (vr >= CP_VR_OUTPUT && vr < CP_VR_STATISTICS) want_outputs = 1;
+        else if (vr < CP_VR_STATE || vr >= CP_VR_SETTINGS)
+            return REFUSE(inst, "%s: value reference %u (%s) as an unknown: only outputs and "
+                          "state derivatives are", function, vr, cp_variable_name(vr));
+    }
+    double d_derivatives[CP_NSTATE], d_outputs[CP_NOUTPUT + 1];
+    if (want_derivatives || want_outputs) {
+        double pivot_ratio;
+        int bad_dof;
+        int status = cp_directional(X(inst), inst->v.r, dx_seed, dp_seed,
+                                    want_derivatives ? d_derivatives : NULL,
+                                    want_outputs ? d_outputs : NULL, &pivot_ratio, &bad_dof);
+        if (status != CP_OK) return no_derivatives(inst, status, bad_dof, pivot_ratio);
+    }
+    for (size_t k = 0; k < nUnknown; k++) {
+        const fmi2ValueReference vr = vUnknown_ref[k];
+        double value = 0.0;  /* a statistic */
+        if (is_derivative(vr)) value = d_derivatives[vr - CP_VR_DERIVATIVE];
+        else if (vr >= CP_VR_OUTPUT && vr < CP_VR_STATISTICS) value = d_outputs[vr - CP_VR_OUTPUT];
+        else if (vr < CP_VR_OUTPUT) value = dx_seed[vr - CP_VR_STATE];
+        if (!isfinite(value)) {
+            log_message(inst, fmi2Discard, "logStatusDiscard", "%s: the derivative of %s is "
+                        "not finite at t = %.9g s; check parameters and state", function,
+                        cp_variable_name(vr), inst->v.time);
+            return fmi2Discard;
+        }
+        dvUnknown[k] = value;
+    }
+    return fmi2OK;
 }
 
 /* ---- Model Exchange ----------------------------------------------------------------------- */
