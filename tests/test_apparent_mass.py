@@ -49,7 +49,9 @@ def test_one_rigid_link_by_hand(formulation):
 @pytest.mark.parametrize("backend", ["pythonfmu", "native"])
 def test_it_is_the_pivot_forces_answer_to_the_inputs_through_fmpy(backend, fmu_dir):
     """Finite differences of F_pivot over the inputs, through fmpy: exact, F_pivot being
-    affine; F_free is the force at a_pivot = 0, the same whatever the inputs."""
+    affine; F_free is the force at a_pivot = 0, the same whatever the inputs. M_app is
+    computed without differences (m I - P M^-1 P^T, or the articulated inertia at the
+    pivot), so this checks it independently."""
     path = build_fmu(Scene.uniform(3, coupling=True), fmu_dir / f"Apparent_{backend}.fmu",
                      backend=backend).path
     fmu = Instance(path, start_values={"alpha1": 0.7, "delta2": 1.5, "omega0": -0.4})

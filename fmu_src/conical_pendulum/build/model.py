@@ -46,6 +46,10 @@ class Equations:
     mass_matrix: sm.Matrix
     forcing: sm.Matrix
     outputs: list[sm.Expr]
+    # With coupling: the chain's linear momentum per generalized speed (3 x dim) and its
+    # total mass, so that F_pivot = F_free - (m I - P M^-1 P^T) a_pivot
+    momentum: sm.Matrix | None = None
+    total_mass: sm.Expr | None = None
 
     def lambdify(self):
         """Numpy functions (x, p) -> M, F and (x, p, u') -> outputs of these very
@@ -125,6 +129,8 @@ def derive(scene: Scene) -> Equations:
     force_terms = [0] * dim
     kinetic, potential = 0, 0
     support_force = Vec([0, 0, 0])   # sum of m (g - a) over the bodies: force on the support
+    momentum = [zero] * dim           # sum of m times the partial velocities: P's columns
+    total_mass = 0
     bob_positions, poses = [], []
     quat_parent = (1, 0, 0, 0)
 
@@ -176,6 +182,8 @@ def derive(scene: Scene) -> Equations:
                 acc = acc + pivot_acc
                 full_acc = acc + sum((partials[s] * rates[s] for s in range(dim)), zero)
                 support_force += mass * (Vec([0, -g, 0]) - full_acc)
+                momentum = [momentum[s] + mass * partials[s] for s in range(dim)]
+                total_mass += mass
             for s in range(dim):
                 if partials[s] == zero:
                     continue
@@ -229,6 +237,8 @@ def derive(scene: Scene) -> Equations:
         mass_matrix=mass_matrix,
         forcing=forcing,
         outputs=outputs,
+        momentum=sm.Matrix.hstack(*momentum) if scene.coupling else None,
+        total_mass=total_mass if scene.coupling else None,
     )
 
 

@@ -166,11 +166,13 @@ static void carry(const Link *k, const cp_real parent[6], cp_real out[6])
     }
 }
 
-int cp_chain_rhs(cp_model *model, const cp_real *x, cp_real *dx)
+/* The articulated-body algorithm's pass from the tip to the pivot: every link's articulated
+ * inertia IA and bias pA, and its joint's U, Dinv and uu. CP_SINGULAR where a joint's 2x2
+ * articulated inertia is. */
+static int articulate(cp_model *model, const cp_real *x, Link *links)
 {
     const int n = CP_NLINK;
     const cp_real *p = model->p;
-    Link links[CP_NLINK];
     kinematics(x, p, links);
     for (int i = 0; i < n; i++) {
         memcpy(links[i].IA, links[i].I, sizeof links[i].I);
@@ -243,6 +245,14 @@ int cp_chain_rhs(cp_model *model, const cp_real *x, cp_real *dx)
         cross(d, pa + 3, t);
         for (int j = 0; j < 3; j++) up->pA[j] += pa[j] + t[j], up->pA[3 + j] += pa[3 + j];
     }
+    return CP_OK;
+}
+
+/* The pass from the pivot to the tip: x' from articulate's quantities. */
+static int accelerate(cp_model *model, const cp_real *x, const Link *links, cp_real *dx)
+{
+    const int n = CP_NLINK;
+    const cp_real *p = model->p;
     cp_real a[6];
     base_acceleration(p, 1, a);
     memcpy(dx, x + 2 * n, 2 * n * sizeof(cp_real));
@@ -268,6 +278,32 @@ int cp_chain_rhs(cp_model *model, const cp_real *x, cp_real *dx)
     }
     return CP_OK;
 }
+
+int cp_chain_rhs(cp_model *model, const cp_real *x, cp_real *dx)
+{
+    Link links[CP_NLINK];
+    int status = articulate(model, x, links);
+    return status ? status : accelerate(model, x, links, dx);
+}
+
+#if CP_PIVOT_INDEX >= 0
+int cp_chain_rates_and_apparent_mass(cp_model *model, const cp_real *x, cp_real *dx, cp_real M[9])
+{
+    Link links[CP_NLINK];
+    int status = articulate(model, x, links);
+    if (status) return status;
+    /* IA - U Dinv U^T of link 0, about the pivot: what the support's translation meets */
+    const Link *k = &links[0];
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            const cp_real *ur = k->U + (3 + r) * 2, *uc = k->U + (3 + c) * 2;
+            M[r * 3 + c] = k->IA[(3 + r) * 6 + 3 + c]
+                           - ur[0] * (k->Dinv[0] * uc[0] + k->Dinv[1] * uc[1])
+                           - ur[1] * (k->Dinv[2] * uc[0] + k->Dinv[3] * uc[1]);
+        }
+    return accelerate(model, x, links, dx);
+}
+#endif
 
 /* Generalized forces that give the rates' rates ud (recursive Newton-Euler). */
 static void inverse_dynamics(const Link *links, const cp_real *p, const cp_real *ud, cp_real *tau)

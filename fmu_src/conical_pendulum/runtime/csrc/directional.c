@@ -16,6 +16,8 @@
 #define cp_mass_forcing cp_mass_forcing_cs
 #define cp_outputs cp_outputs_cs
 #define cp_joint cp_joint_cs
+#define cp_momentum cp_momentum_cs
+#define cp_chain_rates_and_apparent_mass cp_chain_rates_and_apparent_mass_cs
 
 #include "model.c"
 #include "dynamics.c"

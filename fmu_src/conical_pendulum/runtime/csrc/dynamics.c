@@ -4,8 +4,10 @@
 #include <string.h>
 
 #if !CP_RECURSIVE
-/* Solve M u = F in place (F becomes u) by LU with partial pivoting. */
-static int lu_solve(cp_real *M, cp_real *F, cp_model *model)
+/* Factor M in place by LU with partial pivoting: U on and above the diagonal, below it the
+ * multipliers of each elimination step, left where the step found them (later row swaps
+ * move only the columns still to eliminate), and perm, the row each step swapped in. */
+static int lu_factor(cp_real *M, int perm[CP_NDOF], cp_model *model)
 {
     const int n = CP_NDOF;
     double largest = 0.0, smallest = INFINITY;
@@ -14,16 +16,13 @@ static int lu_solve(cp_real *M, cp_real *F, cp_model *model)
         int pivot = k;
         for (int i = k + 1; i < n; i++)
             if (fabs(CP_RE(M[i * n + k])) > fabs(CP_RE(M[pivot * n + k]))) pivot = i;
-        if (pivot != k) {
-            for (int j = 0; j < n; j++) {
+        perm[k] = pivot;
+        if (pivot != k)
+            for (int j = k; j < n; j++) {
                 cp_real tmp = M[k * n + j];
                 M[k * n + j] = M[pivot * n + j];
                 M[pivot * n + j] = tmp;
             }
-            cp_real tmp = F[k];
-            F[k] = F[pivot];
-            F[pivot] = tmp;
-        }
         double d = fabs(CP_RE(M[k * n + k]));
         if (d > largest) largest = d;
         if (d < smallest) {
@@ -33,9 +32,9 @@ static int lu_solve(cp_real *M, cp_real *F, cp_model *model)
         if (d == 0.0) break;
         for (int i = k + 1; i < n; i++) {
             cp_real factor = M[i * n + k] / M[k * n + k];
+            M[i * n + k] = factor;
             if (factor == 0.0) continue;  /* both parts zero: nothing to eliminate */
             for (int j = k + 1; j < n; j++) M[i * n + j] -= factor * M[k * n + j];
-            F[i] -= factor * F[k];
         }
     }
     double ratio = largest > 0 ? smallest / largest : 0.0;
@@ -43,71 +42,108 @@ static int lu_solve(cp_real *M, cp_real *F, cp_model *model)
         model->pivot_ratio = ratio;
         model->bad_dof = weakest;
     }
-    if (!(ratio >= CP_SINGULAR_RATIO)) return CP_SINGULAR;
-    for (int k = n - 1; k >= 0; k--) {
-        cp_real s = F[k];
-        for (int j = k + 1; j < n; j++) s -= M[k * n + j] * F[j];
-        F[k] = s / M[k * n + k];
+    return ratio >= CP_SINGULAR_RATIO ? CP_OK : CP_SINGULAR;
+}
+
+/* Solve M u = b in place (b becomes u) with lu_factor's factors of M: the same operations,
+ * in the same order, as eliminating b along with M. */
+static void lu_solve(const cp_real *LU, const int perm[CP_NDOF], cp_real *b)
+{
+    const int n = CP_NDOF;
+    for (int k = 0; k < n; k++) {
+        cp_real tmp = b[k];
+        b[k] = b[perm[k]];
+        b[perm[k]] = tmp;
+        for (int i = k + 1; i < n; i++)
+            if (LU[i * n + k] != 0.0) b[i] -= LU[i * n + k] * b[k];
     }
-    return 0;
+    for (int k = n - 1; k >= 0; k--) {
+        cp_real s = b[k];
+        for (int j = k + 1; j < n; j++) s -= LU[k * n + j] * b[j];
+        b[k] = s / LU[k * n + k];
+    }
 }
 #endif
 
-int cp_rhs(void *ctx, const cp_real *x, cp_real *dx)
+#if !CP_RECURSIVE
+/* x' = (u, M^-1 F), leaving M's LU factors in M and perm. */
+static int expanded_rates(cp_model *model, const cp_real *x, cp_real *dx, cp_real *M, int *perm)
 {
-    cp_model *model = (cp_model *)ctx;
-#if CP_RECURSIVE
-    return cp_chain_rhs(model, x, dx);
-#else
-    cp_real M[CP_NDOF * CP_NDOF];
     cp_real *F = dx + CP_NDOF;
     cp_mass_forcing(x, model->p, M, F);
     memcpy(dx, x + CP_NDOF, CP_NDOF * sizeof(cp_real));
-    int status = lu_solve(M, F, model);
+    int status = lu_factor(M, perm, model);
     if (status) return status;
+    lu_solve(M, perm, F);
     for (int i = 0; i < CP_NDOF; i++) {
         if (!CP_FINITE(F[i])) {
             model->bad_dof = i;
             return CP_NONFINITE;
         }
     }
-    return 0;
+    return CP_OK;
+}
+#endif
+
+int cp_rhs(void *ctx, const cp_real *x, cp_real *dx)
+{
+#if CP_RECURSIVE
+    return cp_chain_rhs((cp_model *)ctx, x, dx);
+#else
+    cp_real M[CP_NDOF * CP_NDOF];
+    int perm[CP_NDOF];
+    return expanded_rates((cp_model *)ctx, x, dx, M, perm);
 #endif
 }
 
 #if CP_NINPUT
-/* The pivot force of the state x with the parameters and inputs q (model.h: where it is
- * in the outputs). */
-static void pivot_force(const cp_real *x, const cp_real *q, cp_real force[3])
+/* x' and the chain's apparent mass at the pivot, M_app (3x3, row-major): in the expanded
+ * formulation m I - P M^-1 P^T (model.h's cp_momentum: u' answers a_pivot through
+ * M^-1 (-P^T), the pivot force through -m a_pivot - P u'), in the recursive one from the
+ * articulated inertia at the pivot. */
+static int rates_and_apparent_mass(cp_model *model, const cp_real *x, cp_real *dx, cp_real M_app[9])
 {
-    cp_real dx[CP_NSTATE], y[CP_NOUTPUT];
-    cp_model model = {q, 1.0, -1};
-    if (cp_rhs(&model, x, dx))
-        for (int i = 0; i < CP_NSTATE; i++) dx[i] = NAN;
-    cp_outputs(x, q, dx, y);
-    memcpy(force, y + CP_FORCE_OUTPUT, 3 * sizeof(cp_real));
+#if CP_RECURSIVE
+    return cp_chain_rates_and_apparent_mass(model, x, dx, M_app);
+#else
+    cp_real M[CP_NDOF * CP_NDOF], P[3 * CP_NDOF], total;
+    int perm[CP_NDOF];
+    int status = expanded_rates(model, x, dx, M, perm);
+    if (status) return status;
+    cp_momentum(x, model->p, P, &total);
+    for (int c = 0; c < 3; c++) {
+        cp_real z[CP_NDOF];  /* M^-1 P^T, column c */
+        memcpy(z, P + c * CP_NDOF, sizeof z);
+        lu_solve(M, perm, z);
+        for (int r = 0; r < 3; r++) {
+            cp_real s = 0.0;
+            for (int k = 0; k < CP_NDOF; k++) s += P[r * CP_NDOF + k] * z[k];
+            M_app[r * 3 + c] = (r == c ? total : 0.0) - s;
+        }
+    }
+    return CP_OK;
+#endif
 }
 
-/* F_pivot = F_free - M_app a_pivot: F_pivot is affine in the pivot's acceleration (the
- * inputs, last in p), so F_free is the force at a = 0 and M_app's columns are exactly the
- * force's changes from a = 0 to each unit acceleration. out: F_free, then the upper
- * triangle of M_app. */
+/* F_pivot = F_free - M_app a_pivot, exactly affine in the pivot's acceleration (the
+ * inputs, last in p): F_free is the pivot force at a = 0, so both depend on the state
+ * only. out: F_free, then the upper triangle of M_app (of its symmetric mean); NaN where
+ * the mass matrix is singular. */
 static void free_force_and_apparent_mass(const cp_real *x, const cp_real *p, cp_real *out)
 {
-    cp_real q[CP_NPARAM], force[3][3];
+    cp_real q[CP_NPARAM], dx[CP_NSTATE], y[CP_NOUTPUT], M[9];
     memcpy(q, p, sizeof q);
-    cp_real *a = q + CP_NPARAM - CP_NINPUT, *free_force = out;
-    a[0] = a[1] = a[2] = 0.0;
-    pivot_force(x, q, free_force);
-    for (int j = 0; j < 3; j++) {
-        a[j] = 1.0;
-        pivot_force(x, q, force[j]);
-        a[j] = 0.0;
+    for (int j = 0; j < CP_NINPUT; j++) q[CP_NPARAM - CP_NINPUT + j] = 0.0;
+    cp_model model = {q, 1.0, -1};
+    if (rates_and_apparent_mass(&model, x, dx, M)) {
+        for (int k = 0; k < 9; k++) out[k] = NAN;
+        return;
     }
+    cp_outputs(x, q, dx, y);
+    memcpy(out, y + CP_FORCE_OUTPUT, 3 * sizeof(cp_real));
     int k = 3;
-    for (int r = 0; r < 3; r++)  /* the upper triangle of the symmetric mean */
-        for (int c = r; c < 3; c++)
-            out[k++] = 0.5 * ((free_force[r] - force[c][r]) + (free_force[c] - force[r][c]));
+    for (int r = 0; r < 3; r++)
+        for (int c = r; c < 3; c++) out[k++] = 0.5 * (M[r * 3 + c] + M[c * 3 + r]);
 }
 #endif
 

@@ -27,6 +27,12 @@ int cp_rhs(void *ctx, const cp_real *x, cp_real *dx);
 #if CP_RECURSIVE
 /* cp_rhs of the recursive formulation (chain.c). */
 int cp_chain_rhs(cp_model *model, const cp_real *x, cp_real *dx);
+#if CP_PIVOT_INDEX >= 0
+/* cp_chain_rhs, and the chain's apparent mass at the pivot, M_app in F_pivot = F_free -
+ * M_app a_pivot (3x3, row-major): the linear block of the articulated inertia the support
+ * sees through joint 0. */
+int cp_chain_rates_and_apparent_mass(cp_model *model, const cp_real *x, cp_real *dx, cp_real M[9]);
+#endif
 #endif
 
 /* The scene's outputs at x. Those needing accelerations (the pivot force) get them from
