@@ -63,7 +63,7 @@ def cosimulate(pendulum_fmu: Path, cart_fmu: Path, steps=STEPS, stop_time: float
                cart: dict | None = None, scheme: str = "explicit") -> dict:
     """{step: {variable: array}} from ecospy's fixed-step master, one run per step size
     (demos/ecospy_run.py, in a process of its own), after a warm-up run that pays the
-    imports (the cart's scipy); "seconds" is the wall time in ecospy's step(), "ended" why
+    imports (the Python slaves' first imports); "seconds" is the wall time in ecospy's step(), "ended" why
     a run stopped early (the cart beyond DIVERGED), or None."""
     connections, cart_settings = SCHEMES[scheme]
     job = {"models": {"p": str(pendulum_fmu), "cart": str(cart_fmu)}, "connections": connections,

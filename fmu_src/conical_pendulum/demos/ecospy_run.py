@@ -17,7 +17,7 @@ JOB_JSON is a JSON object (the text itself):
 Only "models", "steps", "stop_time" and "record" are required. The last line printed is
 {"runs": [{"step": dt, "seconds": s, "ended": why or null, "values": {"time": [...], name:
 [...]}}]}, one run per step in the order given; "seconds" is the wall time spent in ecospy's
-step() (a warm-up run pays the first step's imports, a Python slave's scipy for one, outside
+step() (a warm-up run pays the first step's imports, a Python slave's lazy ones, outside
 the timings); "ended" says why a run stopped before stop_time (its values end there).
 
 It must be a process of its own: ecospy's library needs libtbb loaded first, globally
