@@ -61,10 +61,10 @@ def build_cart_fmu(output: Path | str) -> Path:
 
 def cosimulate(pendulum_fmu: Path, cart_fmu: Path, steps=STEPS, stop_time: float = STOP_TIME,
                cart: dict | None = None, scheme: str = "explicit") -> dict:
-    """{step: {variable: array}} from ecospy's fixed-step master, one run per step size
-    (demos/ecospy_run.py, in a process of its own), after a warm-up run that pays the
-    imports (the Python slaves' first imports); "seconds" is the wall time in ecospy's step(), "ended" why
-    a run stopped early (the cart beyond DIVERGED), or None."""
+    """{step: {variable: array}} from ecospy's fixed-step master by `scheme`, one run per
+    step size (demos/ecospy_run.py, in a process of its own), after a warm-up run that pays
+    the Python slaves' first imports; "seconds" is the wall time in ecospy's step(),
+    "ended" why a run stopped early (the cart beyond DIVERGED), or None."""
     connections, cart_settings = SCHEMES[scheme]
     job = {"models": {"p": str(pendulum_fmu), "cart": str(cart_fmu)}, "connections": connections,
            "parameters": {f"cart::{name}": value
