@@ -234,8 +234,9 @@ def compile_binary(sources: Path, folder: Path, platform: str = "linux64") -> Pa
 def guid_of(data: dict) -> str:
     """A GUID that changes with anything the model description or binary says: the scene's
     variables and start values, the core's build (scene structure and generator), the
-    settings, and the glue."""
-    glue = (CSRC / "fmi2_glue.c").read_bytes() + Path(__file__).read_bytes()
+    settings, and every C file it ships from runtime/csrc."""
+    shipped = [CSRC / name for name in GLUE_SOURCES + GLUE_HEADERS if (CSRC / name).exists()]
+    glue = b"".join(path.read_bytes() for path in shipped) + Path(__file__).read_bytes()
     text = json.dumps(data, sort_keys=True) + glue.hex()
     return "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, text)) + "}"
 
