@@ -71,8 +71,9 @@ COMMANDS = {
          "conical-pendulum sweep dist/ConicalPendulum.fmu --random l0=5:15 --samples 100"),
         "conical_pendulum.analysis.sweep", "sweep"),
     "demo": Command(
-        "co-simulate the pendulum on a cart in ecospy, against one monolithic model",
-        ("conical-pendulum demo --out dist/coupled --steps 0.1,0.05,0.025",),
+        "co-simulate the pendulum on a cart in ecospy by two schemes, against one monolithic model",
+        ("conical-pendulum demo --out dist/coupled --steps 0.1,0.05,0.025",
+         "conical-pendulum demo --scheme apparent-mass --cart-mass 0.5 --steps 0.2,0.01"),
         "conical_pendulum.demos.coupled", "cosim"),
 }
 
@@ -82,36 +83,45 @@ def main(argv=None, prog: str = PROG) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     # the subcommand: the first word that is not an option (the top level has only -h, --version)
     chosen = next((word for word in argv if not word.startswith("-")), None)
-    command = prog
-    try:
-        parser = _parser(prog, chosen)
-        args, extra = parser.parse_known_args(argv)
-        command = args.parser.prog
+
+    def parse():
+        args, extra = _parser(prog, chosen).parse_known_args(argv)
         if extra:
             args.parser.error(f"unrecognized arguments: {' '.join(extra)}")
-        return args.run(args)
-    except UsageError as exc:
-        print(f"{exc.prog or command}: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"{command}: interrupted", file=sys.stderr)
-        return 130
+        return args
+
+    return _exit_status(prog, parse)
 
 
 def run_command(name: str, argv=None, prog: str | None = None) -> int:
     """One subcommand as a program of its own (`build_fmu.py` is `build`)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     prog = prog or f"{PROG} {name}"
-    try:
+
+    def parse():
         parser = Parser(prog=prog, formatter_class=argparse.RawDescriptionHelpFormatter)
         _load(name, parser)
-        args = parser.parse_args(argv)
+        return parser.parse_args(argv)
+
+    return _exit_status(prog, parse)
+
+
+def _exit_status(prog: str, parse) -> int:
+    """Run the command parse() returns, as a program: a UsageError is one line on stderr
+    and status 2, Ctrl-C status 130, each named after the command once it is parsed."""
+    args = None
+
+    def named():
+        return prog if args is None else args.parser.prog
+
+    try:
+        args = parse()
         return args.run(args)
     except UsageError as exc:
-        print(f"{exc.prog or prog}: {exc}", file=sys.stderr)
+        print(f"{exc.prog or named()}: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
+        print(f"{named()}: interrupted", file=sys.stderr)
         return 130
 
 
