@@ -84,7 +84,8 @@ class CouplingError:
     angle_error: float   # max |angle - angle_ref| over the pendulum's angles [rad]
     force_error: float   # max |F_pivot_x - F_ref| [N]
     seconds: float       # wall time in ecospy's step() over the run
-    diverged: bool       # stopped beyond DIVERGED, or strayed further from the truth than it ever goes
+    ended: str | None    # why the run stopped early (the cart beyond DIVERGED), or None
+    diverged: bool       # stopped early, or strayed further from the truth than it ever goes
 
 
 def reference(times, scene: Scene = SCENE, cart: dict | None = None) -> dict:
@@ -116,7 +117,7 @@ def coupling_errors(runs: dict, truth: dict, scheme: str, cart_mass: float,
         cart_error = np.abs(run["x"] - ref["x_cart"]).max()
         errors.append(CouplingError(
             scheme, cart_mass, dt, cart_error, max(np.abs(run[name] - ref[name]).max() for name in angles),
-            np.abs(run["F_pivot_x"] - ref["F_pivot_x"]).max(), float(run["seconds"]),
+            np.abs(run["F_pivot_x"] - ref["F_pivot_x"]).max(), float(run["seconds"]), run["ended"],
             run["ended"] is not None or not cart_error < span))
     return errors
 
@@ -213,7 +214,7 @@ def run(args) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     pendulum = build_fmu(SCENE, args.out / "ConicalPendulum.fmu").path
     cart = build_cart_fmu(args.out / "Cart.fmu")
-    errors, ended = [], {}
+    errors = []
     times = np.linspace(0.0, args.stop_time, round(args.stop_time / steps[0]) + 1)
     for mass in sorted(args.cart_mass, reverse=True):
         cart_values = cart_parameters(m_cart=mass)
@@ -225,7 +226,6 @@ def run(args) -> int:
                 print(f"error: {exc}", file=sys.stderr)
                 return 1
             errors += coupling_errors(runs, truth, scheme, mass)
-            ended.update({(scheme, mass, dt): run["ended"] for dt, run in runs.items() if run["ended"]})
     header = ["scheme", "cart_mass_kg", "step_s", "cart_error_m", "angle_error_rad", "force_error_N",
               "ecospy_seconds", "diverged"]
     rows = [[e.scheme, f"{e.cart_mass:g}", f"{e.step:g}", f"{e.cart_error:.3e}", f"{e.angle_error:.3e}",
@@ -236,7 +236,7 @@ def run(args) -> int:
     print("\n".join("\t".join(row) for row in [header, *rows]))
     for e in errors:
         if e.diverged:
-            why = ended.get((e.scheme, e.cart_mass, e.step)) or f"cart error {e.cart_error:.2g} m"
+            why = e.ended or f"cart error {e.cart_error:.2g} m"
             print(f"{e.scheme}, cart {e.cart_mass:g} kg, step {e.step:g} s: the exchange diverged ({why})"
                   + ("; the cart is too light against the chain's apparent mass for an explicit "
                      "exchange (added-mass effect): --scheme apparent-mass" if e.scheme == "explicit" else ""))
