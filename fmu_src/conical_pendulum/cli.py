@@ -7,8 +7,11 @@ and `build` needs neither the sweep extra (Dask) nor the cosim one (ecospy). Bei
 package's code, a sweep's tasks pickle by reference to conical_pendulum.analysis.sweep,
 which the workers import, and not as code of a `__main__` they do not have.
 
-A mistake the user can fix (a bad option or value, a missing file) is one line on stderr,
-`conical-pendulum <command>: <what is wrong>`, and exit status 2, never a traceback.
+A mistake the user can fix (a bad option or value, a missing or unreadable file, a missing
+optional package) is one line on stderr, `conical-pendulum <command>: <what is wrong>`, and
+exit status 2, never a traceback; Ctrl-C is `<command>: interrupted` and status 130. Library
+code raises errors.UserError (or its own ValueError, which the commands here translate)
+and never prints them or exits: only this module turns them into a line and a status.
 `build_fmu.py` runs `build` the same way, as `build_fmu.py: ...`.
 """
 from __future__ import annotations
@@ -20,12 +23,15 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from .errors import UserError
+
 PROG = "conical-pendulum"
 ANGLE_TOLERANCE = 1e-8  # rad: the FMU against the native reference, for build and check
 
 
-class UsageError(Exception):
-    """A mistake the user can fix: `<prog>: <message>` on one line, exit status 2."""
+class UsageError(UserError):
+    """A bad command line, found while parsing it: `<prog>: <message>` on one line, exit
+    status 2; `prog` names the (sub)command when the error comes before it is chosen."""
 
     def __init__(self, message: str, prog: str | None = None):
         super().__init__(message)
@@ -107,8 +113,9 @@ def run_command(name: str, argv=None, prog: str | None = None) -> int:
 
 
 def _exit_status(prog: str, parse) -> int:
-    """Run the command parse() returns, as a program: a UsageError is one line on stderr
-    and status 2, Ctrl-C status 130, each named after the command once it is parsed."""
+    """Run the command parse() returns, as a program: a UserError is one line on stderr
+    and its status (2 for a UsageError), Ctrl-C status 130, each named after the command
+    once it is parsed."""
     args = None
 
     def named():
@@ -117,9 +124,9 @@ def _exit_status(prog: str, parse) -> int:
     try:
         args = parse()
         return args.run(args)
-    except UsageError as exc:
-        print(f"{exc.prog or named()}: {exc}", file=sys.stderr)
-        return 2
+    except UserError as exc:
+        print(f"{getattr(exc, 'prog', None) or named()}: {exc}", file=sys.stderr)
+        return exc.status
     except KeyboardInterrupt:
         print(f"{named()}: interrupted", file=sys.stderr)
         return 130
@@ -140,7 +147,8 @@ def _parser(prog: str, chosen: str | None) -> Parser:
         epilog="Start with 'conical-pendulum build': it writes dist/ConicalPendulum.fmu (the seed scene),\n"
                "checks it and draws its run in dist/pendulum.png and dist/pendulum.gif.\n"
                f"'{prog} COMMAND --help' explains a command's options.\n"
-               "Exit status: 0 on success, 1 when a check or some runs failed, 2 for bad options.")
+               "Exit status: 0 on success, 1 when a check, some runs or a co-simulation failed, 2 for\n"
+               "bad options, a bad file or a missing package (one line on stderr), 130 on Ctrl-C.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     commands = parser.add_subparsers(title="commands", metavar="COMMAND", dest="command", required=True,
                                      parser_class=Parser)

@@ -21,7 +21,6 @@ import logging
 import math
 import numbers
 import shutil
-import sys
 import tempfile
 import threading
 import time
@@ -38,6 +37,7 @@ from fmpy import read_model_description
 from fmpy.fmi2 import FMU2Slave
 from fmpy.simulation import settable_in_initialization_mode, settable_in_instantiated
 
+from ..errors import UserError
 from .fmpy_runs import logging_callbacks, run_fmu
 
 
@@ -265,6 +265,8 @@ def sweep(fmu, runs: Iterable[Mapping[str, float]], *, stop_time: float = 10.0,
         raise ValueError(f"batch = {batch}: must be at least 1")
     if out is not None and not Path(out).parent.is_dir():
         raise ValueError(f"out: {Path(out).parent} is not a directory")
+    if out is not None and Path(out).is_dir():
+        raise ValueError(f"out: {out} is a directory; give a file name")
     inputs = _inputs(md, runs)
     start, frames, done, failed = time.perf_counter(), [], 0, 0
     with _client(scheduler, n_workers, timeout) as client:
@@ -371,24 +373,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _check_options(args) -> None:
     """What argparse cannot say alone: options that go together or exclude each other."""
-    from ..cli import UsageError
-
     given = args.grid or args.random
     if len({name for name, _ in given}) < len(given):
-        raise UsageError("a variable is given twice")
+        raise UserError("a variable is given twice")
     if args.random and args.samples is None:
-        raise UsageError("--random needs --samples")
+        raise UserError("--random needs --samples")
     if args.grid and (args.samples is not None or args.seed is not None):
-        raise UsageError("--samples and --seed go with --random")
+        raise UserError("--samples and --seed go with --random")
     if args.scheduler and args.workers is not None:
-        raise UsageError("--workers is for the local cluster; drop it with --scheduler")
+        raise UserError("--workers is for the local cluster; drop it with --scheduler")
 
 
 def run(args) -> int:
     """The sweep of `conical-pendulum sweep`: 0 when every run succeeded, 1 when some failed;
-    UsageError (exit 2) for bad options or when the sweep could not run."""
-    from ..cli import UsageError
-
+    UserError (exit 2) for bad options or when the sweep could not run."""
     _check_options(args)
     try:
         runs = (grid(dict(args.grid)) if args.grid
@@ -399,7 +397,7 @@ def run(args) -> int:
                         batch=args.batch, out=args.out, progress=not args.no_progress,
                         timeout=args.connect_timeout)
     except (ValueError, ConnectionError) as exc:
-        raise UsageError(str(exc)) from None
+        raise UserError(str(exc)) from None
     seconds = time.perf_counter() - start
     by_run = results.drop_duplicates("run").set_index("run")
     failed = by_run[by_run["status"] == "failed"]

@@ -20,6 +20,7 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
+from ..errors import UserError
 from ..runtime.rules import CALCULATED, FIXED, RULES, SETTINGS, STATISTICS, rule_of
 from ..runtime.slave import MODEL_FILE
 from ..scene import Scene
@@ -223,8 +224,8 @@ def compile_binary(sources: Path, folder: Path, platform: str = "linux64") -> Pa
                f"-I{sources}", f"-I{fmi_headers()}", *(str(sources / name) for name in GLUE_SOURCES),
                "-o", str(library), *libraries, "-s"]
     if shutil.which(compiler[0]) is None:
-        raise RuntimeError(f"the {platform} binary needs the compiler {compiler[0]}"
-                           + (" (Debian: apt-get install gcc-mingw-w64-x86-64)" if platform == "win64" else ""))
+        raise UserError(f"the {platform} binary needs the compiler {compiler[0]}"
+                        + (" (Debian: apt-get install gcc-mingw-w64-x86-64)" if platform == "win64" else ""))
     run = subprocess.run(command, capture_output=True, text=True)
     if run.returncode:
         raise RuntimeError(f"compiling the native FMU failed:\n{' '.join(command)}\n{run.stderr}")

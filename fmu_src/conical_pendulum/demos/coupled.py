@@ -19,12 +19,12 @@ from __future__ import annotations
 import argparse
 import csv
 import math
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..errors import UserError
 from ..scene import Scene
 from . import ecospy_run
 from .monolithic import CART_START, cart_parameters, monolithic
@@ -197,21 +197,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args) -> int:
     """Build both FMUs, co-simulate each scheme and cart mass at each step, compare with the
-    monolithic model, write coupling_error.csv and coupling.png. 0, or 1 when ecospy failed."""
-    from ..cli import UsageError
-
+    monolithic model, write coupling_error.csv and coupling.png. 0; a UserError of status 1
+    when ecospy failed, of status 2 for bad options or without the cosim extra."""
     steps = args.steps
     for dt in steps:
         if not (dt > 0 and abs(args.stop_time / dt - round(args.stop_time / dt)) < 1e-9
                 and abs(dt / steps[0] - round(dt / steps[0])) < 1e-9):
-            raise UsageError(f"--steps: {dt:g} must be positive, divide --stop-time {args.stop_time:g} "
-                             f"and be a multiple of the smallest step {steps[0]:g}")
+            raise UserError(f"--steps: {dt:g} must be positive, divide --stop-time {args.stop_time:g} "
+                            f"and be a multiple of the smallest step {steps[0]:g}")
     for mass in args.cart_mass:
         if not (mass > 0 and math.isfinite(mass)):
-            raise UsageError(f"--cart-mass: must be a positive number of kg, got {mass!r}")
+            raise UserError(f"--cart-mass: must be a positive number of kg, got {mass!r}")
+    lacking = ecospy_run.missing()
+    if lacking:  # before the builds and the reference, which take a while
+        raise UserError(f"needs {lacking}: pip install -e \".[cosim]\"")
     from ..build.fmu import build_fmu
 
-    args.out.mkdir(parents=True, exist_ok=True)
+    if args.out.exists() and not args.out.is_dir():
+        raise UserError(f"--out {args.out}: not a directory")
+    try:
+        args.out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:  # a file above the folder, or no permission
+        raise UserError(f"--out {args.out}: {exc.strerror or exc}") from None
     pendulum = build_fmu(SCENE, args.out / "ConicalPendulum.fmu").path
     cart = build_cart_fmu(args.out / "Cart.fmu")
     errors = []
@@ -223,8 +230,7 @@ def run(args) -> int:
             try:
                 runs = cosimulate(pendulum, cart, steps, args.stop_time, cart_values, scheme)
             except RuntimeError as exc:
-                print(f"error: {exc}", file=sys.stderr)
-                return 1
+                raise UserError(str(exc), status=1) from None
             errors += coupling_errors(runs, truth, scheme, mass)
     header = ["scheme", "cart_mass_kg", "step_s", "cart_error_m", "angle_error_rad", "force_error_N",
               "ecospy_seconds", "diverged"]

@@ -33,7 +33,20 @@ import subprocess
 import sys
 
 MODULE = "conical_pendulum.demos.ecospy_run"  # run as python -m MODULE, also when this is __main__
+TBB = os.path.join(sys.prefix, "lib", "libtbb.so.12")  # the tbb wheel's library, which ecospy's needs
 REQUIRED = ("models", "steps", "stop_time", "record")
+
+
+def missing() -> str | None:
+    """The package of the cosim extra this environment lacks (ecospy, or tbb's library), or
+    None: checked without importing ecospy, which needs libtbb loaded first."""
+    import importlib.util
+
+    if importlib.util.find_spec("ecospy") is None:
+        return "ecospy"
+    if not os.path.exists(TBB):
+        return "tbb"
+    return None
 
 
 def check_job(job) -> dict:
@@ -145,7 +158,7 @@ def main(argv=None) -> None:
     import ctypes
 
     # before ecospy: its library needs tbb's symbols, which the tbb wheel does not put on its path
-    ctypes.CDLL(os.path.join(sys.prefix, "lib", "libtbb.so.12"), mode=ctypes.RTLD_GLOBAL)
+    ctypes.CDLL(TBB, mode=ctypes.RTLD_GLOBAL)
     print(json.dumps({"runs": _simulate(job)}))
     sys.stdout.flush()
     sys.stderr.flush()
