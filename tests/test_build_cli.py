@@ -51,3 +51,20 @@ def test_refuses_what_it_cannot_build(tmp_path, build, args, message):
     assert run.stderr.startswith(f"{run.name}: ") and run.stderr.count("\n") == 1  # one line
     assert "Traceback" not in run.stderr
     assert not list(tmp_path.rglob("*.fmu"))
+
+
+def test_a_scene_without_the_outputs_a_picture_needs_still_builds(tmp_path, build):
+    """Bobs on the first link only, no poses, no energy: the FMU builds and checks, the plot
+    has the angles, and one line says what was left out and why; exit status 0."""
+    scene = tmp_path / "no_poses.toml"
+    scene.write_text('outputs = ["bobs"]\n[[link]]\nbob = { mass = 5.0, radius = 1.0 }\n[[link]]\n')
+    run = build("--scene", str(scene), "--output", str(tmp_path / "NoPoses.fmu"), cwd=tmp_path)
+    assert run.returncode == 0, run.stdout + run.stderr
+    lines = run.stdout.splitlines()
+    assert lines[-3].endswith("rad: OK")
+    assert lines[-2] == f"wrote {tmp_path / 'results.csv'} and {tmp_path / 'pendulum.png'}"
+    assert lines[-1] == ("left out the paths and the animation: the results have neither link poses "
+                         "(link<i>_x/y/z, the scene's output 'poses') nor a bob on every link (bob<i>_x/y/z); "
+                         "the energy drift: the results have no energy output")
+    assert (tmp_path / "pendulum.png").stat().st_size > 10_000 and not (tmp_path / "pendulum.gif").exists()
+    assert "Traceback" not in run.stderr

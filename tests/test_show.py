@@ -53,10 +53,20 @@ def test_refusals(results_csv, args, message):
     assert "Traceback" not in run.stderr
 
 
-def test_results_without_positions_are_refused(tmp_path, seed_fmu):
+def test_results_without_positions_give_what_they_can_and_say_what_they_left_out(tmp_path, seed_fmu):
+    """Angles only: the plot of the angles, without paths and energy drift, and no animation."""
     path = tmp_path / "state.csv"
     write_csv(str(path), run_fmu(seed_fmu, stop_time=0.1, output=["alpha0", "beta0", "alpha1",
                                                                     "beta1", "alpha2", "beta2"]))
-    run = show(path, "--plot", tmp_path / "p.png")
-    assert run.returncode == 2 and "need link poses" in run.stderr
-    assert "Traceback" not in run.stderr
+    png, gif = tmp_path / "p.png", tmp_path / "p.gif"
+    run = show(path, "--plot", png, "--gif", gif)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.splitlines() == [
+        f"wrote {png}",
+        "left out the paths and the animation: the results have neither link poses (link<i>_x/y/z, "
+        "the scene's output 'poses') nor a bob on every link (bob<i>_x/y/z); "
+        "the energy drift: the results have no energy output"]
+    assert np.asarray(Image.open(png).convert("L")).std() > 10 and not gif.exists()
+    assert run.stderr == ""
+    run = show(path, "--gif", gif)  # what is left out is only what was asked for
+    assert run.returncode == 0 and run.stdout.startswith("left out the animation: the results have neither")

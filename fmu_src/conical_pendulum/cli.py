@@ -285,18 +285,24 @@ def _compare(fmu: Path, scene, stop_time: float = 10.0, interval: float = 1.0 / 
 
 
 def _draw(result, folder: Path) -> None:
-    """The run as CSV, a plot and an animation, next to the FMU."""
+    """The run as CSV, a plot and an animation, next to the FMU: as much of them as the
+    scene's outputs allow, and one line saying what was left out and why."""
     from fmpy.util import write_csv
 
     from .viz import plots
 
-    csv = folder / "results.csv"
+    csv, png, gif = folder / "results.csv", folder / "pendulum.png", folder / "pendulum.gif"
     write_csv(str(csv), result)
     results = plots.load_results(csv)
-    plots.plot(results, folder / "pendulum.png")
-    seconds = plots.animate(results, folder / "pendulum.gif")
-    print(f"wrote {csv}, {folder / 'pendulum.png'} and {folder / 'pendulum.gif'} "
-          f"(animation rendered in {seconds:.1f} s)")
+    lacking = plots.missing(results)
+    plots.plot(results, png)
+    if "the animation" in lacking:
+        print(f"wrote {csv} and {png}")
+    else:
+        seconds = plots.animate(results, gif)
+        print(f"wrote {csv}, {png} and {gif} (animation rendered in {seconds:.1f} s)")
+    if lacking:
+        print(plots.left_out(lacking))
 
 
 # ---- check ----

@@ -4,7 +4,8 @@
 
 The CSV is fmpy's (`fmpy.util.write_csv`): a `time` column and one per variable. Links
 are drawn from their mass-centre positions (`link<i>_x/y/z`, the midpoint of each link),
-or from the bob positions when the scene has a bob on every link.
+or from the bob positions when the scene has a bob on every link. Results with neither
+still give the angles and the energy: `missing` says what they cannot give, and why.
 """
 from __future__ import annotations
 
@@ -14,7 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import UserError
 from ..progress import WIDTH, bar
+
+NO_CHAIN = ("the results have neither link poses (link<i>_x/y/z, the scene's output 'poses') "
+            "nor a bob on every link (bob<i>_x/y/z)")
+NO_ENERGY = "the results have no energy output"
 
 
 def load_results(path) -> dict[str, np.ndarray]:
@@ -25,33 +31,61 @@ def load_results(path) -> dict[str, np.ndarray]:
     try:
         data = read_csv(path)
     except OSError as exc:
-        raise SystemExit(f"show: {path}: {exc.strerror or exc}") from None
-    except (IndexError, ValueError):  # empty, a header alone, or not numbers
+        raise UserError(f"{path}: {exc.strerror or exc}") from None
+    except (IndexError, ValueError):  # empty, a header alone, not numbers, or not text
         data = None
     if data is None or data.dtype.names is None or "time" not in data.dtype.names:
-        raise SystemExit(f"show: {path}: expected fmpy's CSV with a 'time' column")
+        raise UserError(f"{path}: expected fmpy's CSV with a 'time' column")
     return {name: data[name] for name in data.dtype.names}
 
 
+def _chain_outputs(results: dict) -> str | None:
+    """What the chain is drawn from: "link" (poses), "bob" (a bob on every link) or None."""
+    n = sum(1 for name in results if name.startswith("alpha"))
+    for prefix in ("link", "bob"):
+        if all(f"{prefix}{i}_x" in results for i in range(n)):
+            return prefix
+    return None
+
+
+def missing(results: dict) -> dict[str, str]:
+    """What of the plot and the animation these results cannot give, each with why:
+    the paths and the animation need the chain's positions, the energy drift the energy."""
+    lacking = {}
+    if _chain_outputs(results) is None:
+        lacking["the paths"] = lacking["the animation"] = NO_CHAIN
+    if "energy" not in results:
+        lacking["the energy drift"] = NO_ENERGY
+    return lacking
+
+
+def left_out(lacking: dict[str, str]) -> str:
+    """One line saying what was left out and why, from (a selection of) missing()."""
+    by_reason: dict[str, list[str]] = {}
+    for what, why in lacking.items():
+        by_reason.setdefault(why, []).append(what)
+    return "left out " + "; ".join(f"{' and '.join(whats)}: {why}" for why, whats in by_reason.items())
+
+
 def joints(results: dict) -> np.ndarray:
-    """Joint positions (time, joint, xyz) from the pivot down, in plot axes (x, z, y up)."""
+    """Joint positions (time, joint, xyz) from the pivot down, in plot axes (x, z, y up).
+    UserError when the results have neither link poses nor a bob on every link."""
     n = sum(1 for name in results if name.startswith("alpha"))
     count = len(results["time"])
     points = np.zeros((count, n + 1, 3))
-    if all(f"link{i}_x" in results for i in range(n)):
-        for i in range(n):
-            centre = np.column_stack([results[f"link{i}_{c}"] for c in "xyz"])
-            points[:, i + 1] = 2 * centre - points[:, i]
-    elif all(f"bob{i}_x" in results for i in range(n)):
-        for i in range(n):
-            points[:, i + 1] = np.column_stack([results[f"bob{i}_{c}"] for c in "xyz"])
-    else:
-        raise SystemExit("show: the results need link poses (link<i>_x/y/z) or a bob on every "
-                         "link (bob<i>_x/y/z); build the FMU with those outputs")
+    source = _chain_outputs(results)
+    if source is None:
+        raise UserError(f"cannot draw the chain: {NO_CHAIN}")
+    for i in range(n):
+        where = np.column_stack([results[f"{source}{i}_{c}"] for c in "xyz"])
+        # a link's pose is its mass centre, the midpoint between its joints
+        points[:, i + 1] = 2 * where - points[:, i] if source == "link" else where
     return points[:, :, [0, 2, 1]]  # inertial Y is up: draw it as the plot's z
 
 
 def plot(results: dict, path) -> None:
+    """Angles, paths from above and energy drift; a panel the results cannot give (missing())
+    says so instead."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -63,12 +97,16 @@ def plot(results: dict, path) -> None:
         axes[0].plot(t, np.degrees(results[name]), label=name)
     axes[0].set(xlabel="time [s]", ylabel="angle [deg]", title="joint angles")
     axes[0].legend(fontsize=7, ncol=2)
-    points = joints(results)
-    for i in range(1, points.shape[1]):
-        axes[1].plot(points[:, i, 0], points[:, i, 1], label=f"end of link {i - 1}")
-    axes[1].set(xlabel="x [m]", ylabel="z [m]", title="paths seen from above")
-    axes[1].set_aspect("equal", adjustable="datalim")
-    axes[1].legend(fontsize=7)
+    if _chain_outputs(results) is None:
+        axes[1].set_axis_off()
+        axes[1].text(0.5, 0.5, "no link poses or bobs on every link", ha="center")
+    else:
+        points = joints(results)
+        for i in range(1, points.shape[1]):
+            axes[1].plot(points[:, i, 0], points[:, i, 1], label=f"end of link {i - 1}")
+        axes[1].set(xlabel="x [m]", ylabel="z [m]", title="paths seen from above")
+        axes[1].set_aspect("equal", adjustable="datalim")
+        axes[1].legend(fontsize=7)
     if "energy" in results:
         energy = results["energy"]
         axes[2].plot(t, (energy - energy[0]) / abs(energy[0]))
@@ -84,7 +122,8 @@ def plot(results: dict, path) -> None:
 def animate(results: dict, path, fps: float = 30.0, size: float = 5.0) -> float:
     """A GIF of the chain from above and aside, at about `fps` frames per simulated second.
 
-    Returns the seconds it took; prints a progress bar to stderr.
+    Returns the seconds it took; prints a progress bar to stderr. UserError when the
+    results cannot draw the chain (missing()).
     """
     import matplotlib
 
@@ -92,9 +131,9 @@ def animate(results: dict, path, fps: float = 30.0, size: float = 5.0) -> float:
     import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation, PillowWriter
 
+    points = joints(results)  # before matplotlib's work: these results may not have the chain
     start = time.perf_counter()
     t = results["time"]
-    points = joints(results)
     duration = t[-1] - t[0]
     frames = np.unique(np.searchsorted(t, np.arange(t[0], t[-1] + 1e-12, 1.0 / fps)).clip(0, len(t) - 1))
     reach = np.abs(points).max() * 1.05 or 1.0
@@ -138,23 +177,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args) -> int:
-    """`conical-pendulum show`: the plot and/or the animation of a results CSV."""
-    from ..cli import UsageError
-
+    """`conical-pendulum show`: the plot and/or the animation of a results CSV; what the
+    results cannot give is left out, and said in one line."""
     if not (args.plot or args.gif):
-        raise UsageError("give --plot and/or --gif")
+        raise UserError("give --plot and/or --gif")
     if not args.fps > 0:
-        raise UsageError(f"--fps: must be positive, got {args.fps:g}")
-    try:  # this module's refusals (an unreadable CSV, no link poses) are SystemExit("show: ...")
-        results = load_results(args.results)
+        raise UserError(f"--fps: must be positive, got {args.fps:g}")
+    for option, path in (("--plot", args.plot), ("--gif", args.gif)):
+        if path and path.is_dir():
+            raise UserError(f"{option} {path}: is a directory")
+        if path and not path.parent.is_dir():
+            raise UserError(f"{option} {path}: {path.parent} is not a directory")
+    results = load_results(args.results)
+    asked = {"the paths": args.plot, "the energy drift": args.plot, "the animation": args.gif}
+    lacking = {what: why for what, why in missing(results).items() if asked[what]}
+    try:
         if args.plot:
             plot(results, args.plot)
             print(f"wrote {args.plot}")
-        if args.gif:
+        if args.gif and "the animation" not in lacking:
             seconds = animate(results, args.gif, fps=args.fps)
             print(f"wrote {args.gif} in {seconds:.1f} s")
-    except SystemExit as exc:
-        if not isinstance(exc.code, str):
-            raise
-        raise UsageError(exc.code.removeprefix("show: ")) from None
+    except OSError as exc:  # a folder that is not there, or not writable
+        raise UserError(f"{exc.filename or 'writing'}: {exc.strerror or exc}") from None
+    if lacking:
+        print(left_out(lacking))
     return 0
