@@ -401,19 +401,22 @@ def _page(args) -> int:
     _positive("--stop-time", args.stop_time)
     if not 0 <= args.port < 65536:
         raise UsageError(f"--port: {args.port} is not a port number")
+    try:
+        import pydy  # noqa: F401 - before any work; write_pydy_page imports it when it runs
+    except ModuleNotFoundError as exc:
+        raise UsageError(f"needs {exc.name}: pip install pydy (or -e \".[test]\")") from None
+    if args.out.exists() and not args.out.is_dir():
+        raise UsageError(f"--out {args.out}: not a directory")
     scene = _fmu_scene(args.fmu)
     start_values = _start_values(args.fmu, args.start)
-    try:
-        from .viz.pydy_page import write_pydy_page
-        import pydy  # noqa: F401 - write_pydy_page imports it only when it runs
-    except ModuleNotFoundError as exc:
-        if not command.extra:
-            raise
-        raise UsageError(f"needs {exc.name}: pip install pydy (or -e \".[test]\")") from None
     from .analysis.fmpy_runs import run_fmu
+    from .viz.pydy_page import write_pydy_page
 
     run = run_fmu(args.fmu, args.stop_time, 1.0 / 60.0, start_values)
-    folder, address = write_pydy_page(scene, {name: run[name] for name in run.dtype.names}, args.out)
+    try:
+        folder, address = write_pydy_page(scene, {name: run[name] for name in run.dtype.names}, args.out)
+    except OSError as exc:
+        raise UsageError(f"--out {args.out}: {exc.strerror or exc}") from None
     print(f"wrote the pydy.viz page of {args.fmu} ({args.stop_time:g} s) into {folder}")
     if args.serve:
         return _serve(folder, address, args.port)
