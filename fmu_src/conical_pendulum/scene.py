@@ -233,6 +233,8 @@ def load_scene(path) -> Scene:
         text = path.read_text()
     except OSError as exc:
         raise SceneError(f"scene file {str(path)!r}: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise SceneError(f"scene file {str(path)!r}: not text (UTF-8)") from None
     try:
         if path.suffix == ".toml":
             data = tomllib.loads(text)

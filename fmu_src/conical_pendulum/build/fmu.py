@@ -97,6 +97,11 @@ def checked_output(output: Path | str) -> Path:
     output = Path(output)
     if output.suffix != ".fmu":
         raise ValueError(f"output: {str(output)!r} must end in .fmu")
+    if output.is_dir():
+        raise ValueError(f"output: {str(output)!r} is a directory")
+    folder = next(parent for parent in output.absolute().parents if parent.exists())
+    if not folder.is_dir():  # the FMU's folder would be made inside a file
+        raise ValueError(f"output: {str(output)!r}: {str(folder)!r} is not a directory")
     return output
 
 
