@@ -1,5 +1,9 @@
 """The `conical-pendulum` command: its help, check, page, and one-line refusals of bad options."""
+import importlib
+import importlib.util
 import json
+import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -8,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from conical_pendulum.cli import COMMANDS, main
+from conical_pendulum.cli import COMMANDS, main, run_command
 
 COMMAND = str(Path(sys.executable).with_name("conical-pendulum"))  # the installed console script
 NAMES = ["build", "check", "show", "page", "sweep", "demo"]
@@ -159,3 +163,205 @@ def test_bad_options_are_one_line_and_exit_2(seed_fmu, tmp_path, args, message):
 def test_in_process_a_bad_option_is_returned_not_raised(capsys):
     assert main(["check", "--interval", "0", "missing.fmu"]) == 2
     assert capsys.readouterr().err == "conical-pendulum check: --interval: must be a positive number, got 0\n"
+
+
+# ---- every command's error paths, in process: one line on stderr and an exit status, never a traceback
+
+def run_main(capsys, *argv):
+    status = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def one_line(err: str, name: str) -> str:
+    """The message of stderr's one line `conical-pendulum <name>: <message>`."""
+    assert err.startswith(f"conical-pendulum {name}: ") and err.count("\n") == 1, err
+    assert "Traceback" not in err
+    return err.removeprefix(f"conical-pendulum {name}: ").rstrip("\n")
+
+
+def hide(monkeypatch, *packages):
+    """Imports of these packages fail from now on, as if they were not installed."""
+    for package in packages:
+        monkeypatch.setitem(sys.modules, package, None)
+
+
+@pytest.mark.parametrize("name, args, hidden, message", [
+    ("page", ["FMU", "--out", "OUT"], "pydy", 'needs pydy: pip install pydy (or -e ".[test]")'),
+    ("sweep", ["FMU", "--grid", "l0=5,6", "--out", "OUT/s.parquet"], "dask",
+     'needs dask: pip install -e ".[sweep]"'),
+    ("demo", ["--out", "OUT"], "ecospy", 'needs ecospy: pip install -e ".[cosim]"'),
+])
+def test_a_missing_optional_package_is_one_line_saying_what_to_install(
+        monkeypatch, capsys, tmp_path, seed_fmu, name, args, hidden, message):
+    hide(monkeypatch, hidden)
+    # a module an earlier test imported would not import its package again: drop it
+    monkeypatch.delitem(sys.modules, "conical_pendulum.analysis.sweep", raising=False)
+    status, out, err = run_main(capsys, name, *[{"FMU": seed_fmu}.get(a, a.replace("OUT", str(tmp_path / "out")))
+                                                 for a in args])
+    assert status == 2 and one_line(err, name) == message
+    assert not out and not list(tmp_path.iterdir())  # found before any work
+
+
+def test_demo_without_tbb_says_what_to_install(monkeypatch, capsys, tmp_path):
+    from conical_pendulum.demos import ecospy_run
+
+    find_spec = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",  # ecospy itself is there
+                        lambda name, *a: object() if name == "ecospy" else find_spec(name, *a))
+    monkeypatch.setattr(ecospy_run, "TBB", str(tmp_path / "libtbb.so.12"))
+    status, _, err = run_main(capsys, "demo", "--out", tmp_path / "out")
+    assert status == 2 and one_line(err, "demo") == 'needs tbb: pip install -e ".[cosim]"'
+    assert not list(tmp_path.iterdir())
+
+
+def test_build_without_mingw_says_what_to_install(monkeypatch, capsys, tmp_path):
+    which = shutil.which
+    monkeypatch.setattr(shutil, "which", lambda cmd, *a, **k: None if "mingw" in cmd else which(cmd, *a, **k))
+    status, _, err = run_main(capsys, "build", "--native", "--win64", "--no-check", "--output", tmp_path / "W.fmu")
+    assert status == 2
+    assert one_line(err, "build") == ("the win64 binary needs the compiler x86_64-w64-mingw32-gcc "
+                                      "(Debian: apt-get install gcc-mingw-w64-x86-64)")
+    assert not (tmp_path / "W.fmu").exists()
+
+
+def test_build_check_and_show_need_no_optional_package(monkeypatch, capsys, tmp_path, seed_fmu):
+    """They have no optional package to miss: without the test, sweep and cosim extras they run."""
+    from fmpy.util import write_csv
+
+    from conical_pendulum.analysis.fmpy_runs import run_fmu
+
+    results = tmp_path / "results.csv"
+    write_csv(str(results), run_fmu(seed_fmu, stop_time=0.2, output_interval=0.05))
+    hide(monkeypatch, "pydy", "dask", "distributed", "ecospy", "selenium")
+    status, out, err = run_main(capsys, "build", "--no-check", "--output", tmp_path / "Seed.fmu")
+    assert status == 0 and f"built {tmp_path / 'Seed.fmu'}" in out, err
+    status, out, err = run_main(capsys, "check", seed_fmu, "--stop-time", "0.5")
+    assert status == 0 and out.strip().endswith("rad: OK"), err
+    status, out, err = run_main(capsys, "show", results, "--plot", tmp_path / "p.png")
+    assert status == 0 and out == f"wrote {tmp_path / 'p.png'}\n", err
+
+
+def bad_file(folder: Path, kind: str, suffix: str) -> Path:
+    """A file that cannot be read as what is expected: not there, a directory, binary
+    garbage, text of another kind, or without read permission."""
+    path = folder / f"bad{suffix}"
+    if kind == "directory":
+        path.mkdir()
+    elif kind == "garbage":
+        path.write_bytes(bytes(range(256)) * 8)
+    elif kind == "text":
+        path.write_text("this is not it\n")
+    elif kind == "unreadable":
+        if os.geteuid() == 0:
+            pytest.skip("root reads a file without read permission")
+        path.write_text("time,alpha0\n0,0\n")
+        path.chmod(0)
+    return path
+
+
+@pytest.mark.parametrize("kind", ["missing", "directory", "garbage", "text", "unreadable"])
+@pytest.mark.parametrize("name, args, suffix", [
+    ("build", ["--scene", "BAD", "--output", "OUT/x.fmu"], ".toml"),
+    ("check", ["BAD"], ".fmu"),
+    ("show", ["BAD", "--plot", "OUT/p.png"], ".csv"),
+    ("page", ["BAD", "--out", "OUT"], ".fmu"),
+    ("sweep", ["BAD", "--grid", "l0=5,6", "--out", "OUT/s.parquet"], ".fmu"),
+])
+def test_a_bad_or_unreadable_file_is_one_line(capsys, tmp_path, name, args, suffix, kind):
+    path = bad_file(tmp_path, kind, suffix)
+    (tmp_path / "out").mkdir()
+    status, out, err = run_main(capsys, name, *[str(path) if a == "BAD" else a.replace("OUT", str(tmp_path / "out"))
+                                                 for a in args])
+    assert status == 2 and str(path) in one_line(err, name)
+    assert not out and not list((tmp_path / "out").iterdir())
+
+
+@pytest.mark.parametrize("name, args, message", [
+    ("build", ["--no-check", "--output", "FOLDER"], "output: 'FOLDER' is a directory"),
+    ("build", ["--no-check", "--output", "FILE/x.fmu"], "'FILE' is not a directory"),
+    ("show", ["RESULTS", "--plot", "FOLDER"], "--plot FOLDER: is a directory"),
+    ("show", ["RESULTS", "--gif", "FILE/x.gif"], "--gif FILE/x.gif: FILE is not a directory"),
+    ("page", ["FMU", "--out", "FILE"], "--out FILE: not a directory"),
+    ("sweep", ["FMU", "--grid", "l0=5,6", "--out", "FOLDER"], "out: FOLDER is a directory"),
+    ("demo", ["--out", "FILE"], "--out FILE: not a directory"),
+])
+def test_an_output_where_a_file_or_folder_cannot_be_is_one_line(
+        monkeypatch, capsys, tmp_path, seed_fmu, name, args, message):
+    from conical_pendulum.demos import ecospy_run
+
+    monkeypatch.setattr(ecospy_run, "missing", lambda: None)  # the demo's --out, even without ecospy
+    folder, file, results = tmp_path / "folder.fmu", tmp_path / "file", tmp_path / "results.csv"
+    folder.mkdir()
+    file.write_text("x\n")
+    results.write_text("time,alpha0\n0,0\n1,0.1\n")
+    names = {"FOLDER": str(folder), "FILE": str(file), "RESULTS": str(results), "FMU": str(seed_fmu)}
+
+    def named(text):
+        for placeholder, value in names.items():
+            text = text.replace(placeholder, value)
+        return text
+
+    status, out, err = run_main(capsys, name, *map(named, args))
+    assert status == 2 and named(message) in one_line(err, name)
+    assert not out and sorted(p.name for p in tmp_path.iterdir()) == ["file", "folder.fmu", "results.csv"]
+    assert not list(folder.iterdir()) and file.read_text() == "x\n"
+
+
+WORK = {  # what each command spends its time in, and a command line that gets there
+    "build": ("conical_pendulum.build.fmu", "build_fmu", ["--no-check", "--output", "OUT/x.fmu"]),
+    "check": ("conical_pendulum.analysis.compare", "compare", ["FMU", "--stop-time", "1"]),
+    "show": ("conical_pendulum.viz.plots", "plot", ["RESULTS", "--plot", "OUT/p.png"]),
+    "page": ("conical_pendulum.analysis.fmpy_runs", "run_fmu", ["FMU", "--out", "OUT"]),
+    "sweep": ("conical_pendulum.analysis.sweep", "sweep", ["FMU", "--grid", "l0=5,6", "--out", "OUT/s.parquet"]),
+    "demo": ("conical_pendulum.build.fmu", "build_fmu", ["--out", "OUT"]),
+}
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_ctrl_c_is_one_line_and_status_130(monkeypatch, capsys, tmp_path, seed_fmu, name):
+    pytest.importorskip({"page": "pydy", "sweep": "dask"}.get(name, "conical_pendulum"))
+    from conical_pendulum.demos import ecospy_run
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    module, function, args = WORK[name]
+    monkeypatch.setattr(importlib.import_module(module), function, interrupted)
+    monkeypatch.setattr(ecospy_run, "missing", lambda: None)
+    results = tmp_path / "results.csv"
+    results.write_text("time,alpha0\n0,0\n1,0.1\n")
+    (tmp_path / "out").mkdir()
+    places = {"FMU": str(seed_fmu), "RESULTS": str(results)}
+    status, _, err = run_main(capsys, name, *[places.get(a, a.replace("OUT", str(tmp_path / "out")))
+                                              for a in args])
+    assert status == 130 and err == f"conical-pendulum {name}: interrupted\n"
+
+
+def test_build_fmu_py_names_itself_when_interrupted(monkeypatch, capsys, tmp_path):
+    import conical_pendulum.build.fmu
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(conical_pendulum.build.fmu, "build_fmu", interrupted)
+    assert run_command("build", ["--no-check", "--output", str(tmp_path / "x.fmu")], prog="build_fmu.py") == 130
+    assert capsys.readouterr().err == "build_fmu.py: interrupted\n"
+
+
+def test_a_failed_ecospy_run_is_the_demos_status_1(monkeypatch, capsys, tmp_path):
+    """The demo's own failure (ecospy ran and failed) is status 1, printed by the CLI, not the demo."""
+    import conical_pendulum.build.fmu
+    from conical_pendulum.demos import coupled, ecospy_run
+
+    def failed(*args, **kwargs):
+        raise RuntimeError("ecospy failed (exit 3): boom")
+
+    monkeypatch.setattr(ecospy_run, "missing", lambda: None)
+    monkeypatch.setattr(conical_pendulum.build.fmu, "build_fmu", lambda scene, path: type("B", (), {"path": path}))
+    monkeypatch.setattr(coupled, "build_cart_fmu", lambda path: path)
+    monkeypatch.setattr(coupled, "reference", lambda *args: {})
+    monkeypatch.setattr(coupled, "cosimulate", failed)
+    status, out, err = run_main(capsys, "demo", "--out", tmp_path, "--steps", "0.5", "--stop-time", "1",
+                                "--cart-mass", "5", "--scheme", "explicit")
+    assert status == 1 and one_line(err, "demo") == "ecospy failed (exit 3): boom"
