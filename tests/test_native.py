@@ -19,6 +19,7 @@ from conical_pendulum.analysis.simulate import simulate
 from conical_pendulum.build.fmu import build_fmu
 from conical_pendulum.build.native import fmi_headers
 from fmu_helpers import BAD_VALUES, Instance
+from required_tools import require_tool
 
 HOST_SOURCE = Path(__file__).parent / "hosts" / "fmi_host.c"
 SCENES = {"seed": Scene.uniform(3), "coupled": Scene.uniform(3, coupling=True),
@@ -208,7 +209,7 @@ def test_ecos_command_line_engine_runs_it_with_a_clean_environment(native, tmp_p
 
 
 def test_a_thousand_cycles_under_valgrind(native, host, tmp_path):
-    assert shutil.which("valgrind"), "needs Debian's valgrind (.ci/run installs it)"
+    require_tool("valgrind", None, "Debian's valgrind (.ci/run installs it)")
     md = read_model_description(str(native))
     run = subprocess.run(["valgrind", "--error-exitcode=3", "--leak-check=full",
                           "--errors-for-leak-kinds=definite,indirect,possible", "--quiet",
@@ -306,8 +307,8 @@ def test_a_failed_step_is_discarded_with_the_diagnosis_and_reset_goes_on(tmp_pat
 def test_the_windows_binary_runs_under_wine(tmp_path, host):
     """binaries/win64 cross-compiled with Debian's mingw-w64, run by the same C host built
     for Windows, under Debian's wine64; it agrees with the Linux binary."""
-    compiler, wine = shutil.which("x86_64-w64-mingw32-gcc"), "/usr/lib/wine/wine64"
-    assert compiler and os.path.exists(wine), "needs mingw-w64 and wine64 (.ci/run installs them)"
+    compiler = require_tool("x86_64-w64-mingw32-gcc", None, "Debian's gcc-mingw-w64-x86-64 (.ci/run installs it)")
+    wine = require_tool("wine64", "/usr/lib/wine/wine64", "Debian's wine64 (.ci/run installs it)")
     both = build_fmu(SCENES["seed"], tmp_path / "Both.fmu", backend="native",
                      platforms=("linux64", "win64")).path
     assert validate_fmu(str(both)) == []

@@ -7,6 +7,7 @@ import pytest
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.viz.pydy_page import PREFIX, write_pydy_page
+from required_tools import require_tool
 
 
 def test_the_page_carries_the_fmu_trajectories(seed_fmu, tmp_path):
@@ -57,7 +58,6 @@ def test_the_page_plays_in_headless_chromium(seed_fmu, tmp_path):
     chain: three red links and three blue bobs, each apart, inside the canvas and not specks."""
     import functools
     import http.server
-    import shutil
     import threading
     import time
 
@@ -66,8 +66,8 @@ def test_the_page_plays_in_headless_chromium(seed_fmu, tmp_path):
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
-    browser, driver_path = shutil.which("chromium"), shutil.which("chromedriver")
-    assert browser and driver_path, "needs Debian's chromium and chromium-driver (see .ci/run)"
+    browser = require_tool("chromium", None, "Debian's chromium (.ci/run installs it)")
+    driver_path = require_tool("chromedriver", None, "Debian's chromium-driver (.ci/run installs it)")
     run = run_fmu(seed_fmu, stop_time=1.0, output_interval=1 / 60, start_values={"alpha0": 1.0})
     folder, address = write_pydy_page(Scene.uniform(3), {n: run[n] for n in run.dtype.names}, tmp_path)
     handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(folder))
