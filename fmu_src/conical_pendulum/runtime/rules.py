@@ -23,9 +23,11 @@ class Rule:
     low: float = -math.inf
     low_open: bool = False  # the value must exceed low, not only reach it
     high: float = math.inf  # the value must stay below high
+    whole: bool = False     # the value must be a whole number (a count carried as a Real)
 
     def holds(self, value: float) -> bool:
-        return (value > self.low if self.low_open else value >= self.low) and value < self.high
+        return ((value > self.low if self.low_open else value >= self.low) and value < self.high
+                and (not self.whole or float(value).is_integer()))
 
 
 NATIVE_SOLVERS = SOLVERS[:3]  # the C solvers; Radau runs on scipy, in the pythonfmu FMU only
@@ -48,6 +50,8 @@ RULES = {
                           low=0.0, high=len(NATIVE_SOLVERS)),
     "hold-order": Rule("choose 0 (held over the step) or 1 (extrapolated linearly)", "0 or 1",
                        low=0.0, high=2.0),
+    "statistic": Rule("must be a whole number >= 0 and < 2**53", "a whole number >= 0 and < 2**53",
+                      low=0.0, high=2.0 ** 53, whole=True),
 }
 
 # The rule of a variable by its name without the link index: (rule, what it is).
@@ -68,6 +72,7 @@ QUANTITIES = {
     "c_cart": ("non-negative", "a damping coefficient"),
     "M_x": ("non-negative", "an apparent mass"),
     "F_x_order": ("hold-order", ""),
+    "h": ("non-negative", "the solver's carried step"),  # no variable: what an FMU state carries
 }
 
 # The scene's link fields and their rules: those that are parameters follow the parameter's.
@@ -97,6 +102,7 @@ SETTINGS = {
 STATISTICS = {"n_rhs": "right-hand side evaluations so far",
               "n_steps": "accepted internal steps so far",
               "n_rejected": "rejected internal steps so far"}
+QUANTITIES.update({name: ("statistic", "a count") for name in STATISTICS})  # restored states
 
 
 # Why a variable cannot be set: the same words in the pythonfmu slave and the native FMU.
@@ -126,7 +132,10 @@ def check_value(name: str, value, quantity: str | None = None) -> float:
     quantity: the name whose rule applies, when `name` only labels the value."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise BadValue(f"{name}: expected a number, got {value!r}")
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond any double
+        number = math.inf
     shown = value if isinstance(value, numbers.Integral) else number  # a count reads as one
     if not math.isfinite(number):
         raise BadValue(f"{name} = {shown!r}: must be finite")

@@ -8,6 +8,7 @@ typedef struct {
     int low_open;         /* the value must exceed low, not only reach it */
     double high;          /* the value must stay below high */
     const char *refusal;  /* what a message says when the value breaks the rule */
+    int whole;            /* the value must be a whole number (a count carried as a Real) */
 } cp_rule;
 
 #endif
