@@ -115,7 +115,8 @@ static const char *refusal(const char *name, const char *shown, double value, co
         snprintf(message, size, "%s = %s: must be finite", name, shown);
         return message;
     }
-    int holds = (rule->low_open ? value > rule->low : value >= rule->low) && value < rule->high;
+    int holds = (rule->low_open ? value > rule->low : value >= rule->low) && value < rule->high
+                && (!rule->whole || value == floor(value));
     if (holds) return NULL;
     snprintf(message, size, "%s = %s: %s%s%s", name, shown, what, *what ? " " : "", rule->refusal);
     return message;
@@ -127,6 +128,16 @@ static const char *real_refusal(const char *name, double value, const cp_rule *r
     char shown[40];
     python_repr(shown, sizeof shown, value);
     return refusal(name, shown, value, rule, what, message, size);
+}
+
+/* NULL if an Integer setting (solver or max_steps) may take value, or the message refusing it. */
+static const char *integer_refusal(fmi2ValueReference vr, fmi2Integer value, char *message,
+                                   size_t size)
+{
+    const cp_rule *rule = &cp_rules[vr == CP_VR_SOLVER ? CP_SOLVER_RULE : CP_MAX_STEPS_RULE];
+    char shown[16];
+    snprintf(shown, sizeof shown, "%d", (int)value);  /* a count reads as one: 7, not 7.0 */
+    return refusal(cp_variable_name(vr), shown, value, rule, "", message, size);
 }
 
 static void invalidate(Instance *inst)
@@ -248,7 +259,7 @@ fmi2Status fmi2Terminate(fmi2Component c)
 
 fmi2Status fmi2Reset(fmi2Component c)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2Reset");
+    Instance *inst = (Instance *)c;  /* allowed in every state: whatever it holds, never refused */
     if (!inst) return fmi2Error;
     reset_values(inst);
     return fmi2OK;
@@ -363,19 +374,14 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2SetInteger: vr or value is NULL");
     char message[512];
     for (size_t k = 0; k < nvr; k++) {
-        const cp_rule *rule;
-        if (vr[k] == CP_VR_SOLVER) rule = &cp_rules[CP_SOLVER_RULE];
-        else if (vr[k] == CP_VR_MAX_STEPS) rule = &cp_rules[CP_MAX_STEPS_RULE];
-        else return REFUSE(inst, "fmi2SetInteger: value reference %u is not an Integer variable",
-                           vr[k]);
-        const char *name = cp_variable_name(vr[k]);
+        if (vr[k] != CP_VR_SOLVER && vr[k] != CP_VR_MAX_STEPS)
+            return REFUSE(inst, "fmi2SetInteger: value reference %u is not an Integer variable",
+                          vr[k]);
         if (!(inst->v.state & BEFORE_INIT)) {
-            snprintf(message, sizeof message, CP_FIXED_MESSAGE, name);
+            snprintf(message, sizeof message, CP_FIXED_MESSAGE, cp_variable_name(vr[k]));
             return REFUSE(inst, "%s", message);
         }
-        char shown[16];
-        snprintf(shown, sizeof shown, "%d", (int)value[k]);  /* a count reads as one: 7, not 7.0 */
-        if (refusal(name, shown, value[k], rule, "", message, sizeof message))
+        if (integer_refusal(vr[k], value[k], message, sizeof message))
             return REFUSE(inst, "%s", message);
     }
     for (size_t k = 0; k < nvr; k++)
@@ -415,6 +421,63 @@ typedef struct {
     char guid[sizeof CP_GUID];
 } StateHeader;
 
+/* The states of FMI 2.0's state machine an instance of each type can be in. */
+#define CO_SIMULATION_STATES (BEFORE_INIT | STEP_COMPLETE | STEP_FAILED | TERMINATED)
+#define MODEL_EXCHANGE_STATES (BEFORE_INIT | EVENT_MODE | CONTINUOUS_TIME | TERMINATED)
+
+/* NULL if v can be the values of an instance of this type, or what is wrong with it, naming
+ * the field and its value: a restored state is checked as values set through the API are.
+ * The instance state is one state of the type's state machine; every Real keeps its
+ * variable's rule as fmi2SetReal applies it (the outputs where they are valid), and the
+ * statistics are counts; solver and max_steps keep theirs as fmi2SetInteger applies them,
+ * the tolerance is 0 (none) or keeps fmi2SetupExperiment's; the carried step is finite and
+ * not negative, the flags are 0 or 1, the carried derivatives are finite where they are
+ * valid, and the times are finite. */
+static const char *invalid_values(fmi2Type type, const Values *v, char *message, size_t size)
+{
+    const unsigned states = type == fmi2CoSimulation ? CO_SIMULATION_STATES : MODEL_EXCHANGE_STATES;
+    const unsigned bits = (unsigned)v->state;
+    if (!(bits & states) || (bits & (bits - 1))) {  /* none of them, or more than one bit */
+        snprintf(message, size, "instance state = %d: not one state a%s instance can be in",
+                 v->state, type == fmi2CoSimulation ? " Co-Simulation" : " Model Exchange");
+        return message;
+    }
+    const struct { const char *name; int value; } flags[] = {
+        {"fsal", v->fsal}, {"dx_valid", v->dx_valid}, {"outputs_valid", v->outputs_valid}};
+    for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
+        if (flags[k].value != 0 && flags[k].value != 1) {
+            snprintf(message, size, "%s = %d: must be 0 or 1", flags[k].name, flags[k].value);
+            return message;
+        }
+    for (int vr = 0; vr < CP_NREAL; vr++) {
+        if (vr >= CP_VR_OUTPUT && vr < CP_VR_STATISTICS && !v->outputs_valid) continue;
+        if (real_refusal(cp_variable_name(vr), v->r[vr], &cp_rules[cp_real_rule[vr]],
+                         cp_real_what[vr], message, size))
+            return message;
+    }
+    if (integer_refusal(CP_VR_SOLVER, v->solver, message, size)
+        || integer_refusal(CP_VR_MAX_STEPS, v->max_steps, message, size))
+        return message;
+    if (v->tolerance != 0.0 && real_refusal("tolerance (from setupExperiment)", v->tolerance,
+                                            &cp_rules[cp_real_rule[CP_VR_RTOL]],
+                                            cp_real_what[CP_VR_RTOL], message, size))
+        return message;
+    if (real_refusal("h", v->h, &cp_rules[CP_STEP_RULE], CP_STEP_WHAT, message, size)
+        || real_refusal("time", v->time, &cp_rules[CP_FINITE_RULE], "", message, size)
+        || real_refusal("last_successful_time", v->last_successful_time,
+                        &cp_rules[CP_FINITE_RULE], "", message, size))
+        return message;
+    char name[160];
+    for (int k = 0; k < CP_NSTATE; k++) {
+        snprintf(name, sizeof name, "carried %s", cp_variable_name(CP_VR_DERIVATIVE + k));
+        if ((v->fsal && real_refusal(name, v->work[k], &cp_rules[CP_FINITE_RULE], "", message, size))
+            || (v->dx_valid && real_refusal(cp_variable_name(CP_VR_DERIVATIVE + k), v->dx[k],
+                                            &cp_rules[CP_FINITE_RULE], "", message, size)))
+            return message;
+    }
+    return NULL;
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     Instance *inst = checked(c, ANY_STATE, "fmi2GetFMUstate");
@@ -432,13 +495,16 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
     Instance *inst = checked(c, ANY_STATE, "fmi2SetFMUstate");
     if (!inst) return fmi2Error;
     if (!FMUstate) return REFUSE(inst, "fmi2SetFMUstate: FMUstate is NULL");
+    char message[512];
+    if (invalid_values(inst->type, FMUstate, message, sizeof message))
+        return REFUSE(inst, "fmi2SetFMUstate: the state's %s", message);
     inst->v = *(const Values *)FMUstate;
     return fmi2OK;
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2FreeFMUstate");
+    Instance *inst = (Instance *)c;  /* allowed in every state: whatever it holds, never refused */
     if (!inst) return fmi2Error;
     if (!FMUstate) return REFUSE(inst, "fmi2FreeFMUstate: FMUstate is NULL");
     if (*FMUstate) inst->cb.freeMemory(*FMUstate);
@@ -484,10 +550,21 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
         || memcmp(header.guid, CP_GUID, sizeof CP_GUID) != 0)
         return REFUSE(inst, "fmi2DeSerializeFMUstate: the bytes are not a state of this FMU "
                       "(another model, build or version)");
-    Values *copy = *FMUstate ? *FMUstate : inst->cb.allocateMemory(1, sizeof(Values));
+    /* Checked in a copy of its own (the bytes need not be aligned), taken only if it passes. */
+    Values *copy = inst->cb.allocateMemory(1, sizeof(Values));
     if (!copy) return REFUSE(inst, "fmi2DeSerializeFMUstate: out of memory");
     memcpy(copy, serializedState + sizeof header, sizeof(Values));
-    *FMUstate = copy;
+    char message[512];
+    if (invalid_values(inst->type, copy, message, sizeof message)) {
+        inst->cb.freeMemory(copy);
+        return REFUSE(inst, "fmi2DeSerializeFMUstate: the state's %s", message);
+    }
+    if (*FMUstate) {  /* the caller's state, reused */
+        memcpy(*FMUstate, copy, sizeof(Values));
+        inst->cb.freeMemory(copy);
+    } else {
+        *FMUstate = copy;
+    }
     return fmi2OK;
 }
 
