@@ -17,7 +17,10 @@ BAD_VALUES = [
     ("Ixx0", -2.0, "Ixx0 = -2.0: a moment of inertia cannot be negative"),
     ("g", float("nan"), "g = nan: must be finite"),
     ("alpha0", float("inf"), "alpha0 = inf: must be finite"),
-    ("rtol", 0.0, "rtol = 0.0: a tolerance must be positive"),
+    ("rtol", 0.0, "rtol = 0.0: a relative tolerance must be at least 2.22e-14 (100 machine "
+             "epsilons): no solver resolves less"),
+    ("rtol", 1e-15, "rtol = 1e-15: a relative tolerance must be at least 2.22e-14 (100 machine "
+             "epsilons): no solver resolves less"),
     ("max_steps", 0, "max_steps = 0: must be at least 1"),
     ("energy", 1.0, "energy is a calculated output: it cannot be set"),
 ]

@@ -117,7 +117,8 @@ def _compile(name: str, work: Path) -> None:
     from Cython.Build import cythonize
     from setuptools import Distribution, Extension
 
-    sources = [f"{name}.pyx", "model.c", "dynamics.c", "solvers.c", "diagnosis.c", "chain.c"]
+    sources = [f"{name}.pyx", "model.c", "dynamics.c", "solvers.c", "diagnosis.c", "cosim.c",
+               "chain.c"]
     extension = Extension(
         name, [str(work / s) for s in sources], include_dirs=[str(work)],
         define_macros=[("Py_LIMITED_API", LIMITED_API), ("CYTHON_LIMITED_API", "1")],

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import subprocess
 import tempfile
@@ -27,10 +28,18 @@ from ..scene import Scene
 from .compiler import CSRC, build_core
 from .fmu import MODEL_NAME, FmuBuild, checked_output, checked_settings, model_data
 
-GLUE_SOURCES = ["model.c", "dynamics.c", "chain.c", "solvers.c", "diagnosis.c", "directional.c",
-                "fmi2_glue.c"]
+GLUE_SOURCES = ["model.c", "dynamics.c", "chain.c", "solvers.c", "diagnosis.c", "cosim.c",
+                "directional.c", "fmi2_glue.c"]
 GLUE_HEADERS = ["model.h", "real.h", "dynamics.h", "chain.h", "solvers.h", "tableaus.h", "status.h",
-                "diagnosis.h", "directional.h", "rules.h", "fmu_config.h"]
+                "diagnosis.h", "cosim.h", "directional.h", "rules.h", "fmu_config.h"]
+
+
+# The log categories, written once: the model description's LogCategories and fmu_config.h's
+# CP_LOG_* (the only categories fmi2_glue.c can log in, and those fmi2SetDebugLogging takes).
+LOG_CATEGORIES = {
+    "logStatusError": "refused values and calls",
+    "logStatusDiscard": "steps that could not complete, with a diagnosis",
+}
 
 
 def fmi_headers() -> Path:
@@ -53,13 +62,19 @@ def _c_string(text: str) -> str:
     return json.dumps(text)  # a JSON string of ASCII text is a valid C string literal
 
 
+def log_constant(category: str) -> str:
+    """The C name of a log category: logStatusError -> CP_LOG_STATUS_ERROR."""
+    return "CP_" + re.sub(r"(?<!^)(?=[A-Z])", "_", category).upper()
+
+
 def _c_double(value: float) -> str:
     return "INFINITY" if value == float("inf") else ("-INFINITY" if value == -float("inf")
                                                       else repr(float(value)))
 
 
 def config_header(data: dict, guid: str) -> str:
-    """fmu_config.h: value references, start values, names and rules for fmi2_glue.c."""
+    """fmu_config.h: value references, start values, names, rules and log categories for
+    fmi2_glue.c."""
     reals = real_variables(data)
     groups = data["variables"]
     n_state = len(groups["states"])
@@ -92,6 +107,10 @@ def config_header(data: dict, guid: str) -> str:
         f"#define CP_STEP_WHAT {_c_string(rule_of('h')[1])}",
         f"#define CP_CALCULATED_MESSAGE {_c_string(CALCULATED.replace('{name}', '%s'))}",
         f"#define CP_FIXED_MESSAGE {_c_string(FIXED.replace('{name}', '%s'))}", "",
+        "/* The log categories, as the model description's LogCategories declares them. */",
+        "enum { " + ", ".join(map(log_constant, LOG_CATEGORIES)) + ", CP_NLOG };",
+        "static const char *const cp_log_categories[CP_NLOG] = {"
+        + ", ".join(map(_c_string, LOG_CATEGORIES)) + "};",
         "static const cp_rule cp_rules[] = {",
         *(f"    {{{_c_double(r.low)}, {int(r.low_open)}, {_c_double(r.high)}, "
           f"{_c_string(r.refusal)}, {int(r.whole)}}},  /* {name} */" for name, r in RULES.items()),
@@ -145,8 +164,7 @@ def model_description(data: dict, guid: str) -> bytes:
         for name in GLUE_SOURCES:
             ET.SubElement(files, "File", name=name)
     categories = ET.SubElement(root, "LogCategories")
-    for name, text in (("logStatusError", "refused values and calls"),
-                       ("logStatusDiscard", "steps that could not complete, with a diagnosis")):
+    for name, text in LOG_CATEGORIES.items():
         ET.SubElement(categories, "Category", name=name, description=text)
     ET.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime="10.0",
                   stepSize=repr(1.0 / 60.0))

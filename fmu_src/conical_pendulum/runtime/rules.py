@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import sys
 from dataclasses import dataclass
 
 SOLVERS = ("rk4", "rk45", "dop853", "radau")  # the FMU's `solver`: its index; RK4..DOP853 are in C
@@ -43,6 +44,11 @@ RULES = {
     "positive": Rule("must be positive", "a positive finite number", low=0.0, low_open=True),
     "non-negative": Rule("cannot be negative", "a finite number >= 0", low=0.0),
     "count": Rule("must be at least 1", "a whole number >= 1", low=1.0),
+    # scipy's floor for rtol (100 machine epsilons), where it warns and raises the value
+    "relative-tolerance": Rule(f"must be at least {100 * sys.float_info.epsilon:.3g} (100 "
+                               "machine epsilons): no solver resolves less",
+                               f"a finite number >= {100 * sys.float_info.epsilon:.3g}",
+                               low=100 * sys.float_info.epsilon),
     "solver": Rule(_choose(SOLVERS), f"a whole number from 0 to {len(SOLVERS) - 1}",
                    low=0.0, high=len(SOLVERS)),
     "native-solver": Rule(_choose(NATIVE_SOLVERS) + "; Radau needs the pythonfmu FMU",
@@ -62,7 +68,7 @@ QUANTITIES = {
     "Ixx": ("non-negative", "a moment of inertia"),
     "Iyy": ("non-negative", "a moment of inertia"),
     "Izz": ("non-negative", "a moment of inertia"),
-    "rtol": ("positive", "a tolerance"),
+    "rtol": ("relative-tolerance", "a relative tolerance"),
     "atol": ("positive", "a tolerance"),
     "max_step": ("non-negative", "the largest internal step"),
     "max_steps": ("count", ""),

@@ -29,6 +29,9 @@ MODEL_FILE = "model.json"
 RADAU = SOLVERS.index("radau")
 REAL_SETTINGS = tuple(name for name, setting in SETTINGS.items() if not setting.integer)
 INTEGER_SETTINGS = tuple(name for name, setting in SETTINGS.items() if setting.integer)
+MODES = ("instantiated", "initialization", "step")  # where an instance is in FMI's state machine
+STATE_FIELDS = ("reals", "ints", "solver", "mode", "tolerance")  # of an FMU state (_get_fmu_state)
+MEMORY_FIELDS = ("h", "fsal", "f")  # of the solver memory in it (the core's Stepper.memory)
 
 
 def read_model(resources: str) -> dict:
@@ -75,6 +78,10 @@ def _fmi_call(method):
 
 class Refused(ValueError):
     """An input the slave refuses; its message went to the FMI logger already."""
+
+
+class Unreadable(dict):
+    """What fmi2DeSerializeFMUstate makes of bytes that are no state: refused when set."""
 
 
 class ConicalPendulum(Fmi2Slave):
@@ -181,7 +188,7 @@ class ConicalPendulum(Fmi2Slave):
             failure = self._radau_step(current_time, step_size)
         else:
             status = self._stepper.advance(current_time, step_size)
-            failure = status and self._step_failure(status, current_time, step_size)
+            failure = status and self._stepper.diagnosis(status)
         if failure:
             self.log(failure, Fmi2Status.discard)
             return False
@@ -237,23 +244,38 @@ class ConicalPendulum(Fmi2Slave):
         rtol, atol, max_step, max_steps = (self._setting(name) for name in
                                            ("rtol", "atol", "max_step", "max_steps"))
         core, stepper = self._core, self._stepper
+        unworkable = core.unworkable(RADAU, t, dt, max_step, max_steps)
+        if unworkable:
+            return self._step_failure(unworkable, t, dt)
+        if dt == 0:
+            return None
         state, params = self._state, stepper.params
         options = {"first_step": min(stepper.h, dt)} if stepper.h > 0 else {}
-        solver = Radau(lambda _, x: core.rhs(x, params), t, state.copy(), t + dt, rtol=rtol,
-                       atol=atol, max_step=max_step or np.inf, **options)
-        steps, problem = 0, None
-        try:
-            while solver.status == "running" and steps < max_steps:
-                problem = solver.step()
-                steps += 1
+        steps, solver = 0, None
+        try:  # scipy's overflows and non-finite matrices end in a diagnosis, not on stderr
+            with np.errstate(all="ignore"):
+                solver = Radau(lambda _, x: core.rhs(x, params), t, state.copy(), t + dt,
+                               rtol=rtol, atol=atol, max_step=max_step or np.inf, **options)
+                while solver.status == "running" and steps < max_steps:
+                    solver.step()  # "failed" only where the step size underflows
+                    steps += 1
         except core.CoreError as exc:
-            problem = str(exc)
-        stepper.stats[0] += solver.nfev
-        stepper.stats[1] += steps
-        if solver.status != "finished":
-            problem = problem or f"more than max_steps = {max_steps} internal steps were needed"
-            return (f"do_step from t = {t:.9g} s by {dt:.3g} s failed (radau): {problem}. "
-                    f"The state is kept at t = {t:.9g} s.")
+            return self._step_failure(exc.status, t, dt, exc.dof, exc.pivot_ratio)
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:  # no finite step
+            return f"{self._step_failure(core.STEP_UNDERFLOW, t, dt)} (scipy: {exc})"
+        finally:
+            stepper.stats[0] += solver.nfev if solver else 0
+            stepper.stats[1] += steps
+        if solver.status == "failed":
+            return self._step_failure(core.STEP_UNDERFLOW, t, dt)
+        if solver.status == "running":
+            return self._step_failure(core.TOO_MANY_STEPS, t, dt)
+        if not (np.all(np.isfinite(solver.y)) and np.all(np.isfinite(core.outputs(solver.y, params)))):
+            try:  # the pivot force where M is singular: the right-hand side says where
+                core.rhs(solver.y, params)
+            except core.CoreError as exc:
+                return self._step_failure(exc.status, t, dt, exc.dof, exc.pivot_ratio)
+            return self._step_failure(core.NONFINITE, t, dt)
         state[:] = solver.y
         stepper.h = solver.h_abs
         stepper.update_outputs()
@@ -275,11 +297,87 @@ class ConicalPendulum(Fmi2Slave):
     @_fmi_call
     def _set_fmu_state(self, state):
         self._check_alive()
-        self._reals[:] = state["reals"]
-        self._ints[:] = state["ints"]
-        self._stepper.restore(state["solver"])
-        self._mode, self._tolerance = state["mode"], state["tolerance"]
+        reals, ints, memory, mode, tolerance = self._checked_state(state)
+        self._reals[:] = reals
+        self._ints[:] = ints
+        self._stepper.restore(memory)
+        self._mode, self._tolerance = mode, tolerance
         self._configure()
+
+    @staticmethod
+    def _fmu_state_from_bytes(state: bytes) -> dict:
+        """The state in pythonfmu's bytes (JSON); bytes that are none, refused when set.
+
+        Not raised here: pythonfmu 0.7 then releases the instance, its class and its log
+        queue at once, and a static method cannot hold them for it (see _fmi_call)."""
+        try:
+            return Fmi2Slave._fmu_state_from_bytes(state)
+        except ValueError as exc:  # not UTF-8, not JSON
+            return Unreadable(unreadable=str(exc))
+
+    def _checked_state(self, state):
+        """A state to restore, checked as values set through the API are, before any is taken.
+
+        The fields of _get_fmu_state with their types and sizes; every Real keeps its
+        variable's rule (runtime.rules: states and inputs finite, statistics whole counts),
+        the Integer settings theirs (and fit an fmi2Integer), the tolerance is None or keeps
+        setupExperiment's; the solver's carried step is finite and not negative, fsal 0 or 1,
+        the carried derivative finite where fsal says it is valid; the mode is one of MODES.
+        Returns (reals, ints, solver memory, mode, tolerance), or refuses naming what is wrong.
+        """
+        def refuse(what):
+            self._fail(f"fmi2SetFMUstate: the state's {what}")
+
+        if isinstance(state, Unreadable):
+            self._fail(f"fmi2SetFMUstate: the bytes given to fmi2DeSerializeFMUstate are not a "
+                       f"state of this FMU ({state['unreadable']})")
+
+        def numbers_list(name, value, size):
+            if not (isinstance(value, list) and len(value) == size):
+                refuse(f"{name}: expected a list of {size} numbers, got {value!r:.80}")
+            return value
+
+        if not (isinstance(state, dict) and sorted(state) == sorted(STATE_FIELDS)):
+            refuse(f"fields: expected {', '.join(STATE_FIELDS)}, got {state!r:.80}")
+        memory = state["solver"]
+        if not (isinstance(memory, dict) and sorted(memory) == sorted(MEMORY_FIELDS)):
+            refuse(f"solver memory: expected {', '.join(MEMORY_FIELDS)}, got {memory!r:.80}")
+        if not (isinstance(state["mode"], str) and state["mode"] in MODES):
+            refuse(f"mode = {state['mode']!r:.80}: choose one of {', '.join(MODES)}")
+        reals = numbers_list("reals", state["reals"], len(self._reals))
+        ints = numbers_list("ints", state["ints"], len(self._ints))
+        f = numbers_list("solver memory f", memory["f"], len(self._state))
+        fsal = memory["fsal"]
+        if isinstance(fsal, bool) or fsal not in (0, 1):
+            refuse(f"fsal = {fsal!r:.80}: must be 0 or 1")
+        try:
+            reals = [check_value(self.vars[vr].name, value) for vr, value in enumerate(reals)]
+            ints = [check_setting(name, value) for name, value in zip(INTEGER_SETTINGS, ints)]
+            for name, value in zip(INTEGER_SETTINGS, ints):
+                if not -2**31 <= value < 2**31:
+                    raise BadValue(f"{name} = {value}: not a 32-bit fmi2Integer")
+            tolerance = state["tolerance"]
+            if tolerance is not None:
+                tolerance = check_value("tolerance (from setupExperiment)", tolerance, "rtol")
+            h = check_value("h", memory["h"])
+            names = [f"carried der({name})" for name in self._core.STATE_NAMES]
+            if fsal:
+                f = [check_value(name, value) for name, value in zip(names, f)]
+            else:  # not used: any double
+                f = [self._double(name, value) for name, value in zip(names, f)]
+        except BadValue as exc:
+            refuse(str(exc))
+        return reals, ints, {"h": h, "fsal": int(fsal), "f": f}, state["mode"], tolerance
+
+    @staticmethod
+    def _double(name, value):
+        """value as a double (any, even not finite), or BadValue."""
+        try:
+            if not isinstance(value, bool) and isinstance(value, (int, float)):
+                return float(value)
+        except OverflowError:
+            pass
+        raise BadValue(f"{name} = {value!r:.80}: not a double")
 
     # --- helpers ----------------------------------------------------------------------
 
@@ -304,11 +402,11 @@ class ConicalPendulum(Fmi2Slave):
         if self._mode == "step" and var.causality != Fmi2Causality.input:
             self._fail(FIXED.format(name=name))
 
-    def _step_failure(self, status, t, dt):
-        """The diagnosis of a failed step (the core's, as in every FMU of this package)."""
-        stepper = self._stepper
-        return self._core.diagnose(status, t, dt, stepper.bad_dof, stepper.pivot_ratio,
-                                   *(self._setting(name) for name in ("rtol", "atol", "max_steps")))
+    def _step_failure(self, status, t, dt, bad_dof=-1, pivot_ratio=1.0):
+        """The diagnosis of a failed Radau step (the core's, as in every FMU of this package)."""
+        return self._core.diagnose(status, t, dt, bad_dof, pivot_ratio,
+                                   *(self._setting(name) for name in
+                                     ("rtol", "atol", "max_step", "max_steps")))
 
 
 SLAVE = ConicalPendulum  # what the FMU's entry module exports (runtime/entry.py)

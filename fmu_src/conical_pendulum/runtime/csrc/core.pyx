@@ -7,7 +7,8 @@ Copied to a module name unique to the scene and compiled against the limited API
 import numpy as np
 
 cdef extern from "status.h":
-    int CP_OK, CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_BAD_STEP, CP_SINGULAR, CP_NONFINITE
+    int CP_OK, CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_BAD_STEP, CP_MAX_STEP_UNRESOLVED
+    int CP_SINGULAR, CP_NONFINITE
     const int cp_status_codes[]
     int CP_NSTATUS
     const char *cp_status_message(int status)
@@ -19,15 +20,13 @@ cdef extern from "solvers.h":
         cp_rhs_fn rhs
         void *ctx
     ctypedef struct cp_stats:
-        long nfev, naccept, nreject
+        long long nfev, naccept, nreject
     int CP_RK4, CP_RK45, CP_DOP853
     int CP_WORK_SIZE(int dim)
+    int cp_unworkable(int method, double t, double dt, double max_step, long long max_steps)
     int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double *out,
-                       double rtol, double atol, double max_step, long max_steps, double *work,
-                       cp_stats *stats) noexcept nogil
-    int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
-                     double rtol, double atol, double max_step, long max_steps,
-                     double *h, double *work, int *fsal, cp_stats *stats) noexcept nogil
+                       double rtol, double atol, double max_step, long long max_steps,
+                       double *work, cp_stats *stats) noexcept nogil
 
 cdef extern from "dynamics.h":
     int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT
@@ -48,9 +47,19 @@ cdef extern from "diagnosis.h":
         double t, dt
         int bad_dof
         double pivot_ratio
-        double rtol, atol
-        long max_steps
+        double rtol, atol, max_step
+        long long max_steps
     int cp_diagnose(char *buf, size_t size, int status, const cp_failure *failure)
+
+cdef extern from "cosim.h":
+    ctypedef struct cp_settings:
+        int method
+        double rtol, atol, max_step
+        long long max_steps
+    int CP_STEP_WORK_SIZE
+    int cp_cosim_step(const cp_settings *settings, const double *p, double *x, double *y,
+                      double t, double dt, double *h, double *work, int *fsal, double *stats,
+                      cp_failure *failure) noexcept nogil
 
 cdef extern from "<math.h>" nogil:
     double INFINITY
@@ -72,6 +81,7 @@ STATE_NAMES = tuple(CP_STATE_NAMES.decode().split())
 PARAMETER_NAMES = tuple(CP_PARAMETER_NAMES.decode().split())
 OUTPUT_NAMES = tuple(CP_OUTPUT_NAMES.decode().split())
 TOO_MANY_STEPS, STEP_UNDERFLOW, BAD_STEP = CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_BAD_STEP
+MAX_STEP_UNRESOLVED = CP_MAX_STEP_UNRESOLVED
 SINGULAR, NONFINITE = CP_SINGULAR, CP_NONFINITE
 METHODS = {"rk4": CP_RK4, "rk45": CP_RK45, "dop853": CP_DOP853}
 STATUS = {cp_status_codes[k]: cp_status_message(cp_status_codes[k]).decode()  # status.h's list
@@ -87,15 +97,25 @@ class CoreError(RuntimeError):
                          f"(pivot ratio {pivot_ratio:.3g})")
 
 
+def unworkable(int method, double t, double dt, double max_step, long long max_steps):
+    """0, or the status of a step that these settings cannot take whatever the state
+    (solvers.h); any method but RK4's index counts as adaptive."""
+    return cp_unworkable(method, t, dt, max_step, max_steps)
+
+
+cdef str _diagnosis(int status, const cp_failure *failure):
+    cdef char text[2048]
+    cp_diagnose(text, sizeof(text), status, failure)
+    return text.decode()
+
+
 def diagnose(int status, double t, double dt, int bad_dof, double pivot_ratio, double rtol,
-             double atol, long max_steps):
+             double atol, double max_step, long long max_steps):
     """What a user reads when a step fails (diagnosis.c, the same text in every FMU)."""
     cdef cp_failure failure
     failure.t, failure.dt, failure.bad_dof, failure.pivot_ratio = t, dt, bad_dof, pivot_ratio
-    failure.rtol, failure.atol, failure.max_steps = rtol, atol, max_steps
-    cdef char text[2048]
-    cp_diagnose(text, sizeof(text), status, &failure)
-    return text.decode()
+    failure.rtol, failure.atol, failure.max_step, failure.max_steps = rtol, atol, max_step, max_steps
+    return _diagnosis(status, &failure)
 
 
 cdef void _system(cp_system *system, cp_model *model, const double *p, cp_stats *stats) noexcept nogil:
@@ -169,7 +189,7 @@ def outputs(x_in, p_in):
 
 
 def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
-                   double max_step=0.0, long max_steps=10**7):
+                   double max_step=0.0, long long max_steps=10**7):
     """States at every time, by the core's DOP853 with dense output: (array, nfev).
 
     One integration over the whole grid, as solve_ivp(method="DOP853", t_eval=times)
@@ -239,12 +259,9 @@ cdef class Stepper:
     cdef public object values, params, stats
     cdef double[::1] _values, _params, _stats, _work
     cdef int _fsal
-    cdef int _method
-    cdef double _rtol, _atol, _max_step
-    cdef long _max_steps
+    cdef cp_settings _settings
+    cdef cp_failure _failure
     cdef public double h
-    cdef public int bad_dof
-    cdef public double pivot_ratio
 
     def __init__(self, params, values, stats=None):
         self.params, self.values = params, values
@@ -255,10 +272,8 @@ cdef class Stepper:
         _check(self._params, CP_NPARAM, "parameters")
         _check(self._values, CP_NSTATE + CP_NOUTPUT, "state and outputs")
         _check(self._stats, 3, "statistics")
-        self._work = np.zeros(CP_WORK_SIZE(CP_NSTATE))
+        self._work = np.zeros(CP_STEP_WORK_SIZE)
         self.h = 0.0
-        self.bad_dof = -1
-        self.pivot_ratio = 1.0
         self._fsal = 0
 
     @property
@@ -291,34 +306,28 @@ cdef class Stepper:
             with nogil:
                 cp_eval_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
 
-    def configure(self, int method, double rtol, double atol, double max_step, long max_steps):
+    def configure(self, int method, double rtol, double atol, double max_step,
+                  long long max_steps):
         """Fix the solver settings that advance() uses."""
-        self._method, self._rtol, self._atol = method, rtol, atol
-        self._max_step, self._max_steps = max_step, max_steps
+        self._settings.method, self._settings.rtol, self._settings.atol = method, rtol, atol
+        self._settings.max_step, self._settings.max_steps = max_step, max_steps
 
     def advance(self, double t, double dt):
-        """step() with the configured settings: the FMU's doStep, in one call."""
-        if not (dt >= 0 and dt < INFINITY):
-            return BAD_STEP
-        return self.step(self._method, t, dt, self._rtol, self._atol, self._max_step,
-                         self._max_steps)
-
-    def step(self, int method, double t, double dt, double rtol, double atol, double max_step,
-             long max_steps):
-        """Advance by dt; returns a status code (0: ok; see STATUS)."""
-        cdef cp_model model
-        cdef cp_system system
-        cdef cp_stats stats
-        _system(&system, &model, &self._params[0], &stats)
+        """One co-simulation step with the configured settings (cosim.c, as the native FMU
+        takes it): a status code, 0 when the state and outputs reached t + dt."""
         cdef int status
         with nogil:
-            status = cp_integrate(method, &system, t, &self._values[0], dt, rtol, atol, max_step,
-                                  max_steps, &self.h, &self._work[0], &self._fsal, &stats)
-            if status == CP_OK and CP_NOUTPUT:
-                cp_eval_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
-            self._stats[0] += stats.nfev
-            self._stats[1] += stats.naccept
-            self._stats[2] += stats.nreject
-        self.bad_dof = model.bad_dof
-        self.pivot_ratio = model.pivot_ratio
+            status = cp_cosim_step(&self._settings, &self._params[0], &self._values[0],
+                                   &self._values[CP_NSTATE], t, dt, &self.h, &self._work[0],
+                                   &self._fsal, &self._stats[0], &self._failure)
         return status
+
+    def step(self, int method, double t, double dt, double rtol, double atol, double max_step,
+             long long max_steps):
+        """configure() and advance() in one call; returns a status code (0: ok; see STATUS)."""
+        self.configure(method, rtol, atol, max_step, max_steps)
+        return self.advance(t, dt)
+
+    def diagnosis(self, int status):
+        """What a user reads about the last failed step (diagnosis.c, as in every FMU)."""
+        return _diagnosis(status, &self._failure)

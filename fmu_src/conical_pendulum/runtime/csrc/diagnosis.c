@@ -1,8 +1,10 @@
 #include "diagnosis.h"
 
+#include <math.h>
 #include <stdio.h>
 
 #include "model.h"
+#include "solvers.h"
 
 int cp_diagnose(char *buf, size_t size, int status, const cp_failure *f)
 {
@@ -28,13 +30,27 @@ int cp_diagnose(char *buf, size_t size, int status, const cp_failure *f)
         snprintf(hint, sizeof hint, "the acceleration of %s is not finite; check parameters and "
                  "state", speed);
         break;
+    case CP_MAX_STEP_UNRESOLVED:
+        snprintf(hint, sizeof hint, "max_step = %g s is shorter than what time t = %.9g s can "
+                 "resolve (%g s): raise max_step, or set it to 0 (no limit)", f->max_step,
+                 f->t + f->dt, cp_min_step(f->t, f->t + f->dt));
+        break;
     default: {
-        int used = status == CP_TOO_MANY_STEPS
-            ? snprintf(hint, sizeof hint, "more than max_steps = %ld internal steps were needed; "
-                       "raise max_steps, loosen rtol = %g / atol = %g, or take shorter "
-                       "communication steps", f->max_steps, f->rtol, f->atol)
-            : snprintf(hint, sizeof hint, "the step size fell below what time t can resolve; "
-                       "rtol = %g / atol = %g cannot be met here: loosen them", f->rtol, f->atol);
+        int used;
+        double fewest = cp_fewest_steps(f->dt, f->max_step);
+        if (status == CP_TOO_MANY_STEPS && fewest > (double)f->max_steps)
+            used = snprintf(hint, sizeof hint, "max_step = %g s splits this step into %.3g "
+                            "internal steps, more than max_steps = %lld: raise max_step or "
+                            "max_steps, or take shorter communication steps (nothing was "
+                            "integrated)", f->max_step, fewest, f->max_steps);
+        else if (status == CP_TOO_MANY_STEPS)
+            used = snprintf(hint, sizeof hint, "more than max_steps = %lld internal steps were "
+                            "needed; raise max_steps, loosen rtol = %g / atol = %g, or take "
+                            "shorter communication steps", f->max_steps, f->rtol, f->atol);
+        else
+            used = snprintf(hint, sizeof hint, "the step size fell below what time t can "
+                            "resolve; rtol = %g / atol = %g cannot be met here: loosen them",
+                            f->rtol, f->atol);
         if (f->pivot_ratio < CP_NEAR_SINGULAR && used >= 0 && (size_t)used < sizeof hint)
             snprintf(hint + used, sizeof hint - used, ". The mass matrix came close to singular "
                      "on the way (pivot ratio %.2g, at %s): %s", f->pivot_ratio, speed, joint);

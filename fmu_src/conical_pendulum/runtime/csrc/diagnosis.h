@@ -13,8 +13,8 @@ typedef struct {
     double t, dt;         /* the communication step that failed */
     int bad_dof;          /* cp_model.bad_dof: the generalized speed at fault, or -1 */
     double pivot_ratio;   /* cp_model.pivot_ratio over the step */
-    double rtol, atol;    /* the settings the step ran with */
-    long max_steps;
+    double rtol, atol, max_step;  /* the settings the step ran with */
+    long long max_steps;
 } cp_failure;
 
 /* Writes "do_step from t = ... failed: <status>. <diagnosis>. The state is kept ..." into

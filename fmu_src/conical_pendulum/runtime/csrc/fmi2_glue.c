@@ -17,21 +17,87 @@
 
 #include "fmi2Functions.h"
 
+#include "cosim.h"
 #include "diagnosis.h"
 #include "directional.h"
 #include "dynamics.h"
 #include "fmu_config.h"
 #include "solvers.h"
 
-/* Where an instance is in FMI 2.0's state machine: one bit per state, so that each entry
- * point names the states it is allowed in as a mask. */
+/* ---- FMI 2.0's state machine ------------------------------------------------------------- */
+
+/* Where an instance is: one bit per state. The standard's other states are never entered:
+ * start/end has no instance; stepInProgress and stepCanceled need an asynchronous fmi2DoStep
+ * (it never returns fmi2Pending); error and fatal: a refused call takes nothing and leaves the
+ * instance in its state, and fmi2Fatal is never returned. */
 enum {
     INSTANTIATED = 1 << 0, INITIALIZATION = 1 << 1, STEP_COMPLETE = 1 << 2,
     STEP_FAILED = 1 << 3, EVENT_MODE = 1 << 4, CONTINUOUS_TIME = 1 << 5, TERMINATED = 1 << 6
 };
+static const char *const state_names[] = {  /* by bit, as the standard's tables name them */
+    "instantiated", "initializationMode", "stepComplete", "stepFailed", "eventMode",
+    "continuousTimeMode", "terminated"};
 #define BEFORE_INIT (INSTANTIATED | INITIALIZATION)
-#define RUNNING (STEP_COMPLETE | EVENT_MODE | CONTINUOUS_TIME)
-#define ANY_STATE (BEFORE_INIT | RUNNING | STEP_FAILED | TERMINATED)
+/* The states an instance of each type can be in. */
+#define CO_SIMULATION_STATES (BEFORE_INIT | STEP_COMPLETE | STEP_FAILED | TERMINATED)
+#define MODEL_EXCHANGE_STATES (BEFORE_INIT | EVENT_MODE | CONTINUOUS_TIME | TERMINATED)
+/* Where values are defined: initialization mode and after (the getters' rows). */
+#define CS_VALUES (INITIALIZATION | STEP_COMPLETE | STEP_FAILED | TERMINATED)
+#define ME_VALUES (INITIALIZATION | EVENT_MODE | CONTINUOUS_TIME | TERMINATED)
+#define NO_STATE 0
+
+/* The states each function may be called in, Co-Simulation and Model Exchange: FMI 2.0's
+ * tables (sections 4.2.4 and 3.2.3, as the 2.0.x releases print them), one row per function;
+ * the instance's type picks the column. Where the standard allows a call in a state only for
+ * some variables (its numbered conditions: fmi2SetReal of inputs and tunable parameters
+ * after initialization, ...), the state is in and the function checks the variable
+ * (not_settable). fmi2GetTypesPlatform and fmi2GetVersion take no instance. fmi2FreeInstance,
+ * fmi2Reset and fmi2FreeFMUstate are allowed in every state and never refused, whatever the
+ * instance holds, so an instance can always be reset and freed: they do not consult it. */
+/*                                               Co-Simulation                 Model Exchange */
+#define STATES_fmi2SetDebugLogging               CO_SIMULATION_STATES,         MODEL_EXCHANGE_STATES
+#define STATES_fmi2FreeInstance                  CO_SIMULATION_STATES,         MODEL_EXCHANGE_STATES
+#define STATES_fmi2SetupExperiment               INSTANTIATED,                 INSTANTIATED
+#define STATES_fmi2EnterInitializationMode       INSTANTIATED,                 INSTANTIATED
+#define STATES_fmi2ExitInitializationMode        INITIALIZATION,               INITIALIZATION
+#define STATES_fmi2Terminate                     (STEP_COMPLETE | STEP_FAILED), (EVENT_MODE | CONTINUOUS_TIME)
+#define STATES_fmi2Reset                         CO_SIMULATION_STATES,         MODEL_EXCHANGE_STATES
+#define STATES_fmi2GetReal                       CS_VALUES,                    ME_VALUES
+#define STATES_fmi2GetInteger                    CS_VALUES,                    ME_VALUES
+#define STATES_fmi2GetBoolean                    CS_VALUES,                    ME_VALUES
+#define STATES_fmi2GetString                     CS_VALUES,                    ME_VALUES
+#define STATES_fmi2SetReal                       (BEFORE_INIT | STEP_COMPLETE), (BEFORE_INIT | EVENT_MODE | CONTINUOUS_TIME)
+#define STATES_fmi2SetInteger                    (BEFORE_INIT | STEP_COMPLETE), (BEFORE_INIT | EVENT_MODE)
+#define STATES_fmi2SetBoolean                    (BEFORE_INIT | STEP_COMPLETE), (BEFORE_INIT | EVENT_MODE)
+#define STATES_fmi2SetString                     (BEFORE_INIT | STEP_COMPLETE), (BEFORE_INIT | EVENT_MODE)
+#define STATES_fmi2GetFMUstate                   CO_SIMULATION_STATES,         MODEL_EXCHANGE_STATES
+#define STATES_fmi2SetFMUstate                   CO_SIMULATION_STATES,         MODEL_EXCHANGE_STATES
+#define STATES_fmi2FreeFMUstate                  CO_SIMULATION_STATES,         MODEL_EXCHANGE_STATES
+#define STATES_fmi2SerializedFMUstateSize        CO_SIMULATION_STATES,         MODEL_EXCHANGE_STATES
+#define STATES_fmi2SerializeFMUstate             CO_SIMULATION_STATES,         MODEL_EXCHANGE_STATES
+#define STATES_fmi2DeSerializeFMUstate           CO_SIMULATION_STATES,         MODEL_EXCHANGE_STATES
+#define STATES_fmi2GetDirectionalDerivative      CS_VALUES,                    ME_VALUES
+/* Model Exchange only */
+#define STATES_fmi2EnterEventMode                NO_STATE,                     (EVENT_MODE | CONTINUOUS_TIME)
+#define STATES_fmi2NewDiscreteStates             NO_STATE,                     EVENT_MODE
+#define STATES_fmi2EnterContinuousTimeMode       NO_STATE,                     EVENT_MODE
+#define STATES_fmi2CompletedIntegratorStep       NO_STATE,                     CONTINUOUS_TIME
+#define STATES_fmi2SetTime                       NO_STATE,                     CONTINUOUS_TIME  /* eventMode: a pure discrete-time FMU's only */
+#define STATES_fmi2SetContinuousStates           NO_STATE,                     CONTINUOUS_TIME
+#define STATES_fmi2GetEventIndicators            NO_STATE,                     ME_VALUES
+#define STATES_fmi2GetContinuousStates           NO_STATE,                     ME_VALUES
+#define STATES_fmi2GetDerivatives                NO_STATE,                     ME_VALUES
+#define STATES_fmi2GetNominalsOfContinuousStates NO_STATE,                     MODEL_EXCHANGE_STATES
+/* Co-Simulation only */
+#define STATES_fmi2SetRealInputDerivatives       (BEFORE_INIT | STEP_COMPLETE), NO_STATE
+#define STATES_fmi2GetRealOutputDerivatives      (STEP_COMPLETE | STEP_FAILED | TERMINATED), NO_STATE
+#define STATES_fmi2DoStep                        STEP_COMPLETE,                NO_STATE
+#define STATES_fmi2CancelStep                    NO_STATE,                     NO_STATE  /* stepInProgress only */
+#define STATES_fmi2GetStatus                     (STEP_COMPLETE | STEP_FAILED | TERMINATED), NO_STATE
+#define STATES_fmi2GetRealStatus                 (STEP_COMPLETE | STEP_FAILED | TERMINATED), NO_STATE
+#define STATES_fmi2GetIntegerStatus              (STEP_COMPLETE | STEP_FAILED | TERMINATED), NO_STATE
+#define STATES_fmi2GetBooleanStatus              (STEP_COMPLETE | STEP_FAILED | TERMINATED), NO_STATE
+#define STATES_fmi2GetStringStatus               (STEP_COMPLETE | STEP_FAILED | TERMINATED), NO_STATE
 
 /* Everything fmi2GetFMUstate saves: plain data, copied as a whole. */
 typedef struct {
@@ -42,7 +108,7 @@ typedef struct {
     double tolerance;             /* from fmi2SetupExperiment; replaces rtol when > 0 */
     double h;                     /* the solvers' proposed step, carried between steps */
     int fsal;                     /* work holds x' at x */
-    double work[CP_WORK_SIZE(CP_NSTATE)];
+    double work[CP_STEP_WORK_SIZE];
     double dx[CP_NSTATE];         /* Model Exchange: x' at (time, x) when dx_valid */
     int dx_valid, outputs_valid;
     double last_successful_time;
@@ -52,41 +118,62 @@ typedef struct {
     Values v;
     fmi2CallbackFunctions cb;
     fmi2Type type;
-    int logging;
+    unsigned logging;             /* bit k: log category cp_log_categories[k] is on */
     char name[128];
 } Instance;
+
+#define ALL_CATEGORIES ((1u << CP_NLOG) - 1)
 
 #define X(inst) ((inst)->v.r + CP_VR_STATE)
 #define Y(inst) ((inst)->v.r + CP_VR_OUTPUT)
 #define STATS(inst) ((inst)->v.r + CP_VR_STATISTICS)
 
-static void log_message(Instance *inst, fmi2Status status, const char *category,
-                        const char *format, ...)
+/* A message through the host's logger, in one of the model description's log categories
+ * (CP_LOG_*, fmu_config.h). FMI 2.0, section 2.1.3: after fmi2Warning, fmi2Error and fmi2Fatal
+ * "function logger was called", so those are always reported; other messages (fmi2Discard's
+ * diagnoses) only in debug mode, that is when their category is on (section 2.1.5: loggingOn
+ * of fmi2Instantiate, then fmi2SetDebugLogging). */
+static void log_message(Instance *inst, fmi2Status status, int category, const char *format, ...)
 {
-    if (!inst->cb.logger || (status == fmi2OK && !inst->logging)) return;
+    if (!inst->cb.logger) return;
+    if ((status == fmi2OK || status == fmi2Discard) && !(inst->logging >> category & 1u)) return;
     char text[2048];
     va_list args;
     va_start(args, format);
     vsnprintf(text, sizeof text, format, args);
     va_end(args);
-    inst->cb.logger(inst->cb.componentEnvironment, inst->name, status, category, text);
+    inst->cb.logger(inst->cb.componentEnvironment, inst->name, status, cp_log_categories[category],
+                    text);
 }
 
-#define REFUSE(inst, ...) (log_message((inst), fmi2Error, "logStatusError", __VA_ARGS__), fmi2Error)
+#define REFUSE(inst, ...) (log_message((inst), fmi2Error, CP_LOG_STATUS_ERROR, __VA_ARGS__), fmi2Error)
 
-/* The instance behind c if the call is allowed in its state; logs why not otherwise. */
-static Instance *checked(fmi2Component c, int allowed, const char *function)
+/* The instance behind c if FMI 2.0 allows the function in its state (the table above, in the
+ * column of the instance's type); logs that it does not otherwise, naming the state. */
+#define CHECKED(c, function) checked((c), #function, STATES_##function)
+
+static Instance *checked(fmi2Component c, const char *function, int co_simulation,
+                         int model_exchange)
 {
     Instance *inst = (Instance *)c;
     if (!inst) return NULL;
-    if (!(inst->v.state & allowed)) {
-        log_message(inst, fmi2Error, "logStatusError", "%s is not allowed in this state "
-                    "(%s)", function,
-                    inst->v.state == STEP_FAILED ? "after a discarded step: call "
-                    "fmi2SetFMUstate or fmi2Reset first" : "see FMI 2.0's state machine");
-        return NULL;
-    }
-    return inst;
+    const int cs = inst->type == fmi2CoSimulation;
+    const int allowed = cs ? co_simulation : model_exchange;
+    if (inst->v.state & allowed) return inst;
+    const char *state = "?";
+    for (int k = 0; k < (int)(sizeof state_names / sizeof state_names[0]); k++)
+        if (inst->v.state == 1 << k) state = state_names[k];
+    const char *why = "";
+    if (!allowed && (cs ? model_exchange : co_simulation))
+        why = cs ? ": a Model Exchange function" : ": a Co-Simulation function";
+    else if (!allowed)
+        why = ": only while a step is in progress, and fmi2DoStep never runs asynchronously here";
+    else if (inst->v.state == STEP_FAILED)
+        why = "; after a discarded step fmi2SetFMUstate or fmi2Reset go back, fmi2Terminate ends";
+    log_message(inst, fmi2Error, CP_LOG_STATUS_ERROR, "%s is not allowed in state %s (FMI 2.0, %s)%s",
+                function, state, cs ? "Co-Simulation, section 4.2.4" : "Model Exchange, section 3.2.3",
+                why);
+    return NULL;
 }
 
 /* A double as Python's repr writes it, so that messages read as the pythonfmu FMU's do. */
@@ -170,10 +257,31 @@ const char *fmi2GetVersion(void) { return fmi2Version; }
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[])
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2SetDebugLogging");
+    /* FMI 2.0, section 2.1.5: with nCategories = 0, loggingOn applies to every category; with
+     * a list, loggingOn makes the listed ones the categories in force, and logging off turns
+     * the listed ones off and leaves the others. A name the model description does not declare
+     * is refused, naming it, and the categories in force stay as they were. */
+    Instance *inst = CHECKED(c, fmi2SetDebugLogging);
     if (!inst) return fmi2Error;
     if (nCategories && !categories) return REFUSE(inst, "fmi2SetDebugLogging: categories is NULL");
-    inst->logging = loggingOn;
+    unsigned listed = 0;
+    for (size_t k = 0; k < nCategories; k++) {
+        int found = -1;
+        for (int j = 0; j < CP_NLOG && categories[k]; j++)
+            if (strcmp(categories[k], cp_log_categories[j]) == 0) found = j;
+        if (found < 0) {
+            char declared[512] = "";
+            for (int j = 0, n = 0; j < CP_NLOG && n < (int)sizeof declared; j++)
+                n += snprintf(declared + n, sizeof declared - n, "%s%s", j ? ", " : "",
+                              cp_log_categories[j]);
+            return REFUSE(inst, "fmi2SetDebugLogging: log category \"%s\" is not this FMU's "
+                          "(its model description declares %s)",
+                          categories[k] ? categories[k] : "(null)", declared);
+        }
+        listed |= 1u << found;
+    }
+    if (!nCategories) inst->logging = loggingOn ? ALL_CATEGORIES : 0;
+    else inst->logging = loggingOn ? listed : inst->logging & ~listed;
     return fmi2OK;
 }
 
@@ -189,7 +297,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (!inst) return NULL;
     inst->cb = *functions;
     inst->type = fmuType;
-    inst->logging = loggingOn;
+    inst->logging = loggingOn ? ALL_CATEGORIES : 0;
     snprintf(inst->name, sizeof inst->name, "%s", instanceName ? instanceName : "?");
     const char *problem = NULL;
     if (!instanceName || !*instanceName) problem = "instanceName is empty";
@@ -198,7 +306,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     else if (fmuType != fmi2ModelExchange && fmuType != fmi2CoSimulation)
         problem = "fmuType is neither fmi2ModelExchange nor fmi2CoSimulation";
     if (problem) {
-        log_message(inst, fmi2Error, "logStatusError", "fmi2Instantiate: %s", problem);
+        log_message(inst, fmi2Error, CP_LOG_STATUS_ERROR, "fmi2Instantiate: %s", problem);
         functions->freeMemory(inst);
         return NULL;
     }
@@ -217,7 +325,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 {
     (void)stopTimeDefined;
     (void)stopTime;
-    Instance *inst = checked(c, INSTANTIATED, "fmi2SetupExperiment");
+    Instance *inst = CHECKED(c, fmi2SetupExperiment);
     if (!inst) return fmi2Error;
     char message[256];
     if (toleranceDefined && real_refusal("tolerance (from setupExperiment)", tolerance,
@@ -232,7 +340,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
-    Instance *inst = checked(c, INSTANTIATED, "fmi2EnterInitializationMode");
+    Instance *inst = CHECKED(c, fmi2EnterInitializationMode);
     if (!inst) return fmi2Error;
     inst->v.state = INITIALIZATION;
     return fmi2OK;
@@ -240,7 +348,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
-    Instance *inst = checked(c, INITIALIZATION, "fmi2ExitInitializationMode");
+    Instance *inst = CHECKED(c, fmi2ExitInitializationMode);
     if (!inst) return fmi2Error;
     if (inst->v.tolerance > 0) inst->v.r[CP_VR_RTOL] = inst->v.tolerance;
     invalidate(inst);
@@ -251,7 +359,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 
 fmi2Status fmi2Terminate(fmi2Component c)
 {
-    Instance *inst = checked(c, RUNNING | STEP_FAILED, "fmi2Terminate");
+    Instance *inst = CHECKED(c, fmi2Terminate);
     if (!inst) return fmi2Error;
     inst->v.state = TERMINATED;
     return fmi2OK;
@@ -276,7 +384,7 @@ static int is_derivative(fmi2ValueReference vr)
  * its complex-step copy, with the weakest generalized speed and pivot ratio it found). */
 static fmi2Status no_derivatives(Instance *inst, int status, int bad_dof, double pivot_ratio)
 {
-    log_message(inst, fmi2Discard, "logStatusDiscard", "derivatives at t = %.9g s: %s at "
+    log_message(inst, fmi2Discard, CP_LOG_STATUS_DISCARD, "derivatives at t = %.9g s: %s at "
                 "generalized speed %d (pivot ratio %.2g); check parameters and state",
                 inst->v.time, cp_status_message(status), bad_dof, pivot_ratio);
     return fmi2Discard;
@@ -295,7 +403,7 @@ static fmi2Status derivatives(Instance *inst)
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[])
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetReal");
+    Instance *inst = CHECKED(c, fmi2GetReal);
     if (!inst) return fmi2Error;
     if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2GetReal: vr or value is NULL");
     for (size_t k = 0; k < nvr; k++) {
@@ -313,7 +421,8 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     return fmi2OK;
 }
 
-/* NULL if the variable may be set in the instance's state, or why not. */
+/* NULL if the variable may be set in the instance's state, or why not: the standard's
+ * conditions on the variable in the states where the table lets fmi2SetReal in. */
 static const char *not_settable(const Instance *inst, fmi2ValueReference vr, char *message,
                                 size_t size)
 {
@@ -322,9 +431,6 @@ static const char *not_settable(const Instance *inst, fmi2ValueReference vr, cha
     if (calculated) snprintf(message, size, CP_CALCULATED_MESSAGE, cp_variable_name(vr));
     else if (!input && !(inst->v.state & BEFORE_INIT))
         snprintf(message, size, CP_FIXED_MESSAGE, cp_variable_name(vr));
-    else if (inst->v.state & (TERMINATED | STEP_FAILED))
-        snprintf(message, size, "%s cannot be set now: the simulation has %s",
-                 cp_variable_name(vr), inst->v.state == TERMINATED ? "terminated" : "failed");
     else return NULL;
     return message;
 }
@@ -332,7 +438,7 @@ static const char *not_settable(const Instance *inst, fmi2ValueReference vr, cha
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        const fmi2Real value[])
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2SetReal");
+    Instance *inst = CHECKED(c, fmi2SetReal);
     if (!inst) return fmi2Error;
     if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2SetReal: vr or value is NULL");
     char message[512];
@@ -354,7 +460,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Integer value[])
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetInteger");
+    Instance *inst = CHECKED(c, fmi2GetInteger);
     if (!inst) return fmi2Error;
     if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2GetInteger: vr or value is NULL");
     for (size_t k = 0; k < nvr; k++) {
@@ -369,7 +475,7 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[])
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2SetInteger");
+    Instance *inst = CHECKED(c, fmi2SetInteger);
     if (!inst) return fmi2Error;
     if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2SetInteger: vr or value is NULL");
     char message[512];
@@ -390,10 +496,9 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 }
 
 /* Booleans and Strings: this FMU has none, so any value reference is refused. */
-static fmi2Status no_variables(fmi2Component c, const char *function, const char *type,
+static fmi2Status no_variables(Instance *inst, const char *function, const char *type,
                                const fmi2ValueReference vr[], size_t nvr)
 {
-    Instance *inst = checked(c, ANY_STATE, function);
     if (!inst) return fmi2Error;
     return nvr ? REFUSE(inst, "%s: value reference %u: this FMU has no %s variables", function,
                         vr ? vr[0] : 0, type) : fmi2OK;
@@ -404,7 +509,7 @@ static fmi2Status no_variables(fmi2Component c, const char *function, const char
                         value_type value[])                                                   \
     {                                                                                          \
         (void)value;                                                                           \
-        return no_variables(c, #function, type, vr, nvr);                                      \
+        return no_variables(CHECKED(c, function), #function, type, vr, nvr);                   \
     }
 NO_VARIABLES(fmi2GetBoolean, "Boolean", fmi2Boolean)
 NO_VARIABLES(fmi2SetBoolean, "Boolean", const fmi2Boolean)
@@ -420,10 +525,6 @@ typedef struct {
     unsigned size;
     char guid[sizeof CP_GUID];
 } StateHeader;
-
-/* The states of FMI 2.0's state machine an instance of each type can be in. */
-#define CO_SIMULATION_STATES (BEFORE_INIT | STEP_COMPLETE | STEP_FAILED | TERMINATED)
-#define MODEL_EXCHANGE_STATES (BEFORE_INIT | EVENT_MODE | CONTINUOUS_TIME | TERMINATED)
 
 /* NULL if v can be the values of an instance of this type, or what is wrong with it, naming
  * the field and its value: a restored state is checked as values set through the API are.
@@ -480,7 +581,7 @@ static const char *invalid_values(fmi2Type type, const Values *v, char *message,
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetFMUstate");
+    Instance *inst = CHECKED(c, fmi2GetFMUstate);
     if (!inst) return fmi2Error;
     if (!FMUstate) return REFUSE(inst, "fmi2GetFMUstate: FMUstate is NULL");
     Values *copy = *FMUstate ? *FMUstate : inst->cb.allocateMemory(1, sizeof(Values));
@@ -492,7 +593,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2SetFMUstate");
+    Instance *inst = CHECKED(c, fmi2SetFMUstate);
     if (!inst) return fmi2Error;
     if (!FMUstate) return REFUSE(inst, "fmi2SetFMUstate: FMUstate is NULL");
     char message[512];
@@ -514,7 +615,7 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2SerializedFMUstateSize");
+    Instance *inst = CHECKED(c, fmi2SerializedFMUstateSize);
     if (!inst) return fmi2Error;
     if (!FMUstate || !size) return REFUSE(inst, "fmi2SerializedFMUstateSize: a pointer is NULL");
     *size = sizeof(StateHeader) + sizeof(Values);
@@ -524,7 +625,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
                                  fmi2Byte serializedState[], size_t size)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2SerializeFMUstate");
+    Instance *inst = CHECKED(c, fmi2SerializeFMUstate);
     if (!inst) return fmi2Error;
     if (!FMUstate || !serializedState) return REFUSE(inst, "fmi2SerializeFMUstate: a pointer is NULL");
     if (size < sizeof(StateHeader) + sizeof(Values))
@@ -539,7 +640,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2DeSerializeFMUstate");
+    Instance *inst = CHECKED(c, fmi2DeSerializeFMUstate);
     if (!inst) return fmi2Error;
     if (!serializedState || !FMUstate) return REFUSE(inst, "fmi2DeSerializeFMUstate: a pointer is NULL");
     StateHeader header;
@@ -580,7 +681,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         size_t nKnown, const fmi2Real dvKnown[], fmi2Real dvUnknown[])
 {
     static const char *const function = "fmi2GetDirectionalDerivative";
-    Instance *inst = checked(c, INITIALIZATION | RUNNING | STEP_FAILED | TERMINATED, function);
+    Instance *inst = CHECKED(c, fmi2GetDirectionalDerivative);
     if (!inst) return fmi2Error;
     if ((nUnknown && (!vUnknown_ref || !dvUnknown)) || (nKnown && (!vKnown_ref || !dvKnown)))
         return REFUSE(inst, "%s: a pointer is NULL", function);
@@ -621,7 +722,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         else if (vr >= CP_VR_OUTPUT && vr < CP_VR_STATISTICS) value = d_outputs[vr - CP_VR_OUTPUT];
         else if (vr < CP_VR_OUTPUT) value = dx_seed[vr - CP_VR_STATE];
         if (!isfinite(value)) {
-            log_message(inst, fmi2Discard, "logStatusDiscard", "%s: the derivative of %s is "
+            log_message(inst, fmi2Discard, CP_LOG_STATUS_DISCARD, "%s: the derivative of %s is "
                         "not finite at t = %.9g s; check parameters and state", function,
                         cp_variable_name(vr), inst->v.time);
             return fmi2Discard;
@@ -635,7 +736,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 
 fmi2Status fmi2EnterEventMode(fmi2Component c)
 {
-    Instance *inst = checked(c, EVENT_MODE | CONTINUOUS_TIME, "fmi2EnterEventMode");
+    Instance *inst = CHECKED(c, fmi2EnterEventMode);
     if (!inst) return fmi2Error;
     inst->v.state = EVENT_MODE;
     return fmi2OK;
@@ -643,7 +744,7 @@ fmi2Status fmi2EnterEventMode(fmi2Component c)
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
 {
-    Instance *inst = checked(c, EVENT_MODE, "fmi2NewDiscreteStates");
+    Instance *inst = CHECKED(c, fmi2NewDiscreteStates);
     if (!inst) return fmi2Error;
     if (!eventInfo) return REFUSE(inst, "fmi2NewDiscreteStates: eventInfo is NULL");
     memset(eventInfo, 0, sizeof *eventInfo);  /* no events: nothing changes, nothing to wait for */
@@ -652,7 +753,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
 
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
 {
-    Instance *inst = checked(c, EVENT_MODE, "fmi2EnterContinuousTimeMode");
+    Instance *inst = CHECKED(c, fmi2EnterContinuousTimeMode);
     if (!inst) return fmi2Error;
     inst->v.state = CONTINUOUS_TIME;
     return fmi2OK;
@@ -662,7 +763,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
 {
     (void)noSetFMUStatePriorToCurrentPoint;
-    Instance *inst = checked(c, CONTINUOUS_TIME, "fmi2CompletedIntegratorStep");
+    Instance *inst = CHECKED(c, fmi2CompletedIntegratorStep);
     if (!inst) return fmi2Error;
     if (!enterEventMode || !terminateSimulation)
         return REFUSE(inst, "fmi2CompletedIntegratorStep: a pointer is NULL");
@@ -673,7 +774,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
 {
-    Instance *inst = checked(c, EVENT_MODE | CONTINUOUS_TIME, "fmi2SetTime");
+    Instance *inst = CHECKED(c, fmi2SetTime);
     if (!inst) return fmi2Error;
     if (!isfinite(time)) return REFUSE(inst, "fmi2SetTime: time = %g must be finite", time);
     inst->v.time = time;  /* the model is autonomous: x' does not depend on time */
@@ -690,7 +791,7 @@ static fmi2Status check_states_call(Instance *inst, const void *x, size_t nx, co
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
 {
-    Instance *inst = checked(c, EVENT_MODE | CONTINUOUS_TIME, "fmi2SetContinuousStates");
+    Instance *inst = CHECKED(c, fmi2SetContinuousStates);
     if (!inst) return fmi2Error;
     if (check_states_call(inst, x, nx, "fmi2SetContinuousStates") != fmi2OK) return fmi2Error;
     for (size_t k = 0; k < nx; k++)
@@ -704,7 +805,7 @@ fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n
 
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx)
 {
-    Instance *inst = checked(c, INITIALIZATION | RUNNING | TERMINATED, "fmi2GetDerivatives");
+    Instance *inst = CHECKED(c, fmi2GetDerivatives);
     if (!inst) return fmi2Error;
     if (check_states_call(inst, dx, nx, "fmi2GetDerivatives") != fmi2OK) return fmi2Error;
     fmi2Status status = derivatives(inst);
@@ -715,14 +816,14 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx)
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
 {
     (void)eventIndicators;
-    Instance *inst = checked(c, INITIALIZATION | RUNNING | TERMINATED, "fmi2GetEventIndicators");
+    Instance *inst = CHECKED(c, fmi2GetEventIndicators);
     if (!inst) return fmi2Error;
     return ni ? REFUSE(inst, "fmi2GetEventIndicators: ni = %zu, but this FMU has none", ni) : fmi2OK;
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetContinuousStates");
+    Instance *inst = CHECKED(c, fmi2GetContinuousStates);
     if (!inst) return fmi2Error;
     if (check_states_call(inst, x, nx, "fmi2GetContinuousStates") != fmi2OK) return fmi2Error;
     memcpy(x, X(inst), nx * sizeof x[0]);
@@ -731,7 +832,7 @@ fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetNominalsOfContinuousStates");
+    Instance *inst = CHECKED(c, fmi2GetNominalsOfContinuousStates);
     if (!inst) return fmi2Error;
     if (check_states_call(inst, x_nominal, nx, "fmi2GetNominalsOfContinuousStates") != fmi2OK)
         return fmi2Error;
@@ -745,7 +846,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
                                        const fmi2Integer order[], const fmi2Real value[])
 {
     (void)vr, (void)order, (void)value;
-    Instance *inst = checked(c, ANY_STATE, "fmi2SetRealInputDerivatives");
+    Instance *inst = CHECKED(c, fmi2SetRealInputDerivatives);
     if (!inst) return fmi2Error;
     return nvr ? REFUSE(inst, "fmi2SetRealInputDerivatives: inputs are held constant over a "
                         "step (canInterpolateInputs is false)") : fmi2OK;
@@ -755,7 +856,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
                                         const fmi2Integer order[], fmi2Real value[])
 {
     (void)vr, (void)order, (void)value;
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetRealOutputDerivatives");
+    Instance *inst = CHECKED(c, fmi2GetRealOutputDerivatives);
     if (!inst) return fmi2Error;
     return nvr ? REFUSE(inst, "fmi2GetRealOutputDerivatives: not provided "
                         "(MaxOutputDerivativeOrder is 0)") : fmi2OK;
@@ -765,7 +866,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
     (void)noSetFMUStatePriorToCurrentPoint;
-    Instance *inst = checked(c, STEP_COMPLETE, "fmi2DoStep");
+    Instance *inst = CHECKED(c, fmi2DoStep);
     if (!inst) return fmi2Error;
     if (inst->type != fmi2CoSimulation)
         return REFUSE(inst, "fmi2DoStep: instantiated for Model Exchange");
@@ -773,42 +874,33 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     if (!(fabs(t - inst->v.time) <= 1e-9 * fmax(1.0, fabs(t))))
         return REFUSE(inst, "fmi2DoStep: currentCommunicationPoint = %.17g s, but the FMU is "
                       "at t = %.17g s", t, inst->v.time);
-    cp_model model = {inst->v.r, 1.0, -1};
-    cp_system system = {CP_NSTATE, cp_rhs, &model};
-    cp_stats stats = {0, 0, 0};
-    int status = CP_BAD_STEP;
-    if (dt >= 0 && dt < INFINITY)
-        status = cp_integrate(inst->v.solver, &system, t, X(inst), dt, inst->v.r[CP_VR_RTOL],
-                              inst->v.r[CP_VR_ATOL], inst->v.r[CP_VR_MAX_STEP], inst->v.max_steps,
-                              &inst->v.h, inst->v.work, &inst->v.fsal, &stats);
-    STATS(inst)[0] += stats.nfev;
-    STATS(inst)[1] += stats.naccept;
-    STATS(inst)[2] += stats.nreject;
+    const cp_settings settings = {inst->v.solver, inst->v.r[CP_VR_RTOL], inst->v.r[CP_VR_ATOL],
+                                  inst->v.r[CP_VR_MAX_STEP], inst->v.max_steps};
+    cp_failure failure;
+    int status = cp_cosim_step(&settings, inst->v.r, X(inst), Y(inst), t, dt, &inst->v.h,
+                               inst->v.work, &inst->v.fsal, STATS(inst), &failure);
+    inst->v.outputs_valid = status == CP_OK;  /* on failure, those at t are computed again */
     if (status != CP_OK) {
-        cp_failure failure = {t, dt, model.bad_dof, model.pivot_ratio, inst->v.r[CP_VR_RTOL],
-                              inst->v.r[CP_VR_ATOL], inst->v.max_steps};
         char message[2048];
         cp_diagnose(message, sizeof message, status, &failure);
-        log_message(inst, fmi2Discard, "logStatusDiscard", "%s", message);
+        log_message(inst, fmi2Discard, CP_LOG_STATUS_DISCARD, "%s", message);
         inst->v.state = STEP_FAILED;
         return fmi2Discard;
     }
     inst->v.time = inst->v.last_successful_time = t + dt;
-    inst->v.dx_valid = inst->v.outputs_valid = 0;
-    update_outputs(inst);
+    inst->v.dx_valid = 0;
     return fmi2OK;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2CancelStep");
-    if (!inst) return fmi2Error;
-    return REFUSE(inst, "fmi2CancelStep: doStep never runs asynchronously here");
+    CHECKED(c, fmi2CancelStep);  /* allowed in no state this FMU enters: logs why */
+    return fmi2Error;
 }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetStatus");
+    Instance *inst = CHECKED(c, fmi2GetStatus);
     if (!inst) return fmi2Error;
     if (!value) return REFUSE(inst, "fmi2GetStatus: value is NULL");
     if (s != fmi2DoStepStatus) return fmi2Discard;
@@ -818,7 +910,7 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetRealStatus");
+    Instance *inst = CHECKED(c, fmi2GetRealStatus);
     if (!inst) return fmi2Error;
     if (!value) return REFUSE(inst, "fmi2GetRealStatus: value is NULL");
     if (s != fmi2LastSuccessfulTime) return fmi2Discard;
@@ -829,12 +921,12 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
 {
     (void)s, (void)value;
-    return checked(c, ANY_STATE, "fmi2GetIntegerStatus") ? fmi2Discard : fmi2Error;
+    return CHECKED(c, fmi2GetIntegerStatus) ? fmi2Discard : fmi2Error;
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
 {
-    Instance *inst = checked(c, ANY_STATE, "fmi2GetBooleanStatus");
+    Instance *inst = CHECKED(c, fmi2GetBooleanStatus);
     if (!inst) return fmi2Error;
     if (!value) return REFUSE(inst, "fmi2GetBooleanStatus: value is NULL");
     if (s != fmi2Terminated) return fmi2Discard;
@@ -845,5 +937,5 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
 {
     (void)s, (void)value;
-    return checked(c, ANY_STATE, "fmi2GetStringStatus") ? fmi2Discard : fmi2Error;
+    return CHECKED(c, fmi2GetStringStatus) ? fmi2Discard : fmi2Error;
 }

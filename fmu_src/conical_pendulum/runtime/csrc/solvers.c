@@ -36,17 +36,16 @@ static double rms(int n, const double *v, const double *scale)
     return sqrt(s / n);
 }
 
+/* cp_integrate has checked that ceil(dt / max_step) <= max_steps. */
 static int rk4(const cp_system *sys, double *x, double dt, double max_step, double *work,
                cp_stats *stats)
 {
     int n = sys->dim, status;
-    long steps = 1;
-    if (max_step > 0 && isfinite(max_step) && dt > max_step)
-        steps = (long)ceil(dt / max_step);
+    long long steps = (long long)cp_fewest_steps(dt, max_step);
     double h = dt / steps;
     double *y = work, *k1 = y + n, *k2 = k1 + n, *k3 = k2 + n, *k4 = k3 + n, *tmp = k4 + n;
     memcpy(y, x, n * sizeof(double));
-    for (long s = 0; s < steps; s++) {
+    for (long long s = 0; s < steps; s++) {
         if ((status = eval(sys, y, k1, stats))) return status;
         for (int i = 0; i < n; i++) tmp[i] = y[i] + 0.5 * h * k1[i];
         if ((status = eval(sys, tmp, k2, stats))) return status;
@@ -57,6 +56,7 @@ static int rk4(const cp_system *sys, double *x, double dt, double max_step, doub
         for (int i = 0; i < n; i++) y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         stats->naccept++;
     }
+    if (!cp_all_finite(n, y)) return CP_NONFINITE;  /* the last update is evaluated by no one */
     memcpy(x, y, n * sizeof(double));
     return CP_OK;
 }
@@ -131,8 +131,8 @@ static rk_memory carve(int n, double *work)
  * scipy's RungeKutta._step_impl does. On return *t_new and m->y_new hold the new point
  * and K[stages] holds x' there; m->y and K[0] are left for dense output. */
 static int one_step(const tableau *tb, const cp_system *sys, double t, double t_end,
-                    rk_memory *m, double rtol, double atol, double max_step, long max_steps,
-                    long *attempts, double *h_abs_io, double *t_new_out, double *h_out,
+                    rk_memory *m, double rtol, double atol, double max_step, long long max_steps,
+                    long long *attempts, double *h_abs_io, double *t_new_out, double *h_out,
                     cp_stats *stats)
 {
     int n = sys->dim, status;
@@ -203,13 +203,13 @@ static int start(const tableau *tb, const cp_system *sys, const double *x, doubl
 }
 
 static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x, double dt,
-                    double rtol, double atol, double max_step, long max_steps, double *h_io,
+                    double rtol, double atol, double max_step, long long max_steps, double *h_io,
                     double *work, int fsal, cp_stats *stats)
 {
     int n = sys->dim, status;
     rk_memory m = carve(n, work);
     double t_end = t + dt, h_abs = *h_io, t_new, h;
-    long attempts = 0;
+    long long attempts = 0;
     if (!(max_step > 0)) max_step = INFINITY;
     if ((status = start(tb, sys, x, dt, rtol, atol, max_step, fsal, &m, &h_abs, stats))) return status;
     while (t < t_end) {
@@ -219,6 +219,7 @@ static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x
         advance(tb, n, &m);
         t = t_new;
     }
+    if (!cp_all_finite(n, m.y)) return CP_NONFINITE;
     *h_io = h_abs;
     memcpy(x, m.y, n * sizeof(double));
     return CP_OK;
@@ -267,14 +268,14 @@ static void dop853_evaluate(int n, const rk_memory *m, double x, double *out)
 }
 
 int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double *out,
-                   double rtol, double atol, double max_step, long max_steps, double *work,
+                   double rtol, double atol, double max_step, long long max_steps, double *work,
                    cp_stats *stats)
 {
     const tableau *tb = &DOP853_TABLEAU;
     int n = sys->dim, status, next = 1;
     rk_memory m = carve(n, work);
     double t = times[0], t_end = times[ntimes - 1], h_abs = 0.0, t_new, h;
-    long attempts = 0;
+    long long attempts = 0;
     if (!(max_step > 0)) max_step = INFINITY;
     if (ntimes < 2) return CP_OK;
     status = start(tb, sys, out, t_end - t, rtol, atol, max_step, 0, &m, &h_abs, stats);
@@ -297,11 +298,12 @@ int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double
 }
 
 int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
-                 double rtol, double atol, double max_step, long max_steps,
+                 double rtol, double atol, double max_step, long long max_steps,
                  double *h, double *work, int *fsal, cp_stats *stats)
 {
     int status;
     if (dt <= 0) return CP_OK;
+    if ((status = cp_unworkable(method, t, dt, max_step, max_steps))) return status;
     if (method == CP_RK4) {
         *fsal = 0;
         return rk4(sys, x, dt, max_step, work, stats);

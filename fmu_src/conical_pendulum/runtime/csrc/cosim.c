@@ -1,0 +1,42 @@
+#include "cosim.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "dynamics.h"
+
+int cp_cosim_step(const cp_settings *s, const double *p, double *x, double *y, double t,
+                  double dt, double *h, double *work, int *fsal, double stats[3],
+                  cp_failure *failure)
+{
+    cp_model model = {p, 1.0, -1};
+    cp_system system = {CP_NSTATE, cp_rhs, &model};
+    cp_stats counts = {0, 0, 0};
+    double *x_start = work + CP_WORK_SIZE(CP_NSTATE), *y_new = x_start + CP_NSTATE;
+    int status = CP_BAD_STEP;
+    if (dt >= 0 && dt < INFINITY) {
+        memcpy(x_start, x, CP_NSTATE * sizeof(double));
+        status = cp_integrate(s->method, &system, t, x, dt, s->rtol, s->atol, s->max_step,
+                              s->max_steps, h, work, fsal, &counts);
+    }
+    stats[0] += (double)counts.nfev;
+    stats[1] += (double)counts.naccept;
+    stats[2] += (double)counts.nreject;
+    if (status == CP_OK && CP_NOUTPUT) {
+        cp_eval_outputs(x, p, y_new);
+        if (cp_all_finite(CP_NOUTPUT, y_new)) {
+            memcpy(y, y_new, CP_NOUTPUT * sizeof(double));
+        } else {  /* the pivot force where M is singular: cp_rhs says where */
+            status = cp_rhs(&model, x, work);
+            if (status == CP_OK) status = CP_NONFINITE;
+            memcpy(x, x_start, CP_NSTATE * sizeof(double));
+            *fsal = 0;
+        }
+    }
+    if (status != CP_OK) {
+        cp_failure f = {t, dt, model.bad_dof, model.pivot_ratio, s->rtol, s->atol, s->max_step,
+                        s->max_steps};
+        *failure = f;
+    }
+    return status;
+}

@@ -1,0 +1,29 @@
+/* One co-simulation step of the model, for every FMU of the package (the pythonfmu slave's
+ * core and the native glue): the settings as the solvers take them, the integration, the
+ * outputs, the statistics and, on failure, what the diagnosis needs. A state or an output
+ * that is not finite is never reported as success. */
+#ifndef CP_COSIM_H
+#define CP_COSIM_H
+
+#include "diagnosis.h"
+#include "model.h"
+#include "solvers.h"
+
+typedef struct {
+    int method;           /* CP_RK4, CP_RK45 or CP_DOP853 */
+    double rtol, atol, max_step;
+    long long max_steps;
+} cp_settings;
+
+/* Doubles of work a step needs: the solvers', then the state at t and the new outputs. */
+#define CP_STEP_WORK_SIZE (CP_WORK_SIZE(CP_NSTATE) + CP_NSTATE + CP_NOUTPUT)
+
+/* Advance x from t to t + dt and write the outputs there into y; p holds the parameters
+ * and inputs. *h and *fsal are the solvers' memory (cp_integrate); stats (right-hand
+ * sides, accepted and rejected steps) grow by what the step cost, failed or not. Returns
+ * CP_OK, or a status with *failure filled for cp_diagnose, x and y as they were. */
+int cp_cosim_step(const cp_settings *settings, const double *p, double *x, double *y, double t,
+                  double dt, double *h, double *work, int *fsal, double stats[3],
+                  cp_failure *failure);
+
+#endif
