@@ -16,6 +16,12 @@ def seed_fmu(fmu_dir):
 
 
 @pytest.fixture(scope="session")
+def native_seed_fmu(fmu_dir):
+    """The seed scene's native FMU (FMI glue in C), as `python build_fmu.py --native` builds it."""
+    return build_fmu(Scene.uniform(3), fmu_dir / "ConicalPendulumNative.fmu", backend="native").path
+
+
+@pytest.fixture(scope="session")
 def chain_fmu(fmu_dir):
     """FMUs of other uniform chains, by number of links."""
     built = {}

@@ -1,0 +1,431 @@
+"""Restored FMU states are checked like values set through the API, in both FMUs.
+
+A state that fails is refused with a message naming the field and its value (the native
+FMU: fmi2Error; the pythonfmu FMU: fmi2Fatal, all that pythonfmu 0.7 returns for an
+exception, after the same message as fmi2Error), and the instance stays exactly as it was
+and answers fmi2Reset. A mutation fuzz of serialized states (header intact, body
+overwritten): each one is refused, or is taken and steps to finite outputs or to a
+discarded step with a message; fmi2Reset works after every one.
+"""
+import ctypes
+import json
+import math
+import re
+import struct
+from collections import Counter
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Model
+from pythonfmu import Fmi2Slave
+
+from conical_pendulum.analysis.fmpy_runs import logging_callbacks
+from conical_pendulum.runtime.rules import BadValue, check_value
+from fmu_helpers import Instance
+
+DISCARD, ERROR, FATAL = 2, 3, 4
+STEP = 1 / 60
+STEPS_BEFORE = 5  # communication steps before the state is taken: fsal and h in use
+FUZZ_CASES = 500  # per FMU
+STEP_COMPLETE = 4  # the native FMU's state word in stepComplete (fmi2_glue.c)
+
+
+def real_names(instance):
+    return [v.name for v in instance.md.modelVariables if v.type == "Real" and not v.name.startswith("der(")]
+
+
+def integer_names(instance):
+    return [v.name for v in instance.md.modelVariables if v.type == "Integer"]
+
+
+def values(instance):
+    """Every Real (but the native FMU's derivatives) and Integer of an instance."""
+    return (instance.fmu.getReal([instance.vr[n] for n in real_names(instance)]),
+            instance.fmu.getInteger([instance.vr[n] for n in integer_names(instance)]))
+
+
+def initialize(instance):
+    instance.fmu.setupExperiment(startTime=0.0)
+    instance.fmu.enterInitializationMode()
+    instance.fmu.exitInitializationMode()
+    instance.time = 0.0
+
+
+def started(path, name="instance"):
+    """An instance a few steps into the seed scenario (solver memory in use)."""
+    instance = Instance(path, name=name, start_values={"alpha0": 0.6, "delta1": 0.4})
+    for _ in range(STEPS_BEFORE):
+        instance.step(STEP)
+    return instance
+
+
+def serialized_state(instance):
+    state = instance.fmu.getFMUstate()
+    data = instance.fmu.serializeFMUstate(state)
+    instance.fmu.freeFMUstate(state)
+    return data
+
+
+# --- the two formats ----------------------------------------------------------------------
+
+class NativeState:
+    """The native FMU's serialized state: a header (magic, size, GUID), then fmi2_glue.c's
+    Values as they lie in memory, which this layout follows field by field."""
+
+    refused_status = ERROR
+
+    def __init__(self, instance, data):
+        reals = real_names(instance)
+        n_state = sum(v.name.startswith("der(") for v in instance.md.modelVariables)
+        self.reals = {name: k for k, name in enumerate(reals)}
+        size = struct.unpack_from("<I", data, 4)[0]  # the header's: sizeof(Values)
+        self.header = len(data) - size
+        self.data = bytes(data)
+        after_r = 16 + 8 * len(reals)
+        tail = size - 8 * n_state - 16
+        self.offsets = {"state": 0, "time": 8, "solver": after_r, "max_steps": after_r + 4,
+                        "tolerance": after_r + 8, "h": after_r + 16, "fsal": after_r + 24,
+                        "work": after_r + 32, "dx": tail, "dx_valid": tail + 8 * n_state,
+                        "outputs_valid": tail + 8 * n_state + 4, "last_successful_time": size - 8}
+        self.fields = {"state": "i", "time": "d", "solver": "i", "max_steps": "i", "tolerance": "d",
+                       "h": "d", "fsal": "i", "dx_valid": "i", "outputs_valid": "i",
+                       "last_successful_time": "d"}
+        self.offsets["mode"], self.fields["mode"] = 0, "i"  # the state word: the slave's mode
+        work = (tail - self.offsets["work"]) / 8
+        assert work == int(work) and work >= 32 * n_state, "Values' layout is not the one assumed"
+        # the meaningful part: all but the solvers' scratch after the carried derivative
+        self.meaningful = np.r_[0:self.offsets["work"] + 8 * n_state, tail:size]
+        reals_now, integers_now = values(instance)  # taken where the state was
+        assert ([self.get(name) for name in reals], [self.get(name) for name in integer_names(instance)],
+                self.get("time"), self.get("state")) == (reals_now, integers_now, instance.time,
+                                                         STEP_COMPLETE), "not the layout assumed"
+
+    def offset(self, field):
+        return 16 + 8 * self.reals[field] if field in self.reals else self.offsets[field]
+
+    def get(self, field, data=None):
+        kind = self.fields.get(field, "d")
+        return struct.unpack_from("<" + kind, data or self.data, self.header + self.offset(field))[0]
+
+    def with_field(self, field, value):
+        kind = self.fields.get(field, "d")
+        return self.overwritten(self.offset(field), struct.pack("<" + kind, value))
+
+    def overwritten(self, at, raw, data=None):
+        """The bytes (the saved ones unless given) with raw written at body offset at."""
+        data = bytearray(data or self.data)
+        data[self.header + at:self.header + at + len(raw)] = raw
+        return bytes(data)
+
+    def time(self, data):
+        return self.get("time", data)
+
+
+class PythonState:
+    """The pythonfmu FMU's serialized state: the slave's _get_fmu_state as JSON (pythonfmu's
+    Fmi2Slave._fmu_state_to_bytes)."""
+
+    refused_status = FATAL
+
+    def __init__(self, instance, data):
+        self.data = bytes(data)
+        self.state = json.loads(data)
+        self.saved_time = instance.time
+        names = real_names(instance)
+        self.paths = {name: ("reals", k) for k, name in enumerate(names)}
+        self.paths.update({name: ("ints", k) for k, name in enumerate(integer_names(instance))})
+        self.paths.update(h=("solver", "h"), fsal=("solver", "fsal"), mode=("mode",),
+                          tolerance=("tolerance",))
+        self.leaves = (list(self.paths.values())
+                       + [("solver", "f", k) for k in range(len(self.state["solver"]["f"]))])
+
+    def with_path(self, path, value):
+        state = json.loads(self.data)
+        node = state
+        for key in path[:-1]:
+            node = node[key]
+        node[path[-1]] = value
+        return Fmi2Slave._fmu_state_to_bytes(state)
+
+    def with_field(self, field, value):
+        return self.with_path(self.paths[field], value)
+
+    def time(self, data):
+        return self.saved_time  # the pythonfmu FMU's state holds no time: doStep says it
+
+
+@pytest.fixture(params=["native", "pythonfmu"])
+def backend(request):
+    return request.param
+
+
+@pytest.fixture
+def path(backend, request):
+    return request.getfixturevalue("native_seed_fmu" if backend == "native" else "seed_fmu")
+
+
+def codec(backend, instance, data):
+    return (NativeState if backend == "native" else PythonState)(instance, data)
+
+
+# --- good states -----------------------------------------------------------------------------
+
+def restore(instance, data):
+    state = instance.fmu.deSerializeFMUstate(data)
+    instance.fmu.setFMUstate(state)
+    instance.fmu.freeFMUstate(state)
+
+
+def stepped(instance, steps=3):
+    """The values after each of a few steps."""
+    seen = []
+    for _ in range(steps):
+        instance.step(STEP)
+        seen.append(values(instance))
+    return seen
+
+
+def test_every_state_an_instance_gives_is_taken_back(path):
+    """Before initialization, after steps (replayed bit for bit) and after a discarded step."""
+    fresh = Instance(path, initialize=False)
+    restore(fresh, serialized_state(fresh))
+    initialize(fresh)
+    fresh.close()
+    fmu = started(path)
+    data, t = serialized_state(fmu), fmu.time
+    straight = stepped(fmu)
+    restore(fmu, data)
+    fmu.time = t
+    assert stepped(fmu) == straight
+    fmu.close()
+    failed = Instance(path, start_values={"max_steps": 1})
+    with pytest.raises(FMICallException) as discard:
+        failed.step(10.0)
+    assert discard.value.status == DISCARD
+    restore(failed, serialized_state(failed))
+    failed.close()
+
+
+# --- a bad state, field by field --------------------------------------------------------------
+
+def rule_message(field, value):
+    """What runtime.rules says of the value, as a message names it (the FMUs say the same)."""
+    name, quantity = (("tolerance (from setupExperiment)", "rtol") if field == "tolerance"
+                      else (field, None))
+    with pytest.raises(BadValue) as refusal:
+        check_value(name, value, quantity)
+    return str(refusal.value)
+
+
+# (what, field, value, native value where it differs, the message after "the state's";
+# None: runtime.rules' message for the value)
+CASES = [
+    ("NaN statistic", "n_rhs", math.nan, None, "n_rhs = nan: must be finite"),
+    ("fractional statistic", "n_steps", 1.5, None, "n_steps = 1.5: a count must be a whole number"),
+    ("negative statistic", "n_rejected", -1.0, None, "n_rejected = -1.0: a count must be a whole"),
+    ("NaN state", "alpha0", math.nan, None, "alpha0 = nan: must be finite"),
+    ("infinite state", "delta1", -math.inf, None, "delta1 = -inf: must be finite"),
+    ("bad parameter", "l0", -1.0, None, "l0 = -1.0: a length must be positive"),
+    ("negative step", "h", -1.0, None, "h = -1.0: the solver's carried step cannot be negative"),
+    ("NaN step", "h", math.nan, None, "h = nan: must be finite"),
+    ("no FMI state", "mode", "running", 6, "{}"),
+    ("unknown solver", "solver", 4, 3, "solver = {}: choose 0 to"),
+    ("rtol 0", "rtol", 0.0, None, None),
+    ("max_steps 0", "max_steps", 0, None, "max_steps = 0: must be at least 1"),
+    ("fsal 2", "fsal", 2, None, "fsal = 2: must be 0 or 1"),
+    ("negative tolerance", "tolerance", -1.0, None, None),
+]
+
+
+@pytest.mark.parametrize("what, field, value, native_value, message", CASES, ids=[c[0] for c in CASES])
+def test_a_bad_state_is_refused_naming_it_and_changes_nothing(backend, path, what, field, value,
+                                                              native_value, message):
+    fmu, twin = started(path), started(path, name="twin")
+    data = serialized_state(fmu)
+    state = codec(backend, fmu, data)
+    if backend == "native" and native_value is not None:
+        value = native_value
+    if message is None:
+        message = rule_message(field, value)
+    elif what == "no FMI state":  # a state word, or mode, that names none
+        message = ("instance state = 6: not one state a Co-Simulation instance can be in"
+                   if backend == "native" else "mode = 'running': choose one of")
+    message = message.format(value)
+    bad = state.with_field(field, value)
+    before = values(fmu)
+    refusals = []  # (function, status)
+    if backend == "native":  # both ways in: a state in memory, and bytes
+        saved = fmu.fmu.getFMUstate()
+        body = bad[state.header:]
+        ctypes.memmove(saved.value, body, len(body))
+        with pytest.raises(FMICallException) as failure:
+            fmu.fmu.setFMUstate(saved)
+        refusals.append(("fmi2SetFMUstate", failure.value.status))
+        fmu.fmu.freeFMUstate(saved)
+        with pytest.raises(FMICallException) as failure:
+            fmu.fmu.deSerializeFMUstate(bad)
+        refusals.append(("fmi2DeSerializeFMUstate", failure.value.status))
+    else:
+        restored = fmu.fmu.deSerializeFMUstate(bad)
+        with pytest.raises(FMICallException) as failure:
+            fmu.fmu.setFMUstate(restored)
+        refusals.append(("fmi2SetFMUstate", failure.value.status))
+        fmu.fmu.freeFMUstate(restored)
+    for function, status in refusals:
+        assert status == state.refused_status
+        wanted = f"{function}: the state's {message}"
+        assert any(s == ERROR and text.startswith(wanted) for s, text in fmu.messages), \
+            (wanted, fmu.messages[-3:])
+    assert values(fmu) == before
+    fmu.step(STEP)
+    twin.step(STEP)
+    assert values(fmu) == values(twin)
+    fmu.fmu.reset()
+    initialize(fmu)
+    fmu.step(STEP)
+    fmu.close()
+    twin.close()
+
+
+def test_a_co_simulation_state_is_no_model_exchange_state(native_seed_fmu):
+    fmu = started(native_seed_fmu)
+    data = serialized_state(fmu)
+    messages = []
+    callbacks = logging_callbacks(lambda status, text: messages.append((status, text)))
+    model = FMU2Model(guid=fmu.md.guid, unzipDirectory=fmu.unzipdir,
+                      modelIdentifier=fmu.md.modelExchange.modelIdentifier, instanceName="me")
+    model.instantiate(callbacks=callbacks, loggingOn=True)
+    with pytest.raises(FMICallException) as failure:
+        model.deSerializeFMUstate(data)
+    assert failure.value.status == ERROR
+    assert (ERROR, "fmi2DeSerializeFMUstate: the state's instance state = 4: not one state a "
+                   "Model Exchange instance can be in") in messages
+    model.reset()
+    model.freeInstance()
+    fmu.close()
+
+
+def test_reset_and_free_state_are_never_refused(native_seed_fmu):
+    """Whatever the instance holds: here a state word that is no state, written in place
+    (Instance begins with its Values, which begin with the state word)."""
+    fmu = started(native_seed_fmu)
+    saved = fmu.fmu.getFMUstate()
+    word = ctypes.c_int.from_address(fmu.fmu.component)
+    assert word.value == STEP_COMPLETE
+    word.value = 0
+    with pytest.raises(FMICallException):
+        fmu.fmu.getReal([0])
+    fmu.fmu.freeFMUstate(saved)
+    fmu.fmu.reset()
+    initialize(fmu)
+    fmu.step(STEP)
+    fmu.close()
+
+
+# --- the fuzz ---------------------------------------------------------------------------------
+
+SPECIAL = [math.nan, math.inf, -math.inf, -1.0, 1e308, -1e308, 5e-324, 0.0, 0.5, 2.0 ** 53]
+
+
+def native_mutation(state, rng):
+    """The saved bytes with one to three overwrites of the body: doubles, int32s, int64s, bytes."""
+    data = state.data
+    for _ in range(1 if rng.random() < 0.75 else int(rng.integers(2, 4))):
+        kind = rng.integers(6)
+        if kind == 0:
+            raw = struct.pack("<d", SPECIAL[rng.integers(len(SPECIAL))])
+        elif kind == 1:
+            raw = struct.pack("<i", [-1, 2**31 - 1, -2**31, 2, 3, 7][rng.integers(6)])
+        elif kind == 2:
+            raw = struct.pack("<q", [2**63 - 1, -1, 2**53 + 1][rng.integers(3)])
+        elif kind == 3:
+            raw = struct.pack("<d", float(rng.standard_normal()) * 10.0 ** int(rng.integers(-12, 12)))
+        else:
+            raw = rng.bytes(int(rng.integers(1, 9)))
+        size = len(data) - state.header
+        if rng.random() < 0.8:  # a field that means something
+            at = int(rng.choice(state.meaningful))
+            at = at - at % 8 if rng.random() < 0.75 else at  # aligned, mostly
+        else:
+            at = int(rng.integers(0, size))
+        at = min(at, size - len(raw))
+        data = state.overwritten(at, raw, data)
+    return data
+
+
+PYTHON_VALUES = [math.nan, math.inf, -math.inf, -1, -1.0, 2**31 - 1, 2**63 - 1, 10**400, 1e308, 0,
+                 0.0, 1.5, 3, None, "x", True, [], {}, "instantiated"]
+
+
+def python_mutation(state, rng):
+    """A value of the saved dict replaced (serialized as pythonfmu does), a field taken away,
+    or the JSON's bytes overwritten at random."""
+    kind = rng.random()
+    if kind < 0.7:
+        path = state.leaves[rng.integers(len(state.leaves))]
+        if rng.random() < 0.75:
+            value = PYTHON_VALUES[rng.integers(len(PYTHON_VALUES))]
+        else:
+            value = float(rng.standard_normal()) * 10.0 ** int(rng.integers(-300, 300))
+        return state.with_path(path, value)
+    if kind < 0.8:
+        data = json.loads(state.data)
+        field = sorted(data)[rng.integers(len(data))]
+        if rng.random() < 0.5:
+            del data[field]
+        else:
+            data[field] = {"extra": 1}
+        return Fmi2Slave._fmu_state_to_bytes(data)
+    data = bytearray(state.data)
+    for _ in range(int(rng.integers(1, 4))):
+        at = int(rng.integers(0, len(data)))
+        raw = rng.bytes(1) if rng.random() < 0.5 else bytes([b"0123456789-.eN"[rng.integers(14)]])
+        data[at:at + 1] = raw
+    return bytes(data)
+
+
+def outcome(fmu, state, data):
+    """What restoring these bytes came to: refused, ran (finite outputs), discarded, or else."""
+    fmu.messages.clear()
+    restored = None
+    try:
+        restored = fmu.fmu.deSerializeFMUstate(data)
+        fmu.fmu.setFMUstate(restored)
+    except FMICallException as exc:
+        said = any(s == ERROR and "the state's" in text for s, text in fmu.messages) or any(
+            "not a state of this FMU" in text for s, text in fmu.messages)
+        return "refused" if exc.status == state.refused_status and said else f"refused badly: {exc}"
+    finally:
+        if restored is not None:
+            fmu.fmu.freeFMUstate(restored)
+    try:
+        fmu.fmu.doStep(currentCommunicationPoint=state.time(data), communicationStepSize=STEP)
+    except FMICallException as exc:
+        if exc.status == DISCARD and any(s == DISCARD and text for s, text in fmu.messages):
+            return "discarded"
+        return f"doStep: {exc} {fmu.messages[-1:]}"
+    reals, _ = values(fmu)
+    return "ran" if all(math.isfinite(v) for v in reals) else f"non-finite outputs: {reals}"
+
+
+def test_mutated_states_are_refused_or_run_to_finite_outputs(backend, path):
+    fmu = started(path)
+    state = codec(backend, fmu, serialized_state(fmu))
+    mutate = native_mutation if backend == "native" else python_mutation
+    rng = np.random.default_rng(18)
+    outcomes, named = Counter(), Counter()  # what came of them; what the refusals named
+    for _ in range(FUZZ_CASES):
+        result = outcome(fmu, state, mutate(state, rng))
+        outcomes[result] += 1
+        if result == "refused":
+            text = next(text for s, text in fmu.messages if s == ERROR)
+            found = re.search(r"the state's (.+?) = |(not a state of this FMU)|the state's (\w+)", text)
+            named[re.sub(r"\d+$", "#", next(g for g in found.groups() if g))] += 1
+        fmu.fmu.reset()  # every time: fmpy raises if it is not fmi2OK
+        initialize(fmu)
+    print(f"\n{backend}: {FUZZ_CASES} mutated states: {dict(outcomes)}; the refusals named "
+          f"{len(named)} fields, most often {dict(named.most_common(8))}")
+    assert set(outcomes) <= {"refused", "ran", "discarded"}, outcomes
+    assert outcomes["refused"] and outcomes["ran"]
+    fmu.close()
