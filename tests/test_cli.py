@@ -225,6 +225,16 @@ def test_build_without_mingw_says_what_to_install(monkeypatch, capsys, tmp_path)
     assert not (tmp_path / "W.fmu").exists()
 
 
+def test_build_without_a_c_compiler_says_what_to_install(monkeypatch, capsys, tmp_path):
+    monkeypatch.setenv("CONICAL_PENDULUM_CACHE", str(tmp_path / "cache"))  # nothing compiled yet
+    monkeypatch.setenv("CC", "no-such-cc")
+    status, _, err = run_main(capsys, "build", "--links", "1", "--no-check", "--output", tmp_path / "P.fmu")
+    assert status == 2
+    assert one_line(err, "build") == ("the compiled core needs the C compiler no-such-cc, which is "
+                                      "not on PATH (Debian: apt-get install gcc; or set CC)")
+    assert not (tmp_path / "P.fmu").exists()
+
+
 def test_build_check_and_show_need_no_optional_package(monkeypatch, capsys, tmp_path, seed_fmu):
     """They have no optional package to miss: without the test, sweep and cosim extras they run."""
     from fmpy.util import write_csv

@@ -12,11 +12,13 @@ import json
 import os
 import shutil
 import sys
+import sysconfig
 import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..errors import UserError
 from ..scene import Scene
 
 HERE = Path(__file__).parent
@@ -116,6 +118,11 @@ def build_core(scene: Scene, cache: Path | None = None) -> CoreBuild:
 def _compile(name: str, work: Path) -> None:
     from Cython.Build import cythonize
     from setuptools import Distribution, Extension
+
+    compiler = (os.environ.get("CC") or sysconfig.get_config_var("CC") or "cc").split()[0]
+    if shutil.which(compiler) is None:
+        raise UserError(f"the compiled core needs the C compiler {compiler}, which is not on "
+                        "PATH (Debian: apt-get install gcc; or set CC)")
 
     sources = [f"{name}.pyx", "model.c", "dynamics.c", "solvers.c", "diagnosis.c", "cosim.c",
                "chain.c"]
