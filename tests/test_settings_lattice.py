@@ -14,15 +14,13 @@ from collections import Counter
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave, fmi2Discard
-from fmpy.fmi1 import FMICallException
-
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 from conical_pendulum.build.compiler import load_core
-from conical_pendulum.build.native import build_native_fmu
 from conical_pendulum.runtime.rules import NATIVE_SOLVERS, SOLVERS
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave, fmi2Discard
 
 SEED = Scene.uniform(3)
 STEPS = (1e-9, 1e-6, 0.01, 1.0, 100.0)                  # communication steps [s]
@@ -47,11 +45,6 @@ CASES = [(solver, max_step, max_steps, h) for solver in range(len(SOLVERS)) for 
 @pytest.fixture(scope="module")
 def core():
     return load_core(SEED)
-
-
-@pytest.fixture(scope="module")
-def native_seed_fmu(tmp_path_factory):
-    return build_native_fmu(SEED, tmp_path_factory.mktemp("lattice") / "Native.fmu").path
 
 
 class Lattice:
