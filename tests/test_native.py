@@ -270,6 +270,8 @@ def test_a_bad_value_is_an_error_and_the_instance_goes_on(native, name, value, m
 
 def test_wrong_references_and_states_are_errors_not_crashes(native):
     fmu = Instance(native, initialize=False)
+    fmu.fmu.setupExperiment(startTime=0.0)
+    fmu.fmu.enterInitializationMode()  # where getters are allowed (tests/test_state_machine.py)
     for call in (lambda: fmu.fmu.getReal([10_000]), lambda: fmu.fmu.setInteger([0], [1]),
                  lambda: fmu.fmu.doStep(0.0, 0.1), lambda: fmu.fmu.getBoolean([0]),
                  lambda: fmu.fmu.fmi2GetReal(fmu.fmu.component, None, 1, None)):  # null pointers
@@ -277,7 +279,9 @@ def test_wrong_references_and_states_are_errors_not_crashes(native):
             call()
         assert failure.value.status == 3
     texts = " ".join(text for _, text in fmu.messages)
-    assert "10000 is not a Real variable" in texts and "fmi2DoStep is not allowed" in texts
+    assert "10000 is not a Real variable" in texts and "no Boolean variables" in texts
+    assert "fmi2DoStep is not allowed in state initializationMode" in texts
+    assert "fmi2GetReal: vr or value is NULL" in texts
     fmu.close(after_fatal=True)
 
 
