@@ -487,3 +487,26 @@ def test_set_debug_logging_honours_the_declared_categories(native):
     fmu = Logged(native, logging_on=True)
     assert fmu.logged() == both  # loggingOn in fmi2Instantiate: every category
     fmu.close()
+
+
+def test_without_debug_logging_the_diagnosis_comes_with_the_next_refusal(native):
+    """A discard's diagnosis is debug logging; the error a host meets next carries it, so a
+    host that never asked for debug logging (fmpy's default) still learns why."""
+    fmu = Logged(native, logging_on=False)
+    fmu.messages.clear()
+    with pytest.raises(FMICallException):
+        fmu.fmu.doStep(0.0, 10.0)
+    assert fmu.messages == []
+    with pytest.raises(FMICallException) as refused:
+        fmu.fmu.doStep(0.0, 10.0)
+    assert refused.value.status == ERROR
+    [(status, category, text)] = fmu.messages
+    assert (status, category) == (ERROR, "logStatusError")
+    assert "not allowed in state stepFailed" in text
+    assert "The step was discarded: do_step from t = 0 s by 10 s failed: too many steps." in text
+    fmu.fmu.setFMUstate(fmu.start)  # gone with the failed step
+    fmu.messages.clear()
+    with pytest.raises(FMICallException):
+        fmu.fmu.enterInitializationMode()
+    assert "discarded" not in fmu.messages[0][2]
+    fmu.close()

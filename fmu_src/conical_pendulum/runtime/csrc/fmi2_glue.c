@@ -120,6 +120,7 @@ typedef struct {
     fmi2Type type;
     unsigned logging;             /* bit k: log category cp_log_categories[k] is on */
     char name[128];
+    char discarded[2048];         /* the last discarded step's diagnosis, while in stepFailed */
 } Instance;
 
 #define ALL_CATEGORIES ((1u << CP_NLOG) - 1)
@@ -137,7 +138,7 @@ static void log_message(Instance *inst, fmi2Status status, int category, const c
 {
     if (!inst->cb.logger) return;
     if ((status == fmi2OK || status == fmi2Discard) && !(inst->logging >> category & 1u)) return;
-    char text[2048];
+    char text[4096];
     va_list args;
     va_start(args, format);
     vsnprintf(text, sizeof text, format, args);
@@ -170,9 +171,12 @@ static Instance *checked(fmi2Component c, const char *function, int co_simulatio
         why = ": only while a step is in progress, and fmi2DoStep never runs asynchronously here";
     else if (inst->v.state == STEP_FAILED)
         why = "; after a discarded step fmi2SetFMUstate or fmi2Reset go back, fmi2Terminate ends";
-    log_message(inst, fmi2Error, CP_LOG_STATUS_ERROR, "%s is not allowed in state %s (FMI 2.0, %s)%s",
+    /* the diagnosis again, in an error that is always reported: logged at the discard only in
+     * debug mode, it would otherwise never reach a host that did not ask for it */
+    const int failed = inst->v.state == STEP_FAILED && inst->discarded[0];
+    log_message(inst, fmi2Error, CP_LOG_STATUS_ERROR, "%s is not allowed in state %s (FMI 2.0, %s)%s%s%s",
                 function, state, cs ? "Co-Simulation, section 4.2.4" : "Model Exchange, section 3.2.3",
-                why);
+                why, failed ? ". The step was discarded: " : "", failed ? inst->discarded : "");
     return NULL;
 }
 
@@ -247,6 +251,7 @@ static void reset_values(Instance *inst)
     inst->v.solver = CP_SOLVER_START;
     inst->v.max_steps = CP_MAX_STEPS_START;
     inst->v.state = INSTANTIATED;
+    inst->discarded[0] = '\0';
 }
 
 /* ---- common functions ------------------------------------------------------------------ */
@@ -600,6 +605,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
     if (invalid_values(inst->type, FMUstate, message, sizeof message))
         return REFUSE(inst, "fmi2SetFMUstate: the state's %s", message);
     inst->v = *(const Values *)FMUstate;
+    inst->discarded[0] = '\0';
     return fmi2OK;
 }
 
@@ -881,9 +887,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                                inst->v.work, &inst->v.fsal, STATS(inst), &failure);
     inst->v.outputs_valid = status == CP_OK;  /* on failure, those at t are computed again */
     if (status != CP_OK) {
-        char message[2048];
-        cp_diagnose(message, sizeof message, status, &failure);
-        log_message(inst, fmi2Discard, CP_LOG_STATUS_DISCARD, "%s", message);
+        cp_diagnose(inst->discarded, sizeof inst->discarded, status, &failure);
+        log_message(inst, fmi2Discard, CP_LOG_STATUS_DISCARD, "%s", inst->discarded);
         inst->v.state = STEP_FAILED;
         return fmi2Discard;
     }
