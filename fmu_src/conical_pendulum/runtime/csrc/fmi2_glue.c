@@ -874,8 +874,6 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     (void)noSetFMUStatePriorToCurrentPoint;
     Instance *inst = CHECKED(c, fmi2DoStep);
     if (!inst) return fmi2Error;
-    if (inst->type != fmi2CoSimulation)
-        return REFUSE(inst, "fmi2DoStep: instantiated for Model Exchange");
     const double t = currentCommunicationPoint, dt = communicationStepSize;
     if (!(fabs(t - inst->v.time) <= 1e-9 * fmax(1.0, fabs(t))))
         return REFUSE(inst, "fmi2DoStep: currentCommunicationPoint = %.17g s, but the FMU is "
