@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from conical_pendulum import Scene
-from conical_pendulum.build.compiler import build_core
+from conical_pendulum.builder.compiler import build_core
 from results_csv import write_rows
 
 

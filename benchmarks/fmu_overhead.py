@@ -19,7 +19,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 from conical_pendulum import Scene
-from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.builder.fmu import build_fmu
 
 
 def build_trivial(outputs: int, directory: Path) -> Path:

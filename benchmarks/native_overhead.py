@@ -32,9 +32,9 @@ import fmpy
 import numpy as np
 
 from conical_pendulum import Scene
-from conical_pendulum.build.compiler import load_core
-from conical_pendulum.build.fmu import build_fmu
-from conical_pendulum.build.native import fmi_headers
+from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.builder.fmu import build_fmu
+from conical_pendulum.builder.native import fmi_headers
 from results_csv import write_rows
 
 HERE = Path(__file__).parent

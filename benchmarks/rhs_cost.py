@@ -17,7 +17,7 @@ import numpy as np
 
 from conical_pendulum import Scene
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.build.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the seed's pipeline, a test reference
 from references.seed_pipeline import seed_right_hand_side  # noqa: E402

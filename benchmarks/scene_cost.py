@@ -15,8 +15,8 @@ import fmpy
 import numpy as np
 
 from conical_pendulum import Scene
-from conical_pendulum.build.compiler import build_core
-from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.builder.compiler import build_core
+from conical_pendulum.builder.fmu import build_fmu
 
 VARIANTS = {
     "seed (links + bobs, all outputs)": Scene.uniform(3),

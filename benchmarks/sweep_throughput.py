@@ -30,7 +30,7 @@ from distributed import LocalCluster
 
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.analysis.sweep import LoadedFmu, random_samples, sweep
 from results_csv import write_rows
 

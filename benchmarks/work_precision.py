@@ -28,8 +28,8 @@ import numpy as np
 from scipy.integrate import odeint, solve_ivp
 
 from conical_pendulum import Scene
-from conical_pendulum.build.compiler import load_core
-from conical_pendulum.build.fmu import DEFAULT_SETTINGS
+from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.builder.fmu import DEFAULT_SETTINGS
 from results_csv import RESULTS, write_rows
 
 STEP = 1.0 / 60.0
@@ -213,7 +213,7 @@ def fmu_row(scene, core, p, reference, ref_outputs, bob_index):
 
     import fmpy
 
-    from conical_pendulum.build.fmu import build_fmu
+    from conical_pendulum.builder.fmu import build_fmu
 
     with tempfile.TemporaryDirectory() as tmp:
         path = build_fmu(scene, Path(tmp) / "ConicalPendulum.fmu").path

@@ -1,7 +1,7 @@
 import pytest
 
 from conical_pendulum import Scene
-from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.builder.fmu import build_fmu
 
 
 @pytest.fixture(scope="session")

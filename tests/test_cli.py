@@ -319,12 +319,12 @@ def test_an_output_where_a_file_or_folder_cannot_be_is_one_line(
 
 
 WORK = {  # what each command spends its time in, and a command line that gets there
-    "build": ("conical_pendulum.build.fmu", "build_fmu", ["--no-check", "--output", "OUT/x.fmu"]),
+    "build": ("conical_pendulum.builder.fmu", "build_fmu", ["--no-check", "--output", "OUT/x.fmu"]),
     "check": ("conical_pendulum.analysis.compare", "compare", ["FMU", "--stop-time", "1"]),
     "show": ("conical_pendulum.viz.plots", "plot", ["RESULTS", "--plot", "OUT/p.png"]),
     "page": ("conical_pendulum.analysis.fmpy_runs", "run_fmu", ["FMU", "--out", "OUT"]),
     "sweep": ("conical_pendulum.analysis.sweep", "sweep", ["FMU", "--grid", "l0=5,6", "--out", "OUT/s.parquet"]),
-    "demo": ("conical_pendulum.build.fmu", "build_fmu", ["--out", "OUT"]),
+    "demo": ("conical_pendulum.builder.fmu", "build_fmu", ["--out", "OUT"]),
 }
 
 
@@ -349,26 +349,26 @@ def test_ctrl_c_is_one_line_and_status_130(monkeypatch, capsys, tmp_path, seed_f
 
 
 def test_build_fmu_py_names_itself_when_interrupted(monkeypatch, capsys, tmp_path):
-    import conical_pendulum.build.fmu
+    import conical_pendulum.builder.fmu
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(conical_pendulum.build.fmu, "build_fmu", interrupted)
+    monkeypatch.setattr(conical_pendulum.builder.fmu, "build_fmu", interrupted)
     assert run_command("build", ["--no-check", "--output", str(tmp_path / "x.fmu")], prog="build_fmu.py") == 130
     assert capsys.readouterr().err == "build_fmu.py: interrupted\n"
 
 
 def test_a_failed_ecospy_run_is_the_demos_status_1(monkeypatch, capsys, tmp_path):
     """The demo's own failure (ecospy ran and failed) is status 1, printed by the CLI, not the demo."""
-    import conical_pendulum.build.fmu
+    import conical_pendulum.builder.fmu
     from conical_pendulum.demos import coupled, ecospy_run
 
     def failed(*args, **kwargs):
         raise RuntimeError("ecospy failed (exit 3): boom")
 
     monkeypatch.setattr(ecospy_run, "missing", lambda: None)
-    monkeypatch.setattr(conical_pendulum.build.fmu, "build_fmu", lambda scene, path: type("B", (), {"path": path}))
+    monkeypatch.setattr(conical_pendulum.builder.fmu, "build_fmu", lambda scene, path: type("B", (), {"path": path}))
     monkeypatch.setattr(coupled, "build_cart_fmu", lambda path: path)
     monkeypatch.setattr(coupled, "reference", lambda *args: {})
     monkeypatch.setattr(coupled, "cosimulate", failed)

@@ -8,7 +8,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from conical_pendulum.build.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.cli import main as cli
 from conical_pendulum.demos.coupled import SCENE, SCHEMES, build_cart_fmu
 from conical_pendulum.demos.monolithic import cart_parameters, monolithic

@@ -10,8 +10,8 @@ from fmpy.validation import validate_fmu
 
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.build.compiler import load_core
-from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.analysis.simulate import simulate
 from fmu_helpers import Instance
 

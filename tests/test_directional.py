@@ -10,8 +10,8 @@ from fmpy.fmi2 import FMU2Model
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
-from conical_pendulum.build.compiler import load_core
-from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.builder.fmu import build_fmu
 from fmu_helpers import Instance
 
 SCENES = {"seed": Scene.uniform(3),                                  # expanded, no inputs

@@ -10,7 +10,7 @@ from fmpy.fmi1 import FMICallException
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.analysis.simulate import simulate
 from fmu_helpers import Instance
 

@@ -16,7 +16,7 @@ from fmpy.validation import validate_fmu
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.compare import compare
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.builder.fmu import build_fmu
 from fmu_helpers import BAD_VALUES, Instance
 
 

@@ -4,9 +4,9 @@ import pytest
 import sympy as sm
 
 from conical_pendulum import Link, Scene, SceneError
-from conical_pendulum.build.compiler import load_core
-from conical_pendulum.build.kane import kanes_method
-from conical_pendulum.build.model import derive
+from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.builder.kane import kanes_method
+from conical_pendulum.builder.model import derive
 from conical_pendulum.runtime.rules import BadValue
 from conical_pendulum.analysis.simulate import simulate
 

@@ -16,8 +16,8 @@ from fmpy.validation import validate_fmu
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.build.fmu import build_fmu
-from conical_pendulum.build.native import fmi_headers
+from conical_pendulum.builder.fmu import build_fmu
+from conical_pendulum.builder.native import fmi_headers
 from fmu_helpers import BAD_VALUES, Instance
 from required_tools import require_tool
 

@@ -34,7 +34,7 @@ def test_the_page_carries_the_fmu_trajectories(seed_fmu, tmp_path):
 
 
 def test_a_scene_without_bobs_draws_only_links(seed_fmu, tmp_path, fmu_dir):
-    from conical_pendulum.build.fmu import build_fmu
+    from conical_pendulum.builder.fmu import build_fmu
 
     scene = Scene(links=(Link(has_bob=False), Link(has_bob=False)))
     path = build_fmu(scene, fmu_dir / "NoBobs.fmu").path

@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from conical_pendulum import Link, Scene, SceneError
-from conical_pendulum.build.fmu import build_fmu
+from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
-from conical_pendulum.build.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.runtime.rules import NATIVE_SOLVERS, SOLVERS
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException

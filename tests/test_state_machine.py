@@ -15,8 +15,8 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2EventInfo)
 
 from conical_pendulum import Scene
-from conical_pendulum.build.fmu import build_fmu
-from conical_pendulum.build.native import LOG_CATEGORIES
+from conical_pendulum.builder.fmu import build_fmu
+from conical_pendulum.builder.native import LOG_CATEGORIES
 
 OK, DISCARD, ERROR = 0, 2, 3
 CO_SIMULATION, MODEL_EXCHANGE = 1, 0  # fmi2Type

@@ -250,7 +250,7 @@ def _build(args) -> int:
         raise UsageError(str(exc)) from None
     if args.win64 and not args.native:
         raise UsageError("--win64: only the native FMU carries a Windows binary; add --native")
-    from .build.fmu import build_fmu
+    from .builder.fmu import build_fmu
 
     try:
         build = build_fmu(scene, args.output, backend="native" if args.native else "pythonfmu",
@@ -314,7 +314,7 @@ def _positive(option: str, value: float) -> float:
 
 
 def _fmu_scene(path: Path):
-    from .build.fmu import fmu_scene
+    from .builder.fmu import fmu_scene
 
     try:
         return fmu_scene(path)

@@ -1,7 +1,7 @@
 """The one error class for what a user can act on, raised by library code and turned into a
 message and an exit status by the command line alone (cli.py).
 
-Library code (build/, analysis/, viz/, demos/) raises UserError and never exits: a
+Library code (builder/, analysis/, viz/, demos/) raises UserError and never exits: a
 program that imports it keeps control. `conical-pendulum` prints it as
 `<command>: <message>` and exits with its `status`.
 """

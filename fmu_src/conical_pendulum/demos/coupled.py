@@ -49,7 +49,7 @@ EXCHANGED = ["cart::x", "cart::v", "cart::a", "p::F_pivot_x"] + [f"p::{name}" fo
 
 def build_cart_fmu(output: Path | str) -> Path:
     """Cart.fmu from runtime/cart_slave.py, packaged as the pendulum is."""
-    from ..build.fmu import package
+    from ..builder.fmu import package
     from ..runtime.cart_slave import PARAMETERS
 
     output = Path(output)
@@ -91,7 +91,7 @@ class CouplingError:
 def reference(times, scene: Scene = SCENE, cart: dict | None = None) -> dict:
     """The monolithic model on `times`, with F_pivot_x from the compiled core at the
     cart's acceleration."""
-    from ..build.compiler import load_core
+    from ..builder.compiler import load_core
 
     truth = monolithic(times, scene, cart)
     core = load_core(scene)
@@ -211,7 +211,7 @@ def run(args) -> int:
     lacking = ecospy_run.missing()
     if lacking:  # before the builds and the reference, which take a while
         raise UserError(f"needs {lacking}: pip install -e \".[cosim]\"")
-    from ..build.fmu import build_fmu
+    from ..builder.fmu import build_fmu
 
     if args.out.exists() and not args.out.is_dir():
         raise UserError(f"--out {args.out}: not a directory")

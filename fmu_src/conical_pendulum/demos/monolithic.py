@@ -9,7 +9,7 @@ import numpy as np
 import sympy as sm
 import sympy.physics.mechanics as me
 
-from ..build.kane import chain
+from ..builder.kane import chain
 from ..runtime.cart_slave import PARAMETERS as CART_DEFAULTS
 from ..runtime.cart_slave import START as CART_START
 from ..scene import Scene

@@ -3,7 +3,7 @@
 An ordinary module: one class for every scene. What a scene's FMU holds (its variables
 with their start values and descriptions, the compiled core's file) is read at
 instantiation from MODEL_FILE in the FMU's resources, written at build time
-(conical_pendulum.build.fmu). Shipped in each FMU as part of a package with a name
+(conical_pendulum.builder.fmu). Shipped in each FMU as part of a package with a name
 unique to the runtime's sources, and imported once per process through the FMU's
 entry module (runtime/entry.py). At run time it needs numpy and the compiled core,
 nothing else.
