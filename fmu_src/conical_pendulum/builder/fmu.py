@@ -7,6 +7,7 @@ mends its modelDescription, and the FMU moves into place only when everything su
 """
 from __future__ import annotations
 
+import ast
 import hashlib
 import json
 import os
@@ -18,14 +19,14 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..runtime.files import MODEL_FILE, MODEL_NAME
 from ..runtime.rules import SETTINGS, check_setting
-from ..runtime.slave import MODEL_FILE
 from ..scene import PIVOT_OUTPUTS, Scene
+from . import native
 from .compiler import CoreBuild, build_core
 from .model_description import complete, describe, model_description_text
 
 RUNTIME = Path(__file__).parents[1] / "runtime"
-MODEL_NAME = "ConicalPendulum"
 DEFAULT_SETTINGS = {name: setting.default for name, setting in SETTINGS.items()}
 
 
@@ -67,21 +68,22 @@ def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.f
               settings: dict | None = None, cache: Path | None = None,
               backend: str = "pythonfmu", platforms: tuple[str, ...] = ("linux64",)) -> FmuBuild:
     """The scene's FMU at `output`: the pythonfmu slave (the default), or with
-    backend="native" the same C with FMI glue in C (build.native), with a binary for each
+    backend="native" the same C with FMI glue in C (builder.native), with a binary for each
     of `platforms` ("linux64", and "win64" cross-compiled; the pythonfmu FMU is linux64 only)."""
-    if backend == "native":
-        from .native import build_native_fmu
-
-        return build_native_fmu(scene, output, settings, cache, platforms)
-    if tuple(platforms) != ("linux64",):
+    if backend != "native" and tuple(platforms) != ("linux64",):
         raise ValueError(f"platforms: the pythonfmu FMU runs on linux64 only, not {platforms}; "
                          "a native FMU (backend='native') can carry win64 too")
-    if backend != "pythonfmu":
+    if backend not in BACKENDS:
         raise ValueError(f"backend: {backend!r} is not one of {BACKENDS}")
     start = time.perf_counter()
     output, settings = checked_output(output), checked_settings(settings)
+    if backend == "native":
+        native.check_settings(settings)  # before the core's build
     core = build_core(scene, cache)
     data = model_data(scene, core, settings)
+    if backend == "native":
+        native.write_native_fmu(scene, core, data, output, platforms)
+        return FmuBuild(output, core, MODEL_NAME, time.perf_counter() - start)
     starts = {v["name"]: v["start"] for group in data["variables"].values() for v in group
               if "start" in v}
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_model_") as tmp:
@@ -122,13 +124,29 @@ def runtime_digest() -> str:
     return digest.hexdigest()[:16]
 
 
+def runtime_modules(slave_module: str) -> list[str]:
+    """The runtime's modules an FMU of runtime/<slave_module>.py ships: the package's
+    __init__, the slave and what they import from the runtime, transitively (their
+    relative imports, read from the sources)."""
+    needed, wanted = set(), ["__init__", slave_module]
+    while wanted:
+        name = wanted.pop()
+        if name in needed:
+            continue
+        needed.add(name)
+        for node in ast.walk(ast.parse((RUNTIME / f"{name}.py").read_text(), f"{name}.py")):
+            if isinstance(node, ast.ImportFrom) and node.level == 1:
+                wanted += [node.module] if node.module else [alias.name for alias in node.names]
+    return sorted(needed)
+
+
 def package(slave_module: str, data_files: list[Path], output: Path, starts: dict,
             feedthrough=(), **capabilities) -> str:
     """Build the FMU of runtime/<slave_module>.py (its SLAVE class) at `output`.
 
-    The FMU's resources hold the runtime's modules as the package cp_runtime_<digest>,
-    the entry module pythonfmu loads (runtime/entry.py as <slave_module>_<digest>.py)
-    and `data_files`. `starts` are the start values by name (pythonfmu rounds them);
+    The FMU's resources hold the runtime's modules the slave runs with (runtime_modules,
+    not the other slaves) as the package cp_runtime_<digest>, the entry module pythonfmu
+    loads (runtime/entry.py as <slave_module>_<digest>.py) and `data_files`. `starts` are the start values by name (pythonfmu rounds them);
     `feedthrough` names the outputs that depend at once on the inputs. Returns the entry
     module's name.
     """
@@ -141,8 +159,8 @@ def package(slave_module: str, data_files: list[Path], output: Path, starts: dic
         src = Path(tmp) / "src"
         runtime = src / runtime_name
         runtime.mkdir(parents=True)
-        for module in RUNTIME.glob("*.py"):
-            shutil.copy2(module, runtime / module.name)
+        for name in runtime_modules(slave_module):
+            shutil.copy2(RUNTIME / f"{name}.py", runtime / f"{name}.py")
         script = src / f"{entry_name}.py"
         shutil.copy2(RUNTIME / "entry.py", script)
         staged = Path(tmp) / f"{slave_module}.fmu"

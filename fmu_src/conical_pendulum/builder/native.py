@@ -22,11 +22,10 @@ import zipfile
 from pathlib import Path
 
 from ..errors import UserError
+from ..runtime.files import MODEL_FILE, MODEL_NAME
 from ..runtime.rules import CALCULATED, FIXED, RULES, SETTINGS, STATISTICS, rule_of
-from ..runtime.slave import MODEL_FILE
 from ..scene import Scene
-from .compiler import CSRC, build_core
-from .fmu import MODEL_NAME, FmuBuild, checked_output, checked_settings, model_data
+from .compiler import CSRC, CoreBuild
 
 GLUE_SOURCES = ["model.c", "dynamics.c", "chain.c", "solvers.c", "diagnosis.c", "cosim.c",
                 "directional.c", "fmi2_glue.c"]
@@ -263,17 +262,18 @@ def guid_of(data: dict) -> str:
     return "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, text)) + "}"
 
 
-def build_native_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.fmu",
-                     settings: dict | None = None, cache: Path | None = None,
-                     platforms: tuple[str, ...] = ("linux64",)) -> FmuBuild:
-    """The native FMU of a scene at `output` (moved into place only when complete), with a
-    binary for each of `platforms` ("linux64", "win64")."""
-    start = time.perf_counter()
-    output, settings = checked_output(output), checked_settings(settings)
+def check_settings(settings: dict) -> None:
+    """What the native FMU refuses of settings the pythonfmu FMU takes (its solvers)."""
     if settings["solver"] >= RULES["native-solver"].high:
         raise ValueError(f"solver = {settings['solver']}: {RULES['native-solver'].refusal}")
-    core = build_core(scene, cache)
-    data = model_data(scene, core, settings)
+
+
+def write_native_fmu(scene: Scene, core: CoreBuild, data: dict, output: Path,
+                     platforms: tuple[str, ...] = ("linux64",)) -> None:
+    """The native FMU of a scene at `output` (moved into place only when complete), with a
+    binary for each of `platforms` ("linux64", "win64"), from its compiled core and the
+    data its model.json holds; builder.fmu.build_fmu(backend="native") checks the output
+    and the settings (check_settings) and makes both."""
     data["feedthrough"] = [name for name in scene.output_names() if name.startswith("F_pivot")]
     guid = guid_of(data)
     output.parent.mkdir(parents=True, exist_ok=True)
@@ -299,4 +299,3 @@ def build_native_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_
                 archive.write(path, f"sources/{path.name}")
             archive.writestr(f"resources/{MODEL_FILE}", json.dumps(data, indent=1))
         os.replace(staged, output)
-    return FmuBuild(output, core, MODEL_NAME, time.perf_counter() - start)

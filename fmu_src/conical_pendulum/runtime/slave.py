@@ -22,10 +22,10 @@ from pythonfmu import Fmi2Slave, Integer, Real
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 
+from .files import MODEL_FILE
 from .rules import (CALCULATED, FIXED, SETTINGS, SOLVERS, STATISTICS, BadValue, check_setting,
                     check_value)
 
-MODEL_FILE = "model.json"
 RADAU = SOLVERS.index("radau")
 REAL_SETTINGS = tuple(name for name, setting in SETTINGS.items() if not setting.integer)
 INTEGER_SETTINGS = tuple(name for name, setting in SETTINGS.items() if setting.integer)
