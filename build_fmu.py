@@ -5,8 +5,8 @@
     python build_fmu.py --scene scenes/seed.toml
     python build_fmu.py --coupling --output dist/Coupled.fmu   # a moving support: a_pivot in, F_pivot out
 
-The same as `conical-pendulum build` (conical_pendulum/cli.py), which the package installs;
-`python build_fmu.py --help` lists the options.
+The same as `conical-pendulum build` (conical_pendulum/commands/build.py), which the
+package installs; `python build_fmu.py --help` lists the options.
 """
 import sys
 

@@ -195,8 +195,9 @@ def hide(monkeypatch, *packages):
 def test_a_missing_optional_package_is_one_line_saying_what_to_install(
         monkeypatch, capsys, tmp_path, seed_fmu, name, args, hidden, message):
     hide(monkeypatch, hidden)
-    # a module an earlier test imported would not import its package again: drop it
-    monkeypatch.delitem(sys.modules, "conical_pendulum.analysis.sweep", raising=False)
+    # a module an earlier test imported would not import its package again: drop them
+    for module in ("conical_pendulum.analysis.sweep", "conical_pendulum.commands.sweep"):
+        monkeypatch.delitem(sys.modules, module, raising=False)
     status, out, err = run_main(capsys, name, *[{"FMU": seed_fmu}.get(a, a.replace("OUT", str(tmp_path / "out")))
                                                  for a in args])
     assert status == 2 and one_line(err, name) == message

@@ -200,3 +200,15 @@ def test_each_fmu_still_runs_in_fmpy(seed_fmu, cart_fmu):
     cart = fmpy.simulate_fmu(str(cart_fmu), stop_time=1.0, output_interval=0.1)
     assert cart["x"][0] == 1.0 and 0 < cart["x"][-1] < 1.0  # the spring pulls it back to 0
 
+
+def test_each_subcommand_is_a_module_of_its_own():
+    """cli.py is the entry point only; commands/<name>.py has the command's options and run."""
+    from conical_pendulum.cli import COMMANDS
+
+    for name, command in COMMANDS.items():
+        assert command.module == f"{PACKAGE}.commands.{name}"
+        tree = ast.parse((ROOT / "commands" / f"{name}.py").read_text())
+        defined = {node.name for node in tree.body if isinstance(node, ast.FunctionDef)}
+        assert {"add_arguments", "run"} <= defined, name
+    cli = ast.parse((ROOT / "cli.py").read_text())
+    assert not {node.name for node in cli.body if isinstance(node, ast.FunctionDef)} & {"add_arguments", "run"}

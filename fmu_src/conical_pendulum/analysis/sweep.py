@@ -13,7 +13,6 @@ stops quietly, short of the stop time) or an output is not finite.
 """
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import itertools
@@ -37,7 +36,7 @@ from fmpy import read_model_description
 from fmpy.fmi2 import FMU2Slave
 from fmpy.simulation import settable_in_initialization_mode, settable_in_instantiated
 
-from ..errors import UserError
+from ..progress import bar
 from .fmpy_runs import logging_callbacks, run_fmu
 
 
@@ -228,8 +227,6 @@ def _client(scheduler: str | None, n_workers: int, timeout: float):
 
 
 def _show_progress(done: int, total: int, failed: int, start: float) -> None:
-    from ..progress import bar
-
     bar(done, total, "sweep", f" runs, {failed} failed, {time.perf_counter() - start:.1f} s")
 
 
@@ -297,115 +294,3 @@ def sweep(fmu, runs: Iterable[Mapping[str, float]], *, stop_time: float = 10.0,
     if out is not None:
         results.to_parquet(out, index=False)
     return results
-
-
-def _assignment(text: str, form: str) -> tuple[str, str]:
-    name, equals, value = text.partition("=")
-    if not (name and equals and value):
-        raise argparse.ArgumentTypeError(f"{text!r}: expected {form}")
-    return name, value
-
-
-def _number(text: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-
-
-def _grid_axis(text: str) -> tuple[str, list[float]]:
-    name, values = _assignment(text, "NAME=V1,V2,...")
-    return name, [_number(value) for value in values.split(",")]
-
-
-def _range(text: str) -> tuple[str, tuple[float, float]]:
-    name, bounds = _assignment(text, "NAME=LOW:HIGH")
-    low, colon, high = bounds.partition(":")
-    if not colon:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected NAME=LOW:HIGH")
-    return name, (_number(low), _number(high))
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of at least 1")
-    return value
-
-
-EPILOG = """Variables: the FMU's parameters (l0, m0, M0, Ixx0, g, rtol, solver, ...) and state
-start values (alpha0, beta0, omega0, delta0, ...). The file has one row per run and
-time: run, the inputs (a state's start value as <name>_start), status ('ok' or
-'failed'), message, time, the outputs.
-Exit status: 0 when every run succeeded, 1 when some failed (they are in the file),
-2 for bad options or when the sweep could not run."""
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The sweep's options (`conical-pendulum sweep`)."""
-    parser.description = "\n\n".join(__doc__.split("\n\n")[:2])
-    parser.epilog = EPILOG
-    parser.add_argument("fmu", type=Path, help="the FMU (FMI 2.0 co-simulation)")
-    runs = parser.add_mutually_exclusive_group(required=True)
-    runs.add_argument("--grid", type=_grid_axis, action="append", metavar="NAME=V1,V2,...",
-                      help="values of one variable; repeat for more: every combination is run")
-    runs.add_argument("--random", type=_range, action="append", metavar="NAME=LOW:HIGH",
-                      help="a range of one variable, sampled uniformly; repeat for more")
-    parser.add_argument("--samples", type=_positive_int, help="with --random: how many runs")
-    parser.add_argument("--seed", type=int, help="with --random: seed for reproducible samples")
-    parser.add_argument("--stop-time", type=float, default=10.0, help="simulated seconds per run (10)")
-    parser.add_argument("--interval", type=float, default=1.0 / 60.0, help="output interval [s] (1/60)")
-    parser.add_argument("--outputs", type=lambda text: text.split(","), metavar="NAME,NAME,...",
-                        help="variables to record (default: every output)")
-    parser.add_argument("--workers", type=_positive_int,
-                        help="worker processes of the local cluster made for the sweep (2)")
-    parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="run on an existing cluster instead, e.g. tcp://host:8786")
-    parser.add_argument("--connect-timeout", type=float, default=10.0, metavar="SECONDS",
-                        help="with --scheduler: how long to try to connect (10)")
-    parser.add_argument("--batch", type=_positive_int, help="runs per task (default: automatic)")
-    parser.add_argument("--out", type=Path, default=Path("sweep.parquet"), help="Parquet file (sweep.parquet)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
-
-
-def _check_options(args) -> None:
-    """What argparse cannot say alone: options that go together or exclude each other."""
-    given = args.grid or args.random
-    if len({name for name, _ in given}) < len(given):
-        raise UserError("a variable is given twice")
-    if args.random and args.samples is None:
-        raise UserError("--random needs --samples")
-    if args.grid and (args.samples is not None or args.seed is not None):
-        raise UserError("--samples and --seed go with --random")
-    if args.scheduler and args.workers is not None:
-        raise UserError("--workers is for the local cluster; drop it with --scheduler")
-
-
-def run(args) -> int:
-    """The sweep of `conical-pendulum sweep`: 0 when every run succeeded, 1 when some failed;
-    UserError (exit 2) for bad options or when the sweep could not run."""
-    _check_options(args)
-    try:
-        runs = (grid(dict(args.grid)) if args.grid
-                else random_samples(dict(args.random), args.samples, args.seed))
-        start = time.perf_counter()
-        results = sweep(args.fmu, runs, stop_time=args.stop_time, output_interval=args.interval,
-                        outputs=args.outputs, scheduler=args.scheduler, n_workers=args.workers or 2,
-                        batch=args.batch, out=args.out, progress=not args.no_progress,
-                        timeout=args.connect_timeout)
-    except (ValueError, ConnectionError) as exc:
-        raise UserError(str(exc)) from None
-    seconds = time.perf_counter() - start
-    by_run = results.drop_duplicates("run").set_index("run")
-    failed = by_run[by_run["status"] == "failed"]
-    print(f"wrote {args.out}: {len(by_run)} runs ({len(failed)} failed), {len(results)} rows, "
-          f"in {seconds:.1f} s ({len(by_run) / seconds:.1f} runs/s)")
-    for run, row in failed.head(5).iterrows():
-        values = ", ".join(f"{name} = {row[name]:g}" for name in results.attrs["inputs"])
-        print(f"  run {run} ({values}) failed: {row['message']}")
-    if len(failed) > 5:
-        print(f"  ... and {len(failed) - 5} more: status == 'failed' in the file")
-    return 1 if len(failed) else 0

@@ -16,15 +16,15 @@ loaded first, and its interpreter can abort at exit while pythonfmu's library is
 """
 from __future__ import annotations
 
-import argparse
 import csv
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import UserError
+from ..builder import fmu as builder
+from ..builder.compiler import load_core
+from ..runtime.cart_slave import PARAMETERS
 from ..scene import Scene
 from . import ecospy_run
 from .monolithic import CART_START, cart_parameters, monolithic
@@ -49,13 +49,10 @@ EXCHANGED = ["cart::x", "cart::v", "cart::a", "p::F_pivot_x"] + [f"p::{name}" fo
 
 def build_cart_fmu(output: Path | str) -> Path:
     """Cart.fmu from runtime/cart_slave.py, packaged as the pendulum is."""
-    from ..builder.fmu import package
-    from ..runtime.cart_slave import PARAMETERS
-
     output = Path(output)
     starts = {**{name: value for name, (_, value) in PARAMETERS.items()}, **CART_START,
               "F_x": 0.0, "M_x": 0.0}
-    package("cart_slave", [], output, starts, feedthrough=["a"])
+    builder.package("cart_slave", [], output, starts, feedthrough=["a"])
     return output
 
 
@@ -91,8 +88,6 @@ class CouplingError:
 def reference(times, scene: Scene = SCENE, cart: dict | None = None) -> dict:
     """The monolithic model on `times`, with F_pivot_x from the compiled core at the
     cart's acceleration."""
-    from ..builder.compiler import load_core
-
     truth = monolithic(times, scene, cart)
     core = load_core(scene)
     names = scene.state_names()
@@ -158,93 +153,34 @@ def plot(errors: list[CouplingError], path: Path) -> None:
     plt.close(fig)
 
 
-def _numbers(text: str) -> list[float]:
-    try:
-        return sorted({float(s) for s in text.split(",")})
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
-
-
-def _schemes(text: str) -> list[str]:
-    chosen = list(dict.fromkeys(text.split(",")))
-    unknown = [name for name in chosen if name not in SCHEMES]
-    if unknown:
-        raise argparse.ArgumentTypeError(f"unknown scheme(s) {', '.join(map(repr, unknown))}; "
-                                         f"choose from {', '.join(SCHEMES)}")
-    return chosen
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The demo's options (`conical-pendulum demo`)."""
-    parser.description = __doc__
-    parser.add_argument("--out", type=Path, default=Path("dist") / "coupled",
-                        help="folder for the FMUs, coupling_error.csv and coupling.png (dist/coupled)")
-    parser.add_argument("--steps", type=_numbers, default=sorted(STEPS), metavar="DT,DT,...",
-                        help="communication steps [s], comma-separated; each must divide the stop "
-                             f"time and be a multiple of the smallest ({','.join(map(str, STEPS))})")
-    parser.add_argument("--stop-time", type=float, default=STOP_TIME, metavar="SECONDS",
-                        help=f"simulated seconds ({STOP_TIME:g})")
-    parser.add_argument("--cart-mass", type=_numbers, default=sorted(CART_MASSES, reverse=True),
-                        metavar="KG,KG,...",
-                        help="m_cart [kg], comma-separated; lighter than the chain's apparent mass "
-                             "(3 to 5 kg) the explicit exchange diverges at any step "
-                             f"({','.join(f'{m:g}' for m in CART_MASSES)})")
-    parser.add_argument("--scheme", type=_schemes, default=list(SCHEMES), metavar="NAME,NAME,...",
-                        help="how the FMUs exchange the pivot force: explicit (F_pivot_x) or "
-                             "apparent-mass (F_free_x and M_pivot_xx, the cart moving the "
-                             f"chain's apparent mass in its own step) ({','.join(SCHEMES)})")
-
-
-def run(args) -> int:
-    """Build both FMUs, co-simulate each scheme and cart mass at each step, compare with the
-    monolithic model, write coupling_error.csv and coupling.png. 0; a UserError of status 1
-    when ecospy failed, of status 2 for bad options or without the cosim extra."""
-    steps = args.steps
-    for dt in steps:
-        if not (dt > 0 and abs(args.stop_time / dt - round(args.stop_time / dt)) < 1e-9
-                and abs(dt / steps[0] - round(dt / steps[0])) < 1e-9):
-            raise UserError(f"--steps: {dt:g} must be positive, divide --stop-time {args.stop_time:g} "
-                            f"and be a multiple of the smallest step {steps[0]:g}")
-    for mass in args.cart_mass:
-        if not (mass > 0 and math.isfinite(mass)):
-            raise UserError(f"--cart-mass: must be a positive number of kg, got {mass!r}")
-    lacking = ecospy_run.missing()
-    if lacking:  # before the builds and the reference, which take a while
-        raise UserError(f"needs {lacking}: pip install -e \".[cosim]\"")
-    from ..builder.fmu import build_fmu
-
-    if args.out.exists() and not args.out.is_dir():
-        raise UserError(f"--out {args.out}: not a directory")
-    try:
-        args.out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:  # a file above the folder, or no permission
-        raise UserError(f"--out {args.out}: {exc.strerror or exc}") from None
-    pendulum = build_fmu(SCENE, args.out / "ConicalPendulum.fmu").path
-    cart = build_cart_fmu(args.out / "Cart.fmu")
+def demo(out: Path, steps=STEPS, stop_time: float = STOP_TIME, cart_masses=CART_MASSES,
+         schemes=tuple(SCHEMES)) -> list[CouplingError]:
+    """Build both FMUs into the folder `out`, co-simulate each scheme and cart mass (the
+    heaviest first) at each step (the smallest first, each a multiple of it and dividing
+    `stop_time`) and compare with the monolithic model. RuntimeError when ecospy failed."""
+    steps = sorted(steps)
+    pendulum = builder.build_fmu(SCENE, out / "ConicalPendulum.fmu").path
+    cart = build_cart_fmu(out / "Cart.fmu")
     errors = []
-    times = np.linspace(0.0, args.stop_time, round(args.stop_time / steps[0]) + 1)
-    for mass in sorted(args.cart_mass, reverse=True):
+    times = np.linspace(0.0, stop_time, round(stop_time / steps[0]) + 1)
+    for mass in sorted(cart_masses, reverse=True):
         cart_values = cart_parameters(m_cart=mass)
         truth = reference(times, SCENE, cart_values)
-        for scheme in args.scheme:
-            try:
-                runs = cosimulate(pendulum, cart, steps, args.stop_time, cart_values, scheme)
-            except RuntimeError as exc:
-                raise UserError(str(exc), status=1) from None
+        for scheme in schemes:
+            runs = cosimulate(pendulum, cart, steps, stop_time, cart_values, scheme)
             errors += coupling_errors(runs, truth, scheme, mass)
-    header = ["scheme", "cart_mass_kg", "step_s", "cart_error_m", "angle_error_rad", "force_error_N",
-              "ecospy_seconds", "diverged"]
+    return errors
+
+
+HEADER = ["scheme", "cart_mass_kg", "step_s", "cart_error_m", "angle_error_rad", "force_error_N",
+          "ecospy_seconds", "diverged"]
+
+
+def write(errors: list[CouplingError], out: Path) -> list[list[str]]:
+    """coupling_error.csv and coupling.png in the folder `out`; the CSV's rows, header first."""
     rows = [[e.scheme, f"{e.cart_mass:g}", f"{e.step:g}", f"{e.cart_error:.3e}", f"{e.angle_error:.3e}",
              f"{e.force_error:.3e}", f"{e.seconds:.3f}", str(e.diverged).lower()] for e in errors]
-    with open(args.out / "coupling_error.csv", "w", newline="") as f:
-        csv.writer(f, lineterminator="\n").writerows([header, *rows])
-    plot(errors, args.out / "coupling.png")
-    print("\n".join("\t".join(row) for row in [header, *rows]))
-    for e in errors:
-        if e.diverged:
-            why = e.ended or f"cart error {e.cart_error:.2g} m"
-            print(f"{e.scheme}, cart {e.cart_mass:g} kg, step {e.step:g} s: the exchange diverged ({why})"
-                  + ("; the cart is too light against the chain's apparent mass for an explicit "
-                     "exchange (added-mass effect): --scheme apparent-mass" if e.scheme == "explicit" else ""))
-    print(f"wrote {args.out / 'coupling_error.csv'} and {args.out / 'coupling.png'}")
-    return 0
+    with open(out / "coupling_error.csv", "w", newline="") as f:
+        csv.writer(f, lineterminator="\n").writerows([HEADER, *rows])
+    plot(errors, out / "coupling.png")
+    return [HEADER, *rows]

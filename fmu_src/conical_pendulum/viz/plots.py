@@ -9,7 +9,6 @@ still give the angles and the energy: `missing` says what they cannot give, and 
 """
 from __future__ import annotations
 
-import argparse
 import time
 from pathlib import Path
 
@@ -165,41 +164,3 @@ def animate(results: dict, path, fps: float = 30.0, size: float = 5.0) -> float:
     animation.save(path, writer=PillowWriter(fps=fps), progress_callback=progress)
     plt.close(fig)
     return time.perf_counter() - start
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options of `conical-pendulum show`."""
-    parser.add_argument("results", type=Path, metavar="RESULTS.csv",
-                        help="fmpy results CSV (fmpy.util.write_csv), e.g. build's dist/results.csv")
-    parser.add_argument("--plot", type=Path, metavar="PNG", help="PNG of angles, paths from above and energy")
-    parser.add_argument("--gif", type=Path, metavar="GIF", help="animated GIF of the chain in 3D")
-    parser.add_argument("--fps", type=float, default=30.0, help="frames per simulated second (30)")
-
-
-def run(args) -> int:
-    """`conical-pendulum show`: the plot and/or the animation of a results CSV; what the
-    results cannot give is left out, and said in one line."""
-    if not (args.plot or args.gif):
-        raise UserError("give --plot and/or --gif")
-    if not args.fps > 0:
-        raise UserError(f"--fps: must be positive, got {args.fps:g}")
-    for option, path in (("--plot", args.plot), ("--gif", args.gif)):
-        if path and path.is_dir():
-            raise UserError(f"{option} {path}: is a directory")
-        if path and not path.parent.is_dir():
-            raise UserError(f"{option} {path}: {path.parent} is not a directory")
-    results = load_results(args.results)
-    asked = {"the paths": args.plot, "the energy drift": args.plot, "the animation": args.gif}
-    lacking = {what: why for what, why in missing(results).items() if asked[what]}
-    try:
-        if args.plot:
-            plot(results, args.plot)
-            print(f"wrote {args.plot}")
-        if args.gif and "the animation" not in lacking:
-            seconds = animate(results, args.gif, fps=args.fps)
-            print(f"wrote {args.gif} in {seconds:.1f} s")
-    except OSError as exc:  # a folder that is not there, or not writable
-        raise UserError(f"{exc.filename or 'writing'}: {exc.strerror or exc}") from None
-    if lacking:
-        print(left_out(lacking))
-    return 0

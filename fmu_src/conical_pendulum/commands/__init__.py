@@ -1,0 +1,8 @@
+"""The subcommands of `conical-pendulum`, one module each (build, check, show, page, sweep,
+demo), each with `add_arguments(parser)` and `run(args) -> int`: options parsed into calls
+of the library (builder/, analysis/, viz/, demos/), results printed.
+
+Only cli.py imports them, and only the chosen one; they raise errors.UserError for what
+the user can fix, and cli.py alone turns it into one line and an exit status. Library
+code imports nothing from here.
+"""
