@@ -71,29 +71,31 @@ def serialized_state(instance):
 
 class NativeState:
     """The native FMU's serialized state: a header (magic, size, GUID), then fmi2_glue.c's
-    Values as they lie in memory, which this layout follows field by field."""
+    SavedState as it lies in memory: the glue's Machine (state word, time, last successful
+    time), then pendulum_model.c's ModelData, which this layout follows field by field."""
 
     refused_status = ERROR
+    MODEL = 24  # where the ModelData begins, after the Machine
 
     def __init__(self, instance, data):
         reals = real_names(instance)
         n_state = sum(v.name.startswith("der(") for v in instance.md.modelVariables)
         self.reals = {name: k for k, name in enumerate(reals)}
-        size = struct.unpack_from("<I", data, 4)[0]  # the header's: sizeof(Values)
+        size = struct.unpack_from("<I", data, 4)[0]  # the header's: sizeof the SavedState
         self.header = len(data) - size
         self.data = bytes(data)
-        after_r = 16 + 8 * len(reals)
-        tail = size - 8 * n_state - 16
-        self.offsets = {"state": 0, "time": 8, "solver": after_r, "max_steps": after_r + 4,
-                        "tolerance": after_r + 8, "h": after_r + 16, "fsal": after_r + 24,
-                        "work": after_r + 32, "dx": tail, "dx_valid": tail + 8 * n_state,
-                        "outputs_valid": tail + 8 * n_state + 4, "last_successful_time": size - 8}
+        after_r = self.MODEL + 8 * len(reals)
+        tail = size - 8 * n_state - 8
+        self.offsets = {"state": 0, "time": 8, "last_successful_time": 16, "solver": after_r,
+                        "max_steps": after_r + 4, "tolerance": after_r + 8, "h": after_r + 16,
+                        "fsal": after_r + 24, "work": after_r + 32, "dx": tail,
+                        "dx_valid": tail + 8 * n_state, "outputs_valid": tail + 8 * n_state + 4}
         self.fields = {"state": "i", "time": "d", "solver": "i", "max_steps": "i", "tolerance": "d",
                        "h": "d", "fsal": "i", "dx_valid": "i", "outputs_valid": "i",
                        "last_successful_time": "d"}
         self.offsets["mode"], self.fields["mode"] = 0, "i"  # the state word: the slave's mode
         work = (tail - self.offsets["work"]) / 8
-        assert work == int(work) and work >= 32 * n_state, "Values' layout is not the one assumed"
+        assert work == int(work) and work >= 32 * n_state, "ModelData's layout is not the one assumed"
         # the meaningful part: all but the solvers' scratch after the carried derivative
         self.meaningful = np.r_[0:self.offsets["work"] + 8 * n_state, tail:size]
         reals_now, integers_now = values(instance)  # taken where the state was
@@ -102,7 +104,7 @@ class NativeState:
                                                          STEP_COMPLETE), "not the layout assumed"
 
     def offset(self, field):
-        return 16 + 8 * self.reals[field] if field in self.reals else self.offsets[field]
+        return self.MODEL + 8 * self.reals[field] if field in self.reals else self.offsets[field]
 
     def get(self, field, data=None):
         kind = self.fields.get(field, "d")
@@ -308,7 +310,7 @@ def test_a_co_simulation_state_is_no_model_exchange_state(native_seed_fmu):
 
 def test_reset_and_free_state_are_never_refused(native_seed_fmu):
     """Whatever the instance holds: here a state word that is no state, written in place
-    (Instance begins with its Values, which begin with the state word)."""
+    (Instance begins with its Machine, which begins with the state word)."""
     fmu = started(native_seed_fmu)
     saved = fmu.fmu.getFMUstate()
     word = ctypes.c_int.from_address(fmu.fmu.component)

@@ -1,5 +1,6 @@
 """The native FMU: the same C as the pythonfmu FMU with FMI glue in C, in hosts that are not Python."""
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -154,6 +155,22 @@ def test_a_host_rebuilds_the_binary_from_the_fmus_sources(native, tmp_path):
     shipped = run_fmu(native, stop_time=2.0, start_values=START)
     for name in ("alpha0", "beta2", "energy"):
         np.testing.assert_allclose(rebuilt[name], shipped[name], rtol=1e-9, atol=1e-12)
+
+
+def test_the_fmi_layer_knows_the_model_only_through_the_contract(native):
+    """fmi2_glue.c includes the FMI headers, fmu_config.h (GUID, log categories, names) and
+    the model contract fmu_model.h, and touches none of the model's value references, sizes,
+    rules or C; the model's file knows nothing of FMI."""
+    with zipfile.ZipFile(native) as archive:
+        glue = archive.read("sources/fmi2_glue.c").decode()
+        model = archive.read("sources/pendulum_model.c").decode()
+    included = re.findall(r'#include "([^"]+)"', glue)
+    assert included == ["fmi2Functions.h", "fmu_config.h", "fmu_model.h"]
+    for word in ("CP_VR_", "CP_NREAL", "CP_NSTATE", "CP_NPARAM", "CP_NOUTPUT", "cp_rules",
+                 "cp_real_", "cp_rhs", "cp_cosim", "cp_directional", "CP_STEP", "CP_SOLVER",
+                 "CP_FIXED", "CP_CALCULATED"):
+        assert word not in glue, word
+    assert "fmi2" not in model
 
 
 def test_a_c_host_runs_it_with_a_clean_environment(native, host, tmp_path):

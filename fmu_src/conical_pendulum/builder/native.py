@@ -28,9 +28,9 @@ from ..scene import Scene
 from .compiler import CSRC, CoreBuild
 
 GLUE_SOURCES = ["model.c", "dynamics.c", "chain.c", "solvers.c", "diagnosis.c", "cosim.c",
-                "directional.c", "fmi2_glue.c"]
+                "directional.c", "rules.c", "pendulum_model.c", "fmi2_glue.c"]
 GLUE_HEADERS = ["model.h", "real.h", "dynamics.h", "chain.h", "solvers.h", "tableaus.h", "status.h",
-                "diagnosis.h", "cosim.h", "directional.h", "rules.h", "fmu_config.h"]
+                "diagnosis.h", "cosim.h", "directional.h", "rules.h", "fmu_model.h", "fmu_config.h"]
 
 
 # The log categories, written once: the model description's LogCategories and fmu_config.h's

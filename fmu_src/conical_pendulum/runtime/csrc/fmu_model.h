@@ -1,0 +1,167 @@
+/* The model contract: what a model offers the FMI layers, and all they know of it.
+ *
+ * The part include/model.h plays for the Modelica Reference-FMUs' generic glue. An FMI layer
+ * (fmi2_glue.c: FMI 2.0's API, its state machine and FMU states) includes this header and
+ * fmu_config.h, and from fmu_config.h takes only what describes the FMU as a whole: its GUID
+ * (CP_GUID), its log categories (CP_LOG_*, cp_log_categories) and its variables' names by
+ * value reference (cp_variable_name). It never reads the model's data, never applies a value
+ * rule, never names a model quantity. A model (pendulum_model.c: the n-link conical
+ * pendulum) implements these functions and knows nothing of FMI: no fmi2 type, no state
+ * machine, no logger; it answers with a ModelStatus and, where something is refused or
+ * cannot be computed, a message the FMI layer passes on through the host's logger.
+ *
+ * Messages. Every function that can refuse or fail takes (message, size): on MODEL_REFUSED
+ * or MODEL_DISCARD it writes there the whole message (NUL-terminated, cut at size bytes),
+ * worded as the pythonfmu FMU words it ("l0 = -1.0: a length must be positive"); the FMI
+ * layer prefixes its function's name where it wants one. MODEL_NO_VARIABLE writes nothing:
+ * "value reference 7 is not a Real variable" is the FMI layer's to say, in its standard's
+ * words (FMI 3.0 says Float64). The functions named ..._refusal return NULL when the value
+ * may be taken, or the message.
+ *
+ * Data. A model's instance data is a ModelData: opaque here, model_sizes.data_size bytes of
+ * plain data (no pointers, no type aligned more strictly than a double) that the FMI layer
+ * allocates, copies as a whole (FMU states) and serializes byte for byte; model_invalid
+ * checks such bytes before any of them is taken. Nothing is allocated by a model.
+ *
+ * An FMI 3.0 layer (fmi3_glue.c, not written) sits on the same functions: fmi3GetFloat64 and
+ * fmi3SetFloat64 are model_get_real and model_check_real / model_set_real, fmi3GetInt32 and
+ * fmi3SetInt32 the integer ones, fmi3EnterInitializationMode's tolerance goes through
+ * model_tolerance_refusal and model_set_tolerance, fmi3ExitInitializationMode calls
+ * model_initialize, fmi3DoStep calls model_do_step (no early return, no event handling),
+ * fmi3GetDirectionalDerivative and fmi3GetAdjointDerivative's transposed products start from
+ * model_directional_derivative, fmi3GetFMUState and fmi3SerializeFMUState copy the
+ * ModelData with the layer's own machine state and header, as fmi2_glue.c does. Only the
+ * API, the state machine and the FMU state's wrapping are written again.
+ *
+ * A second model, the coupled demo's cart (runtime/cart_slave.py today; not written in C):
+ * cart_model.c defines its struct ModelData (its Reals by value reference: parameters
+ * m_cart, k_cart, c_cart, inputs F_x and M_x, states x and v, its outputs; the Integer
+ * F_x_order; whatever its step carries) and these functions over it, with its own generated
+ * fmu_config.h (GUID, names, value rules, the same log categories) and its own equations;
+ * model_sizes says 2 states. It links with fmi2_glue.c (and later fmi3_glue.c) unchanged:
+ * one more model file, not a copy of the glue. Its model_do_step may integrate with
+ * solvers.c through a cp_system of its own, as cosim.c does for the pendulum.
+ *
+ * Not in the contract: Boolean and String variables, event indicators and events (neither
+ * model has any; the FMI layer refuses them), input and output derivatives. */
+#ifndef CP_FMU_MODEL_H
+#define CP_FMU_MODEL_H
+
+#include <stddef.h>
+
+typedef struct ModelData ModelData;  /* defined by the model only */
+
+typedef enum {
+    MODEL_OK = 0,
+    MODEL_DISCARD,      /* cannot be computed here (a singular mass matrix, a failed step):
+                           message says why; the data is as it was, or at the last step */
+    MODEL_REFUSED,      /* a value or request refused: message says why; nothing taken */
+    MODEL_NO_VARIABLE   /* the value reference is no variable of that type: no message */
+} ModelStatus;
+
+/* The model's sizes. Value references: the Reals are 0 to n_real - 1 (the state derivatives
+ * after them, from vr_derivative, are Reals too, computed), the Integers n_real to
+ * n_real + n_integer - 1. */
+typedef struct {
+    size_t data_size;        /* sizeof(ModelData) */
+    int n_real, n_integer;   /* Real and Integer variables held (the derivatives apart) */
+    int n_state;             /* continuous states x, Model Exchange's nx */
+    int n_event_indicator;   /* 0: the contract has no events yet */
+    unsigned vr_state;       /* the value reference of x[0]; x[k] is vr_state + k */
+    unsigned vr_derivative;  /* the value reference of der(x[0]); der(x[k]) is vr_derivative + k */
+} ModelSizes;
+
+extern const ModelSizes model_sizes;
+
+/* ---- start values, experiment, initialization ---- */
+
+/* Every variable at its start value, the settings at theirs, nothing carried: what
+ * instantiation and a reset give. */
+void model_reset(ModelData *m);
+
+/* NULL if tolerance may be the experiment's tolerance (FMI 2.0's fmi2SetupExperiment, FMI
+ * 3.0's fmi3EnterInitializationMode), or the message refusing it. */
+const char *model_tolerance_refusal(double tolerance, char *message, size_t size);
+
+/* Takes the experiment's tolerance (0: none), which model_initialize applies. */
+void model_set_tolerance(ModelData *m, double tolerance);
+
+/* Leaving initialization: the experiment's tolerance applied to the model's settings, what
+ * was carried forgotten, the outputs computed at the start. */
+void model_initialize(ModelData *m);
+
+/* ---- the variable table ---- */
+
+/* The Real variable vr into *value: MODEL_OK; MODEL_DISCARD (message) for a calculated
+ * value that cannot be had here (a state derivative where the mass matrix is singular);
+ * MODEL_NO_VARIABLE. Outputs are computed when asked, if the state or a parameter changed
+ * since. time only names the instant in a message. */
+ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time, char *message,
+                           size_t size);
+
+/* Whether value may be set into the Real variable vr, without taking it: MODEL_OK,
+ * MODEL_REFUSED (message: a calculated variable; a fixed one once initialized, that is
+ * after initialization mode; or the value breaks the variable's rule), MODEL_NO_VARIABLE.
+ * An FMI layer checks every value of a call before it sets any. */
+ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int initialized,
+                             char *message, size_t size);
+
+/* Takes a value model_check_real accepted (what depends on it is computed again). */
+void model_set_real(ModelData *m, unsigned vr, double value);
+
+/* The Integer variable vr into *value: MODEL_OK or MODEL_NO_VARIABLE. */
+ModelStatus model_get_integer(const ModelData *m, unsigned vr, int *value);
+
+/* As model_check_real, for an Integer. */
+ModelStatus model_check_integer(const ModelData *m, unsigned vr, int value, int initialized,
+                                char *message, size_t size);
+
+/* Takes a value model_check_integer accepted. */
+void model_set_integer(ModelData *m, unsigned vr, int value);
+
+/* ---- Model Exchange ---- */
+
+/* The n_state continuous states into x. */
+void model_get_states(const ModelData *m, double x[]);
+
+/* NULL and x taken (n_state values), or the message refusing it and nothing taken. */
+const char *model_set_states(ModelData *m, const double x[], char *message, size_t size);
+
+/* The states' nominal values into x_nominal (n_state values). */
+void model_get_nominals(const ModelData *m, double x_nominal[]);
+
+/* x' at the current values into dx (n_state values): MODEL_OK, or MODEL_DISCARD (message).
+ * Computed once until the state or a parameter changes. */
+ModelStatus model_get_derivatives(ModelData *m, double dx[], double time, char *message,
+                                  size_t size);
+
+/* ---- directional derivatives ---- */
+
+/* sensitivity = J seed, J the Jacobian of the unknowns (value references: state derivatives
+ * and outputs; a state as unknown is an output of its own value) with respect to the knowns
+ * (states and inputs), at the current values; nothing of m changes. MODEL_OK; MODEL_REFUSED
+ * (message) for a value reference that is no unknown or no known, and nothing written;
+ * MODEL_DISCARD (message) where the Jacobian cannot be had. The seed is finite (the FMI
+ * layer checks it); a sensitivity may come out non-finite, and the FMI layer refuses to hand
+ * it out. */
+ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[], size_t n_unknown,
+                                         const unsigned knowns[], size_t n_known,
+                                         const double seed[], double sensitivity[], double time,
+                                         char *message, size_t size);
+
+/* ---- co-simulation ---- */
+
+/* One communication step from t by dt with the model's own settings and solver memory:
+ * MODEL_OK, the states, outputs and statistics at t + dt; or MODEL_DISCARD, message the
+ * step's diagnosis (what failed, why, what to do), the states and outputs as they were at t
+ * (the statistics count the attempt). */
+ModelStatus model_do_step(ModelData *m, double t, double dt, char *message, size_t size);
+
+/* ---- FMU states ---- */
+
+/* NULL if m can be a model's data, or what is wrong with it, naming the field and its value
+ * (every Real keeps its variable's rule as model_check_real applies it, and so on): the check
+ * of a restored FMU state, before any of it is taken. */
+const char *model_invalid(const ModelData *m, char *message, size_t size);
+
+#endif

@@ -1,0 +1,346 @@
+/* The n-link conical pendulum behind the model contract (fmu_model.h): its instance data,
+ * its variable table with the value rules of runtime/rules.py (fmu_config.h), its settings
+ * and statistics, x' and the outputs (dynamics.h), their directional derivatives
+ * (directional.h) and the co-simulation step every FMU of the package takes (cosim.h).
+ * Nothing here knows FMI: an FMI layer calls these functions and says the messages. */
+#include "fmu_model.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "cosim.h"
+#include "diagnosis.h"
+#include "directional.h"
+#include "dynamics.h"
+#include "fmu_config.h"
+#include "rules.h"
+#include "solvers.h"
+
+/* Everything an instance of the model holds: plain data, copied as a whole in FMU states. */
+struct ModelData {
+    double r[CP_NREAL];           /* Real variables by value reference (fmu_config.h) */
+    int solver, max_steps;        /* the Integer settings */
+    double tolerance;             /* the experiment's; replaces rtol when > 0 */
+    double h;                     /* the solvers' proposed step, carried between steps */
+    int fsal;                     /* work holds x' at x */
+    double work[CP_STEP_WORK_SIZE];
+    double dx[CP_NSTATE];         /* Model Exchange: x' at x when dx_valid */
+    int dx_valid, outputs_valid;
+};
+
+const ModelSizes model_sizes = {sizeof(ModelData), CP_NREAL, CP_VR_DERIVATIVE - CP_NREAL,
+                                CP_NSTATE, 0, CP_VR_STATE, CP_VR_DERIVATIVE};
+
+#define X(m) ((m)->r + CP_VR_STATE)
+#define Y(m) ((m)->r + CP_VR_OUTPUT)
+#define STATS(m) ((m)->r + CP_VR_STATISTICS)
+
+static const char *const tolerance_name = "tolerance (from setupExperiment)";
+
+static int is_derivative(unsigned vr)
+{
+    return vr >= CP_VR_DERIVATIVE && vr < CP_VR_DERIVATIVE + CP_NSTATE;
+}
+
+static int is_output(unsigned vr)  /* a calculated output, not a state or a statistic */
+{
+    return vr >= CP_VR_OUTPUT && vr < CP_VR_STATISTICS;
+}
+
+static int is_integer(unsigned vr)
+{
+    return vr == CP_VR_SOLVER || vr == CP_VR_MAX_STEPS;
+}
+
+/* NULL if an Integer setting (solver or max_steps) may take value, or the message refusing it. */
+static const char *integer_refusal(unsigned vr, int value, char *message, size_t size)
+{
+    const cp_rule *rule = &cp_rules[vr == CP_VR_SOLVER ? CP_SOLVER_RULE : CP_MAX_STEPS_RULE];
+    char shown[16];
+    snprintf(shown, sizeof shown, "%d", value);  /* a count reads as one: 7, not 7.0 */
+    return cp_refusal(cp_variable_name(vr), shown, value, rule, "", message, size);
+}
+
+static const char *real_rule_refusal(unsigned vr, double value, char *message, size_t size)
+{
+    return cp_real_refusal(cp_variable_name(vr), value, &cp_rules[cp_real_rule[vr]],
+                           cp_real_what[vr], message, size);
+}
+
+/* What was computed from the values or carried by the solvers is forgotten. */
+static void invalidate(ModelData *m)
+{
+    m->fsal = 0;
+    m->dx_valid = 0;
+    m->outputs_valid = 0;
+}
+
+static void update_outputs(ModelData *m)
+{
+    if (!m->outputs_valid && CP_NOUTPUT) cp_eval_outputs(X(m), m->r, Y(m));
+    m->outputs_valid = 1;
+}
+
+/* MODEL_DISCARD with its message: x' cannot be had at the model's state (status from cp_rhs
+ * or from its complex-step copy, with the weakest generalized speed and pivot ratio it found). */
+static ModelStatus no_derivatives(double time, int status, int bad_dof, double pivot_ratio,
+                                  char *message, size_t size)
+{
+    snprintf(message, size, "derivatives at t = %.9g s: %s at generalized speed %d (pivot ratio "
+             "%.2g); check parameters and state", time, cp_status_message(status), bad_dof,
+             pivot_ratio);
+    return MODEL_DISCARD;
+}
+
+static ModelStatus derivatives(ModelData *m, double time, char *message, size_t size)
+{
+    if (m->dx_valid) return MODEL_OK;
+    cp_model model = {m->r, 1.0, -1};
+    int status = cp_rhs(&model, X(m), m->dx);
+    if (status != CP_OK)
+        return no_derivatives(time, status, model.bad_dof, model.pivot_ratio, message, size);
+    m->dx_valid = 1;
+    return MODEL_OK;
+}
+
+/* ---- start values, experiment, initialization ---- */
+
+void model_reset(ModelData *m)
+{
+    memset(m, 0, sizeof *m);
+    memcpy(m->r, cp_real_start, sizeof cp_real_start);
+    m->solver = CP_SOLVER_START;
+    m->max_steps = CP_MAX_STEPS_START;
+}
+
+const char *model_tolerance_refusal(double tolerance, char *message, size_t size)
+{
+    return cp_real_refusal(tolerance_name, tolerance, &cp_rules[cp_real_rule[CP_VR_RTOL]],
+                           cp_real_what[CP_VR_RTOL], message, size);
+}
+
+void model_set_tolerance(ModelData *m, double tolerance)
+{
+    m->tolerance = tolerance;
+}
+
+void model_initialize(ModelData *m)
+{
+    if (m->tolerance > 0) m->r[CP_VR_RTOL] = m->tolerance;
+    invalidate(m);
+    update_outputs(m);
+}
+
+/* ---- the variable table ---- */
+
+ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time, char *message,
+                           size_t size)
+{
+    if (vr < CP_NREAL) {
+        if (is_output(vr)) update_outputs(m);
+        *value = m->r[vr];
+        return MODEL_OK;
+    }
+    if (!is_derivative(vr)) return MODEL_NO_VARIABLE;
+    ModelStatus status = derivatives(m, time, message, size);
+    if (status == MODEL_OK) *value = m->dx[vr - CP_VR_DERIVATIVE];
+    return status;
+}
+
+/* NULL if the variable may be set now, or why not: a calculated variable never, a fixed one
+ * (a parameter or a setting) only before the model is initialized, an input always. */
+static const char *not_settable(unsigned vr, int initialized, char *message, size_t size)
+{
+    int input = vr >= CP_VR_INPUT && vr < CP_VR_STATE;
+    int calculated = (vr >= CP_VR_OUTPUT && vr < CP_VR_SETTINGS) || is_derivative(vr);
+    if (calculated) snprintf(message, size, CP_CALCULATED_MESSAGE, cp_variable_name(vr));
+    else if (!input && initialized) snprintf(message, size, CP_FIXED_MESSAGE, cp_variable_name(vr));
+    else return NULL;
+    return message;
+}
+
+ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int initialized,
+                             char *message, size_t size)
+{
+    (void)m;
+    if (vr >= CP_NREAL && !is_derivative(vr)) return MODEL_NO_VARIABLE;
+    if (not_settable(vr, initialized, message, size)
+        || real_rule_refusal(vr, value, message, size))
+        return MODEL_REFUSED;
+    return MODEL_OK;
+}
+
+void model_set_real(ModelData *m, unsigned vr, double value)
+{
+    if (m->r[vr] != value) invalidate(m);
+    m->r[vr] = value;
+}
+
+ModelStatus model_get_integer(const ModelData *m, unsigned vr, int *value)
+{
+    if (!is_integer(vr)) return MODEL_NO_VARIABLE;
+    *value = vr == CP_VR_SOLVER ? m->solver : m->max_steps;
+    return MODEL_OK;
+}
+
+ModelStatus model_check_integer(const ModelData *m, unsigned vr, int value, int initialized,
+                                char *message, size_t size)
+{
+    (void)m;
+    if (!is_integer(vr)) return MODEL_NO_VARIABLE;
+    if (initialized) {  /* the settings are fixed */
+        snprintf(message, size, CP_FIXED_MESSAGE, cp_variable_name(vr));
+        return MODEL_REFUSED;
+    }
+    return integer_refusal(vr, value, message, size) ? MODEL_REFUSED : MODEL_OK;
+}
+
+void model_set_integer(ModelData *m, unsigned vr, int value)
+{
+    *(vr == CP_VR_SOLVER ? &m->solver : &m->max_steps) = value;
+}
+
+/* ---- Model Exchange ---- */
+
+void model_get_states(const ModelData *m, double x[])
+{
+    memcpy(x, X(m), CP_NSTATE * sizeof x[0]);
+}
+
+const char *model_set_states(ModelData *m, const double x[], char *message, size_t size)
+{
+    for (int k = 0; k < CP_NSTATE; k++)
+        if (!isfinite(x[k])) {
+            snprintf(message, size, "%s = %g: must be finite", cp_variable_name(CP_VR_STATE + k),
+                     x[k]);
+            return message;
+        }
+    memcpy(X(m), x, CP_NSTATE * sizeof x[0]);
+    invalidate(m);
+    return NULL;
+}
+
+void model_get_nominals(const ModelData *m, double x_nominal[])
+{
+    (void)m;
+    for (int k = 0; k < CP_NSTATE; k++) x_nominal[k] = 1.0;  /* angles and rates: order one */
+}
+
+ModelStatus model_get_derivatives(ModelData *m, double dx[], double time, char *message,
+                                  size_t size)
+{
+    ModelStatus status = derivatives(m, time, message, size);
+    if (status == MODEL_OK) memcpy(dx, m->dx, CP_NSTATE * sizeof dx[0]);
+    return status;
+}
+
+/* ---- directional derivatives ---- */
+
+/* From directional.c: the model's own C evaluated in complex arithmetic, exact to rounding.
+ * A state as unknown is an output of its own value; the statistics depend on nothing
+ * (ModelStructure). */
+ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[], size_t n_unknown,
+                                         const unsigned knowns[], size_t n_known,
+                                         const double seed[], double sensitivity[], double time,
+                                         char *message, size_t size)
+{
+    double dx_seed[CP_NSTATE] = {0}, dp_seed[CP_NPARAM] = {0};
+    for (size_t k = 0; k < n_known; k++) {
+        const unsigned vr = knowns[k];
+        if (vr < CP_VR_INPUT || vr >= CP_VR_STATE + CP_NSTATE) {
+            snprintf(message, size, "value reference %u (%s) as a known: only states and inputs "
+                     "are", vr, cp_variable_name(vr));
+            return MODEL_REFUSED;
+        }
+        if (vr < CP_VR_STATE) dp_seed[vr] += seed[k];  /* the inputs end p (fmu_config.h) */
+        else dx_seed[vr - CP_VR_STATE] += seed[k];
+    }
+    int want_derivatives = 0, want_outputs = 0;
+    for (size_t k = 0; k < n_unknown; k++) {
+        const unsigned vr = unknowns[k];
+        if (is_derivative(vr)) want_derivatives = 1;
+        else if (is_output(vr)) want_outputs = 1;
+        else if (vr < CP_VR_STATE || vr >= CP_VR_SETTINGS) {
+            snprintf(message, size, "value reference %u (%s) as an unknown: only outputs and "
+                     "state derivatives are", vr, cp_variable_name(vr));
+            return MODEL_REFUSED;
+        }
+    }
+    double d_derivatives[CP_NSTATE], d_outputs[CP_NOUTPUT + 1];
+    if (want_derivatives || want_outputs) {
+        double pivot_ratio;
+        int bad_dof;
+        int status = cp_directional(X(m), m->r, dx_seed, dp_seed,
+                                    want_derivatives ? d_derivatives : NULL,
+                                    want_outputs ? d_outputs : NULL, &pivot_ratio, &bad_dof);
+        if (status != CP_OK)
+            return no_derivatives(time, status, bad_dof, pivot_ratio, message, size);
+    }
+    for (size_t k = 0; k < n_unknown; k++) {
+        const unsigned vr = unknowns[k];
+        double value = 0.0;  /* a statistic */
+        if (is_derivative(vr)) value = d_derivatives[vr - CP_VR_DERIVATIVE];
+        else if (is_output(vr)) value = d_outputs[vr - CP_VR_OUTPUT];
+        else if (vr < CP_VR_OUTPUT) value = dx_seed[vr - CP_VR_STATE];
+        sensitivity[k] = value;
+    }
+    return MODEL_OK;
+}
+
+/* ---- co-simulation ---- */
+
+ModelStatus model_do_step(ModelData *m, double t, double dt, char *message, size_t size)
+{
+    const cp_settings settings = {m->solver, m->r[CP_VR_RTOL], m->r[CP_VR_ATOL],
+                                  m->r[CP_VR_MAX_STEP], m->max_steps};
+    cp_failure failure;
+    int status = cp_cosim_step(&settings, m->r, X(m), Y(m), t, dt, &m->h, m->work, &m->fsal,
+                               STATS(m), &failure);
+    m->outputs_valid = status == CP_OK;  /* on failure, those at t are computed again */
+    if (status != CP_OK) {
+        cp_diagnose(message, size, status, &failure);
+        return MODEL_DISCARD;
+    }
+    m->dx_valid = 0;
+    return MODEL_OK;
+}
+
+/* ---- FMU states ---- */
+
+/* Every Real keeps its variable's rule as model_check_real applies it (the outputs where
+ * they are valid), and the statistics are counts; solver and max_steps keep theirs as
+ * model_check_integer applies them, the tolerance is 0 (none) or keeps
+ * model_tolerance_refusal's; the carried step is finite and not negative, the flags are 0
+ * or 1, the carried derivatives are finite where they are valid. */
+const char *model_invalid(const ModelData *m, char *message, size_t size)
+{
+    const struct { const char *name; int value; } flags[] = {
+        {"fsal", m->fsal}, {"dx_valid", m->dx_valid}, {"outputs_valid", m->outputs_valid}};
+    for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
+        if (flags[k].value != 0 && flags[k].value != 1) {
+            snprintf(message, size, "%s = %d: must be 0 or 1", flags[k].name, flags[k].value);
+            return message;
+        }
+    for (unsigned vr = 0; vr < CP_NREAL; vr++) {
+        if (is_output(vr) && !m->outputs_valid) continue;
+        if (real_rule_refusal(vr, m->r[vr], message, size)) return message;
+    }
+    if (integer_refusal(CP_VR_SOLVER, m->solver, message, size)
+        || integer_refusal(CP_VR_MAX_STEPS, m->max_steps, message, size))
+        return message;
+    if (m->tolerance != 0.0 && model_tolerance_refusal(m->tolerance, message, size))
+        return message;
+    if (cp_real_refusal("h", m->h, &cp_rules[CP_STEP_RULE], CP_STEP_WHAT, message, size))
+        return message;
+    char name[160];
+    for (int k = 0; k < CP_NSTATE; k++) {
+        snprintf(name, sizeof name, "carried %s", cp_variable_name(CP_VR_DERIVATIVE + k));
+        if ((m->fsal && cp_real_refusal(name, m->work[k], &cp_rules[CP_FINITE_RULE], "", message,
+                                        size))
+            || (m->dx_valid && cp_real_refusal(cp_variable_name(CP_VR_DERIVATIVE + k), m->dx[k],
+                                               &cp_rules[CP_FINITE_RULE], "", message, size)))
+            return message;
+    }
+    return NULL;
+}
