@@ -17,7 +17,7 @@ the whole chain, sum m (g - a), so it needs u' (the symbols `rates`).
 
 The published model (kinematics="pydy-example") cannot be formed this way: its
 equations are whatever sympy derives from contradictory kinematics, so they come from
-running the seed's own KanesMethod derivation (see build.kane).
+running the seed's own KanesMethod derivation (see builder.kane).
 """
 from __future__ import annotations
 
@@ -30,6 +30,7 @@ from ..scene import Scene
 from .kane import kanes_method
 
 Vec = sm.Matrix
+ZERO, UNIT_X, UNIT_Z = Vec([0, 0, 0]), Vec([1, 0, 0]), Vec([0, 0, 1])
 
 
 @dataclass
@@ -98,147 +99,255 @@ class _Builder:
         return symbol
 
 
-def derive(scene: Scene) -> Equations:
+@dataclass
+class _Symbols:
+    """The scene's symbols: the state x = (alpha, beta, omega, delta), the parameters and
+    inputs p, and the accelerations u' (`rates`), which only the support force uses."""
+
+    n: int
+    alpha: tuple
+    beta: tuple
+    omega: tuple
+    delta: tuple
+    rates: tuple
+    params: dict[str, sm.Symbol]
+    pivot_acc: sm.Matrix | None
+
+    @property
+    def dim(self) -> int:
+        return 2 * self.n
+
+    @property
+    def g(self) -> sm.Symbol:
+        return self.params["g"]
+
+
+def _symbols(scene: Scene) -> _Symbols:
+    """Symbols named as the FMU's variables, so that the generated C reads like the model."""
     n = scene.n
-    alpha = sm.symbols(f"alpha0:{n}")
-    beta = sm.symbols(f"beta0:{n}")
-    omega = sm.symbols(f"omega0:{n}")
-    delta = sm.symbols(f"delta0:{n}")
-    speeds = list(omega) + list(delta)
-    param_symbols = {name: sm.Symbol(name) for name in scene.core_parameter_names()}
-    P = param_symbols.__getitem__
-    g = P("g")
-    rates = sm.symbols(f"domega0:{n}") + sm.symbols(f"ddelta0:{n}")
-    pivot_acc = Vec([P(name) for name in scene.input_names()]) if scene.coupling else None
-    zero, unit_x, unit_z = Vec([0, 0, 0]), Vec([1, 0, 0]), Vec([0, 0, 1])
-    ja, jb, joint_dcm, joint_jac = joint_kinematics()
-    joint_jac_rate = [joint_jac.diff(ja), joint_jac.diff(jb)]
+    params = {name: sm.Symbol(name) for name in scene.core_parameter_names()}
+    return _Symbols(
+        n=n, alpha=sm.symbols(f"alpha0:{n}"), beta=sm.symbols(f"beta0:{n}"),
+        omega=sm.symbols(f"omega0:{n}"), delta=sm.symbols(f"delta0:{n}"),
+        rates=sm.symbols(f"domega0:{n}") + sm.symbols(f"ddelta0:{n}"), params=params,
+        pivot_acc=Vec([params[name] for name in scene.input_names()]) if scene.coupling else None)
 
-    b = _Builder()
-    dim = 2 * n
-    rotation = sm.eye(3)              # parent's axes in inertial components
-    w_parent = zero                   # parent's angular velocity
-    wb_parent = zero                  # parent's angular acceleration at u' = 0
-    partial_w_parent = [zero] * dim   # parent's partial angular velocities
-    joint = zero                      # position of the joint above the current link
-    joint_vel = zero
-    joint_acc_bias = zero
-    partial_joint = [zero] * dim
 
-    mass_terms = [[0] * dim for _ in range(dim)]
-    force_terms = [0] * dim
-    kinetic, potential = 0, 0
-    support_force = Vec([0, 0, 0])   # sum of m (g - a) over the bodies: force on the support
-    momentum = [zero] * dim           # sum of m times the partial velocities: P's columns
-    total_mass = 0
-    bob_positions, poses = [], []
-    quat_parent = (1, 0, 0, 0)
+@dataclass
+class _Point:
+    """A point of the chain in inertial components: position, partial velocities (one per
+    generalized speed; ZERO where the speed does not move it), velocity, and acceleration
+    at u' = 0 (the full one adds sum(partials[s] u'_s))."""
 
-    for i, link in enumerate(scene.links):
-        sub = {ja: alpha[i], jb: beta[i]}
-        parent_rotation = rotation
-        rotation = b.name(f"R{i}", parent_rotation * joint_dcm.xreplace(sub))
-        # Angular velocity, its partials and its u'-free derivative.
-        if scene.kinematics == "consistent":
-            axes = b.name(f"e{i}", parent_rotation * joint_jac.xreplace(sub))
-            partial_w = list(partial_w_parent)
-            partial_w[i], partial_w[n + i] = axes[:, 0], axes[:, 1]
-            w_rel = axes[:, 0] * omega[i] + axes[:, 1] * delta[i]
-            w = b.name(f"w{i}", w_parent + w_rel)
-            jac_rate = (joint_jac_rate[0] * omega[i] + joint_jac_rate[1] * delta[i]).xreplace(sub)
-            wb = b.name(f"wb{i}", wb_parent + w_parent.cross(w_rel)
-                        + parent_rotation * jac_rate * Vec([omega[i], delta[i]]))
-        else:  # "pydy-example": the published set_ang_vel(I, omega*I.z + delta*I.x)
-            partial_w = [zero] * dim
-            partial_w[i], partial_w[n + i] = unit_z, unit_x
-            w = b.name(f"w{i}", unit_z * omega[i] + unit_x * delta[i])
-            wb = zero
-        # Points of the link: r from the joint to the bob, centre of mass at r/2.
-        r = b.name(f"r{i}", -P(f"l{i}") * rotation[:, 1])
-        w_cross_r = w.cross(r)
-        acc_rel = b.name(f"ar{i}", wb.cross(r) + w.cross(w_cross_r))
-        partial_rel = [b.name(f"vr{i}_{s}", partial_w[s].cross(r)) if partial_w[s] != zero else zero
-                       for s in range(dim)]
-        centre = joint + r / 2
-        poses.append((centre, _quaternion_times(b, i, quat_parent, alpha[i], beta[i])))
-        quat_parent = poses[-1][1]
-        bodies = []
-        if link.has_mass:
-            partial_c = [partial_joint[s] + partial_rel[s] / 2 for s in range(dim)]
-            bodies.append((P(f"M{i}"), centre, partial_c, joint_vel + w_cross_r / 2,
-                           joint_acc_bias + acc_rel / 2))
-        bob = b.name(f"p{i}", joint + r)
-        partial_bob = [b.name(f"vp{i}_{s}", partial_joint[s] + partial_rel[s])
-                       if partial_joint[s] != zero or partial_rel[s] != zero else zero
-                       for s in range(dim)]
-        bob_vel = b.name(f"v{i}", joint_vel + w_cross_r)
-        bob_acc = b.name(f"a{i}", joint_acc_bias + acc_rel)
-        if link.has_bob:
-            bodies.append((P(f"m{i}"), bob, partial_bob, bob_vel, bob_acc))
-            bob_positions.append(bob)
-        # Kane: Fr + Fr* = 0 with Fr* = -M u' + (terms at u' = 0).
-        for mass, point, partials, vel, acc in bodies:
-            if pivot_acc is not None:
-                acc = acc + pivot_acc
-                full_acc = acc + sum((partials[s] * rates[s] for s in range(dim)), zero)
-                support_force += mass * (Vec([0, -g, 0]) - full_acc)
-                momentum = [momentum[s] + mass * partials[s] for s in range(dim)]
-                total_mass += mass
-            for s in range(dim):
-                if partials[s] == zero:
-                    continue
-                force_terms[s] += -mass * (partials[s].dot(acc) + g * partials[s][1])
-                for t in range(s, dim):
-                    if partials[t] != zero:
-                        mass_terms[s][t] += mass * partials[s].dot(partials[t])
-            kinetic += mass * vel.dot(vel) / 2
-            potential += mass * g * point[1]
-        if link.has_mass:
-            inertia = Vec([P(f"Ixx{i}"), P(f"Iyy{i}"), P(f"Izz{i}")])
-            to_body = rotation.T
-            body_w = b.name(f"bw{i}", to_body * w)
-            body_h = Vec([inertia[k] * body_w[k] for k in range(3)])
-            body_torque = b.name(f"bt{i}", Vec([inertia[k] * v for k, v in enumerate(to_body * wb)])
-                                 + body_w.cross(body_h))
-            body_partial = [b.name(f"bpw{i}_{s}", to_body * partial_w[s]) if partial_w[s] != zero
-                            else zero for s in range(dim)]
-            for s in range(dim):
-                if body_partial[s] == zero:
-                    continue
-                force_terms[s] += -body_partial[s].dot(body_torque)
-                for t in range(s, dim):
-                    if body_partial[t] != zero:
-                        mass_terms[s][t] += sum(inertia[k] * body_partial[s][k] * body_partial[t][k]
-                                                for k in range(3))
-            kinetic += body_w.dot(body_h) / 2
-        w_parent, wb_parent, partial_w_parent = w, wb, partial_w
-        joint, joint_vel, joint_acc_bias, partial_joint = bob, bob_vel, bob_acc, partial_bob
+    position: sm.Matrix
+    partials: list[sm.Matrix]
+    velocity: sm.Matrix
+    acc_bias: sm.Matrix
 
+
+@dataclass
+class _Frame:
+    """A link's frame: axes in inertial components (columns), angular velocity, partial
+    angular velocities and angular acceleration at u' = 0."""
+
+    rotation: sm.Matrix
+    w: sm.Matrix
+    partial_w: list[sm.Matrix]
+    wb: sm.Matrix
+
+
+@dataclass
+class _Parent:
+    """What link i inherits from the one above it (the pivot for the first): its frame,
+    the joint (its lower end) and its orientation quaternion."""
+
+    frame: _Frame
+    joint: _Point
+    quaternion: tuple
+
+    @classmethod
+    def pivot(cls, dim: int) -> _Parent:
+        """The inertial frame and a fixed pivot at the origin (a moving pivot's
+        acceleration is added at the bodies, _add_particle)."""
+        return cls(_Frame(sm.eye(3), ZERO, [ZERO] * dim, ZERO),
+                   _Point(ZERO, [ZERO] * dim, ZERO, ZERO), (1, 0, 0, 0))
+
+
+@dataclass
+class _Sums:
+    """Kane's equations accumulated body by body: the upper triangle of the mass matrix M
+    and the forcing F (Fr + Fr* = 0 with Fr* = -M u' + terms at u' = 0), the energies,
+    and with coupling the force on the support (sum of m (g - a)) and the chain's linear
+    momentum per generalized speed (P's columns) and total mass."""
+
+    mass_terms: list[list]
+    force_terms: list
+    kinetic: sm.Expr
+    potential: sm.Expr
+    support_force: sm.Matrix
+    momentum: list[sm.Matrix]
+    total_mass: sm.Expr
+
+    @classmethod
+    def empty(cls, dim: int) -> _Sums:
+        return cls([[0] * dim for _ in range(dim)], [0] * dim, 0, 0, ZERO, [ZERO] * dim, 0)
+
+
+def _link_frame(b: _Builder, scene: Scene, sym: _Symbols, joint, i: int, parent: _Frame) -> _Frame:
+    """Link i's frame from its parent's through the two-angle joint: the rotation composed,
+    and the angular velocity as the parent's plus the joint's relative one, whose
+    Jacobian columns are the partial angular velocities of omega_i and delta_i. With the
+    published kinematics the angular velocity is the seed's declared omega*I.z + delta*I.x
+    (what it contradicts: model.md)."""
+    ja, jb, joint_dcm, joint_jac, joint_jac_rate = joint
+    sub = {ja: sym.alpha[i], jb: sym.beta[i]}
+    omega, delta = sym.omega[i], sym.delta[i]
+    rotation = b.name(f"R{i}", parent.rotation * joint_dcm.xreplace(sub))
+    if scene.kinematics == "consistent":
+        axes = b.name(f"e{i}", parent.rotation * joint_jac.xreplace(sub))
+        partial_w = list(parent.partial_w)
+        partial_w[i], partial_w[sym.n + i] = axes[:, 0], axes[:, 1]
+        w_rel = axes[:, 0] * omega + axes[:, 1] * delta
+        w = b.name(f"w{i}", parent.w + w_rel)
+        jac_rate = (joint_jac_rate[0] * omega + joint_jac_rate[1] * delta).xreplace(sub)
+        wb = b.name(f"wb{i}", parent.wb + parent.w.cross(w_rel)
+                    + parent.rotation * jac_rate * Vec([omega, delta]))
+    else:  # "pydy-example": the published set_ang_vel(I, omega*I.z + delta*I.x)
+        partial_w = [ZERO] * sym.dim
+        partial_w[i], partial_w[sym.n + i] = UNIT_Z, UNIT_X
+        w = b.name(f"w{i}", UNIT_Z * omega + UNIT_X * delta)
+        wb = ZERO
+    return _Frame(rotation, w, partial_w, wb)
+
+
+def _link_points(b: _Builder, sym: _Symbols, i: int, parent: _Parent, frame: _Frame):
+    """Link i's mass centre (mid-length) and lower end (its bob, and the next link's joint)
+    from the joint down the link's -y axis, with their velocities, partial velocities and
+    accelerations at u' = 0 by the rigid-body formulas (v = v_joint + w x r, a = a_joint
+    + w' x r + w x (w x r)); and the link's pose (centre and quaternion) as an output.
+    Returns (centre, lower end, quaternion)."""
+    joint, w, dim = parent.joint, frame.w, sym.dim
+    r = b.name(f"r{i}", -sym.params[f"l{i}"] * frame.rotation[:, 1])
+    w_cross_r = w.cross(r)
+    acc_rel = b.name(f"ar{i}", frame.wb.cross(r) + w.cross(w_cross_r))
+    partial_rel = [b.name(f"vr{i}_{s}", frame.partial_w[s].cross(r))
+                   if frame.partial_w[s] != ZERO else ZERO for s in range(dim)]
+    centre = _Point(joint.position + r / 2, [joint.partials[s] + partial_rel[s] / 2 for s in range(dim)],
+                    joint.velocity + w_cross_r / 2, joint.acc_bias + acc_rel / 2)
+    quaternion = _quaternion_times(b, i, parent.quaternion, sym.alpha[i], sym.beta[i])
+    end = b.name(f"p{i}", joint.position + r)
+    partial_end = [b.name(f"vp{i}_{s}", joint.partials[s] + partial_rel[s])
+                   if joint.partials[s] != ZERO or partial_rel[s] != ZERO else ZERO
+                   for s in range(dim)]
+    lower = _Point(end, partial_end, b.name(f"v{i}", joint.velocity + w_cross_r),
+                   b.name(f"a{i}", joint.acc_bias + acc_rel))
+    return centre, lower, quaternion
+
+
+def _add_particle(sums: _Sums, sym: _Symbols, mass, point: _Point) -> None:
+    """A mass at a point (a link's centre or a bob) in Kane's equations: its generalized
+    inertia force -m v_s . a adds m v_s . v_t to M and -m v_s . a(u' = 0) to F, and gravity
+    (along -Y) -m g v_s[Y] to F; its energies; with coupling, its acceleration gains the
+    pivot's, its share of the support force uses the full acceleration (with u'), and
+    its momentum per speed (m v_s) goes to P."""
+    dim, g, partials, acc = sym.dim, sym.g, point.partials, point.acc_bias
+    if sym.pivot_acc is not None:
+        acc = acc + sym.pivot_acc
+        full_acc = acc + sum((partials[s] * sym.rates[s] for s in range(dim)), ZERO)
+        sums.support_force += mass * (Vec([0, -g, 0]) - full_acc)
+        sums.momentum = [sums.momentum[s] + mass * partials[s] for s in range(dim)]
+        sums.total_mass += mass
+    for s in range(dim):
+        if partials[s] == ZERO:
+            continue
+        sums.force_terms[s] += -mass * (partials[s].dot(acc) + g * partials[s][1])
+        for t in range(s, dim):
+            if partials[t] != ZERO:
+                sums.mass_terms[s][t] += mass * partials[s].dot(partials[t])
+    sums.kinetic += mass * point.velocity.dot(point.velocity) / 2
+    sums.potential += mass * g * point.position[1]
+
+
+def _add_link_rotation(b: _Builder, sums: _Sums, sym: _Symbols, i: int, frame: _Frame) -> None:
+    """Link i's rotational inertia in Kane's equations, in body axes where the central
+    inertia is diagonal: Euler's torque I w' + w x (I w) at u' = 0 projected on the partial
+    angular velocities goes to F, I's products of those partials to M; and its kinetic
+    energy."""
+    inertia = Vec([sym.params[f"Ixx{i}"], sym.params[f"Iyy{i}"], sym.params[f"Izz{i}"]])
+    to_body = frame.rotation.T
+    body_w = b.name(f"bw{i}", to_body * frame.w)
+    body_h = Vec([inertia[k] * body_w[k] for k in range(3)])
+    body_torque = b.name(f"bt{i}", Vec([inertia[k] * v for k, v in enumerate(to_body * frame.wb)])
+                         + body_w.cross(body_h))
+    body_partial = [b.name(f"bpw{i}_{s}", to_body * frame.partial_w[s]) if frame.partial_w[s] != ZERO
+                    else ZERO for s in range(sym.dim)]
+    for s in range(sym.dim):
+        if body_partial[s] == ZERO:
+            continue
+        sums.force_terms[s] += -body_partial[s].dot(body_torque)
+        for t in range(s, sym.dim):
+            if body_partial[t] != ZERO:
+                sums.mass_terms[s][t] += sum(inertia[k] * body_partial[s][k] * body_partial[t][k]
+                                             for k in range(3))
+    sums.kinetic += body_w.dot(body_h) / 2
+
+
+def _mass_matrix_and_forcing(scene: Scene, sums: _Sums, dim: int) -> tuple[sm.Matrix, sm.Matrix]:
+    """M (symmetric: the upper triangle mirrored) and F; the published model's come from
+    the seed's own KanesMethod derivation instead (module docstring)."""
     if scene.kinematics == "pydy-example":
-        mass_matrix, forcing = kanes_method(scene)
-    else:
-        mass_matrix = sm.Matrix(dim, dim, lambda s, t: mass_terms[min(s, t)][max(s, t)])
-        forcing = sm.Matrix(force_terms)
+        return kanes_method(scene)
+    return (sm.Matrix(dim, dim, lambda s, t: sums.mass_terms[min(s, t)][max(s, t)]),
+            sm.Matrix(sums.force_terms))
+
+
+def _outputs(scene: Scene, sums: _Sums, bobs: list, poses: list) -> list[sm.Expr]:
+    """The calculated outputs the scene asks for, in the FMU's order (Scene.output_names)."""
     outputs = []
     if "bobs" in scene.outputs:
-        outputs += [c for p in bob_positions for c in p]
+        outputs += [c for p in bobs for c in p]
     if "poses" in scene.outputs:
         outputs += [c for centre, quat in poses for c in list(centre) + list(quat)]
     if "energy" in scene.outputs:
-        outputs.append(kinetic + potential)
+        outputs.append(sums.kinetic + sums.potential)
     if scene.coupling:
-        outputs += list(support_force)
+        outputs += list(sums.support_force)
+    return outputs
+
+
+def derive(scene: Scene) -> Equations:
+    """The scene's equations, link by link from the pivot down: each link's frame and
+    points from its parent's, then each body's share of Kane's equations; then M, F and
+    the outputs. Every per-link quantity is named (_Builder), in this order."""
+    sym = _symbols(scene)
+    ja, jb, joint_dcm, joint_jac = joint_kinematics()
+    joint = (ja, jb, joint_dcm, joint_jac, [joint_jac.diff(ja), joint_jac.diff(jb)])
+    b, sums, parent = _Builder(), _Sums.empty(sym.dim), _Parent.pivot(sym.dim)
+    bobs, poses = [], []
+    for i, link in enumerate(scene.links):
+        frame = _link_frame(b, scene, sym, joint, i, parent.frame)
+        centre, lower, quaternion = _link_points(b, sym, i, parent, frame)
+        poses.append((centre.position, quaternion))
+        if link.has_mass:
+            _add_particle(sums, sym, sym.params[f"M{i}"], centre)
+        if link.has_bob:
+            _add_particle(sums, sym, sym.params[f"m{i}"], lower)
+            bobs.append(lower.position)
+        if link.has_mass:
+            _add_link_rotation(b, sums, sym, i, frame)
+        parent = _Parent(frame, lower, quaternion)
+    mass_matrix, forcing = _mass_matrix_and_forcing(scene, sums, sym.dim)
     return Equations(
         scene=scene,
-        states=list(alpha) + list(beta) + speeds,
-        params=[param_symbols[name] for name in scene.core_parameter_names()],
-        rates=list(rates),
+        states=list(sym.alpha) + list(sym.beta) + list(sym.omega) + list(sym.delta),
+        params=[sym.params[name] for name in scene.core_parameter_names()],
+        rates=list(sym.rates),
         definitions=b.definitions,
         mass_matrix=mass_matrix,
         forcing=forcing,
-        outputs=outputs,
-        momentum=sm.Matrix.hstack(*momentum) if scene.coupling else None,
-        total_mass=total_mass if scene.coupling else None,
+        outputs=_outputs(scene, sums, bobs, poses),
+        momentum=sm.Matrix.hstack(*sums.momentum) if scene.coupling else None,
+        total_mass=sums.total_mass if scene.coupling else None,
     )
 
 
