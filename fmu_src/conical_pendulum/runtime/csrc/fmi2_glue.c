@@ -181,14 +181,14 @@ static Instance *checked(fmi2Component c, const char *function, int co_simulatio
 /* The instance as it is instantiated, and as fmi2Reset leaves it. */
 static void reset(Instance *inst)
 {
-    const Machine start = {INSTANTIATED, 0.0, 0.0};
-    inst->machine = start;
+    memset(&inst->machine, 0, sizeof inst->machine);  /* padding too: it is serialized */
+    inst->machine.state = INSTANTIATED;
     inst->discarded[0] = '\0';
     model_reset(MODEL(inst));
 }
 
 /* Where the model can say only that x' or a step cannot be had: its message, logged. */
-static fmi2Status discarded(Instance *inst, const char *message)
+static fmi2Status discard(Instance *inst, const char *message)
 {
     log_message(inst, fmi2Discard, CP_LOG_STATUS_DISCARD, "%s", message);
     return fmi2Discard;
@@ -333,7 +333,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         switch (model_get_real(MODEL(inst), vr[k], &value[k], inst->machine.time, message,
                                sizeof message)) {
         case MODEL_OK: break;
-        case MODEL_DISCARD: return discarded(inst, message);
+        case MODEL_DISCARD: return discard(inst, message);
         case MODEL_REFUSED: return REFUSE(inst, "fmi2GetReal: %s", message);
         case MODEL_NO_VARIABLE:
             return REFUSE(inst, "fmi2GetReal: value reference %u is not a Real variable", vr[k]);
@@ -564,7 +564,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                          dvKnown, dvUnknown, inst->machine.time, message,
                                          sizeof message)) {
     case MODEL_OK: break;
-    case MODEL_DISCARD: return discarded(inst, message);
+    case MODEL_DISCARD: return discard(inst, message);
     default: return REFUSE(inst, "%s: %s", function, message);
     }
     for (size_t k = 0; k < nUnknown; k++)
@@ -654,7 +654,7 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx)
     char message[MESSAGE_SIZE];
     if (model_get_derivatives(MODEL(inst), dx, inst->machine.time, message, sizeof message)
         != MODEL_OK)
-        return discarded(inst, message);
+        return discard(inst, message);
     return fmi2OK;
 }
 
@@ -719,7 +719,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       "at t = %.17g s", t, inst->machine.time);
     if (model_do_step(MODEL(inst), t, dt, inst->discarded, sizeof inst->discarded) != MODEL_OK) {
         inst->machine.state = STEP_FAILED;
-        return discarded(inst, inst->discarded);
+        return discard(inst, inst->discarded);
     }
     inst->machine.time = inst->machine.last_successful_time = t + dt;
     return fmi2OK;
