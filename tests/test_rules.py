@@ -91,11 +91,14 @@ def test_the_slave_refuses_settings_by_their_rules(resources, name, bad, good):
 def test_the_core_the_slave_and_the_scene_name_the_same_things(resources):
     core = load_core(SCENE)
     model = read_model(resources)
-    groups = model["variables"]
-    assert core.PARAMETER_NAMES == tuple(SCENE.core_parameter_names()) == tuple(
-        v["name"] for v in groups["parameters"] + groups["inputs"])
-    assert core.STATE_NAMES == tuple(SCENE.state_names()) == tuple(v["name"] for v in groups["states"])
-    assert core.OUTPUT_NAMES == tuple(SCENE.output_names()) == tuple(v["name"] for v in groups["outputs"])
+
+    def group(*names):
+        return tuple(v["name"] for v in model["variables"] if v["group"] in names)
+
+    assert core.PARAMETER_NAMES == tuple(SCENE.core_parameter_names()) == group("parameters", "inputs")
+    assert core.STATE_NAMES == tuple(SCENE.state_names()) == group("states")
+    assert core.OUTPUT_NAMES == tuple(SCENE.output_names()) == group("outputs")
+    assert core.STATISTICS_SLOTS == {name: k for k, name in enumerate(group("statistics"))}
     for method, code in core.METHODS.items():  # the C solvers' codes are the `solver` values
         assert SOLVERS[code] == method
     assert model["settings"] == {name: setting.default for name, setting in SETTINGS.items()}

@@ -17,6 +17,7 @@ import re
 import sympy as sm
 from sympy.printing.c import C99CodePrinter
 
+from ..runtime.rules import STATISTICS
 from ..scene import Scene
 from .model import Equations, joint_kinematics
 
@@ -101,6 +102,10 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
         f"#define CP_OUTPUTS_NEED_RATES {int(needs_rates)}",
         "/* Where F_pivot is in the outputs (-1: no coupling); F_free and M_app follow it. */",
         f"#define CP_FORCE_OUTPUT {_index(scene.output_names(), 'F_pivot_x')}",
+        "/* The statistics' slots in cp_cosim_step's stats (runtime.rules.STATISTICS's order, the",
+        " * order of the FMUs' statistics variables: builder.variables). */",
+        *(f"#define CP_STAT_{name.upper()} {k}" for k, name in enumerate(STATISTICS)),
+        f"#define CP_NSTAT {len(STATISTICS)}",
         '#include "real.h"',
         *lines,
         "/* M is row-major CP_NDOF x CP_NDOF; M u' = F. */",

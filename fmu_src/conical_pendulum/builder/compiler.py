@@ -24,6 +24,7 @@ from ..scene import Scene
 HERE = Path(__file__).parent
 CSRC = HERE.parent / "runtime" / "csrc"
 GENERATOR_SOURCES = [*(HERE / name for name in ("kane.py", "model.py", "codegen.py", "compiler.py")),
+                     HERE.parent / "runtime" / "rules.py",  # the statistics' slots (model.h)
                      *sorted(CSRC.glob("*.[chp]*"))]
 LIMITED_API = "0x030B0000"  # CPython 3.11: one compiled file serves 3.11 and newer
 

@@ -21,10 +21,11 @@ from pathlib import Path
 
 from ..runtime.files import MODEL_FILE, MODEL_NAME
 from ..runtime.rules import SETTINGS, check_setting
-from ..scene import PIVOT_OUTPUTS, Scene
+from ..scene import Scene
 from . import native
 from .compiler import CoreBuild, build_core
-from .model_description import complete, describe, model_description_text
+from .model_description import complete, model_description_text
+from .variables import variables
 
 RUNTIME = Path(__file__).parents[1] / "runtime"
 DEFAULT_SETTINGS = {name: setting.default for name, setting in SETTINGS.items()}
@@ -38,24 +39,15 @@ class FmuBuild:
     seconds: float
 
 
-def model_data(scene: Scene, core: CoreBuild, settings: dict) -> dict:
-    """What the slave reads from MODEL_FILE: the scene's variables in value-reference order,
-    the core's file, the settings' start values, and the scene itself (see fmu_scene)."""
-    def group(names, starts=None):
-        return [{"name": name, "description": describe(name),
-                 **({} if starts is None else {"start": start})}
-                for name, start in zip(names, starts or [None] * len(names))]
-
+def model_data(scene: Scene, core: CoreBuild, settings: dict, backend: str = "pythonfmu") -> dict:
+    """What the slave reads from MODEL_FILE: the FMU's variables in value-reference order
+    (builder.variables, as dicts), the core's file, the settings' start values, and the
+    scene itself (see fmu_scene)."""
     return {
         "model": MODEL_NAME,
         "description": model_description_text(scene),
         "core": {"module": core.module_name, "file": core.library.name},
-        "variables": {
-            "parameters": group(scene.parameter_names(), scene.parameter_defaults()),
-            "inputs": group(scene.input_names(), [0.0] * len(scene.input_names())),  # at rest
-            "states": group(scene.state_names(), scene.state_defaults()),
-            "outputs": group(scene.output_names()),
-        },
+        "variables": [v.to_dict() for v in variables(scene, settings, backend)],
         "settings": settings,
         "scene": scene.to_dict(),
     }
@@ -80,17 +72,15 @@ def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.f
     if backend == "native":
         native.check_settings(settings)  # before the core's build
     core = build_core(scene, cache)
-    data = model_data(scene, core, settings)
+    data = model_data(scene, core, settings, backend)
     if backend == "native":
         native.write_native_fmu(scene, core, data, output, platforms)
         return FmuBuild(output, core, MODEL_NAME, time.perf_counter() - start)
-    starts = {v["name"]: v["start"] for group in data["variables"].values() for v in group
-              if "start" in v}
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_model_") as tmp:
         model_file = Path(tmp) / MODEL_FILE
         model_file.write_text(json.dumps(data, indent=1))
-        module_name = package("slave", [model_file, core.library], output, {**starts, **settings},
-                              feedthrough=PIVOT_OUTPUTS if scene.coupling else (),
+        module_name = package("slave", [model_file, core.library], output, {},
+                              described=data["variables"],
                               canGetAndSetFMUstate=True, canSerializeFMUstate=True)
     return FmuBuild(output, core, module_name, time.perf_counter() - start)
 
@@ -141,14 +131,15 @@ def runtime_modules(slave_module: str) -> list[str]:
 
 
 def package(slave_module: str, data_files: list[Path], output: Path, starts: dict,
-            feedthrough=(), **capabilities) -> str:
+            feedthrough=(), described: list[dict] | None = None, **capabilities) -> str:
     """Build the FMU of runtime/<slave_module>.py (its SLAVE class) at `output`.
 
     The FMU's resources hold the runtime's modules the slave runs with (runtime_modules,
     not the other slaves) as the package cp_runtime_<digest>, the entry module pythonfmu
     loads (runtime/entry.py as <slave_module>_<digest>.py) and `data_files`. `starts` are the start values by name (pythonfmu rounds them);
-    `feedthrough` names the outputs that depend at once on the inputs. Returns the entry
-    module's name.
+    `feedthrough` names the outputs that depend at once on the inputs; `described`, the
+    variables as builder.variables describes them, replaces both (model_description.complete).
+    Returns the entry module's name.
     """
     from pythonfmu import FmuBuilder  # build time only
 
@@ -173,7 +164,7 @@ def package(slave_module: str, data_files: list[Path], output: Path, starts: dic
             for name in set(sys.modules) - saved_modules:
                 if name == entry_name or name.split(".")[0] == runtime_name:
                     del sys.modules[name]
-        complete(staged, starts, set(feedthrough))
+        complete(staged, starts, set(feedthrough), described)
         os.replace(staged, output)
     return entry_name
 

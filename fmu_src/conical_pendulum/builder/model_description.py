@@ -8,12 +8,17 @@ from pathlib import Path
 from ..scene import Scene
 
 
-def complete(fmu: Path, starts: dict, feedthrough: set[str]) -> None:
+def complete(fmu: Path, starts: dict, feedthrough: set[str],
+             described: list[dict] | None = None) -> None:
     """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only;
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
     Outputs declare their direct feedthrough (the `feedthrough` outputs depend on every
     input, the others on none), so a master knows where an algebraic loop can be.
+    `described`: the FMU's variables as builder.variables describes them (as dicts, in
+    value-reference order); then pythonfmu's variables must be exactly those (name, value
+    reference, type, causality, variability, initial), and the starts and each output's
+    dependencies on the inputs are theirs.
 
     pythonfmu lists no InitialUnknowns, writes Real starts with 16 digits (a double
     needs 17 to round-trip), and packs binaries for every platform it has, while the
@@ -34,15 +39,26 @@ def complete(fmu: Path, starts: dict, feedthrough: set[str]) -> None:
     initial = ET.SubElement(structure, "InitialUnknowns")
     inputs = " ".join(str(index) for index, var in enumerate(variables, start=1)
                       if var.get("causality") == "input")
+    if described is not None:
+        _check_described(variables, described)
+        starts = {v["name"]: v["start"] for v in described if v["start"] is not None}
+        index_of = {v["name"]: str(index) for index, v in enumerate(described, start=1)}
+        inputs_of = {v["name"]: v["causality"] == "input" for v in described}
+        # Co-Simulation only: an output depends on the inputs it names (the state is not a known)
+        depends = {v["name"]: " ".join(index_of[name] for name in v["depends_on"] if inputs_of[name])
+                   for v in described}
+    else:
+        depends = {var.get("name"): inputs if var.get("name") in feedthrough else ""
+                   for var in variables}
     for index, var in enumerate(variables, start=1):
         real = var.find("Real")
         if real is not None and real.get("start") is not None:
             real.set("start", repr(float(starts[var.get("name")])))
         if var.get("causality") == "output":
-            direct = var.get("name") in feedthrough
-            ET.SubElement(outputs, "Unknown", index=str(index), dependencies=inputs if direct else "",
-                          **({"dependenciesKind": " ".join(["dependent"] * len(inputs.split()))}
-                             if direct and inputs else {}))
+            direct = depends[var.get("name")]
+            ET.SubElement(outputs, "Unknown", index=str(index), dependencies=direct,
+                          **({"dependenciesKind": " ".join(["dependent"] * len(direct.split()))}
+                             if direct else {}))
             if var.get("initial") in ("calculated", "approx"):
                 ET.SubElement(initial, "Unknown", index=str(index))
     if not len(initial):
@@ -53,6 +69,24 @@ def complete(fmu: Path, starts: dict, feedthrough: set[str]) -> None:
         for name, data in entries.items():  # binaries stored: every run extracts them
             stored = name.endswith((".so", ".dll", ".dylib"))
             archive.writestr(name, data, zipfile.ZIP_STORED if stored else zipfile.ZIP_DEFLATED)
+
+
+def _check_described(variables, described: list[dict]) -> None:
+    """pythonfmu wrote the variables the description gives, in its order (else ValueError)."""
+    def attributes(var):
+        kind = next(child.tag for child in var)
+        return (var.get("name"), int(var.get("valueReference")), kind, var.get("causality"),
+                var.get("variability"), var.get("initial"))
+
+    written = [attributes(var) for var in variables]
+    wanted = [(v["name"], v["value_reference"], v["type"], v["causality"], v["variability"],
+               v["initial"]) for v in described]
+    if written != wanted:
+        padded = max(len(written), len(wanted))
+        wrong = next((w, d) for w, d in zip(written + [None] * padded, wanted + [None] * padded)
+                     if w != d)
+        raise ValueError(f"pythonfmu's model description disagrees with the variables' "
+                         f"description: {wrong[0]} where {wrong[1]} was described")
 
 
 def model_description_text(scene: Scene) -> str:

@@ -27,8 +27,8 @@ from .rules import (CALCULATED, FIXED, SETTINGS, SOLVERS, STATISTICS, BadValue, 
                     check_value)
 
 RADAU = SOLVERS.index("radau")
-REAL_SETTINGS = tuple(name for name, setting in SETTINGS.items() if not setting.integer)
-INTEGER_SETTINGS = tuple(name for name, setting in SETTINGS.items() if setting.integer)
+STAT = {name: k for k, name in enumerate(STATISTICS)}  # the core's stats slots (model.h's CP_STAT_*)
+KINDS = {"Real": Real, "Integer": Integer}
 MODES = ("instantiated", "initialization", "step")  # where an instance is in FMI's state machine
 STATE_FIELDS = ("reals", "ints", "solver", "mode", "tolerance")  # of an FMU state (_get_fmu_state)
 MEMORY_FIELDS = ("h", "fsal", "f")  # of the solver memory in it (the core's Stepper.memory)
@@ -38,6 +38,15 @@ def read_model(resources: str) -> dict:
     """The scene's FMU data written at build time: model, core, variables, settings."""
     with open(os.path.join(resources, MODEL_FILE), encoding="utf-8") as file:
         return json.load(file)
+
+
+def _span(variables, *groups) -> slice:
+    """The value references of the variables of `groups`, which follow one another."""
+    refs = [v["value_reference"] for v in variables if v["group"] in groups]
+    first = refs[0] if refs else 0
+    if refs != list(range(first, first + len(refs))):
+        raise ValueError(f"the variables of {', '.join(groups)} do not follow one another")
+    return slice(first, first + len(refs))
 
 
 def _load_core(resources, core):
@@ -97,58 +106,51 @@ class ConicalPendulum(Fmi2Slave):
         try:
             model = read_model(self.resources)
             self._core = _load_core(self.resources, model["core"])
+            # The variables as the build described them (builder.variables), in value-reference
+            # order: the Reals first, one array that getReal answers from in one indexing; the
+            # core reads parameters and inputs as one array p, the state and outputs as one, the
+            # statistics as one. Then the Integers.
+            variables = model["variables"]
+            n_real = sum(v["type"] == "Real" for v in variables)
+            reals = _span(variables, "parameters", "inputs")
+            state_values, stats = _span(variables, "states", "outputs"), _span(variables, "statistics")
+            if [v["type"] for v in variables[:n_real]] != ["Real"] * n_real:
+                raise ValueError("the Real variables do not come first")
+            if [v["value_reference"] for v in variables] != list(range(len(variables))):
+                raise ValueError("the variables are not in value-reference order")
         except Exception as exc:  # noqa: BLE001 - reported at the next FMI call
             self._broken = f"cannot load the model from {self.resources}: {exc!r}"
             self.log(self._broken, Fmi2Status.fatal)
             return
         self.description = model["description"]  # the scene's: no class attribute, or it would win
-        variables = model["variables"]
-        # One array for every Real variable: parameters, inputs, state, outputs,
-        # statistics, real settings; getReal answers from it in one indexing. The core
-        # reads parameters and inputs as one array p.
-        core_parameters = variables["parameters"] + variables["inputs"]  # the core's p
-        n_p, n_state = len(core_parameters), len(variables["states"])
-        stats_vr = n_p + n_state + len(variables["outputs"])
-        self._setting_vr = stats_vr + len(STATISTICS)
-        self._reals = np.zeros(self._setting_vr + len(REAL_SETTINGS))
-        self._reals[:n_p + n_state] = [v["start"] for v in core_parameters + variables["states"]]
-        self._reals[self._setting_vr:] = [model["settings"][name] for name in REAL_SETTINGS]
-        self._ints = [model["settings"][name] for name in INTEGER_SETTINGS]
-        self._state = self._reals[n_p:n_p + n_state]
-        self._stepper = self._core.Stepper(self._reals[:n_p], self._reals[n_p:stats_vr],
-                                           self._reals[stats_vr:self._setting_vr])
+        self._reals = np.array([0.0 if v["start"] is None else v["start"] for v in variables[:n_real]],
+                               dtype=float)
+        self._ints = [v["start"] for v in variables[n_real:]]
+        self._int_names = [v["name"] for v in variables[n_real:]]
+        self._vr = {v["name"]: v["value_reference"] for v in variables}
+        n_state = sum(v["group"] == "states" for v in variables)
+        self._state = self._reals[state_values.start:state_values.start + n_state]
+        self._stepper = self._core.Stepper(self._reals[reals], self._reals[state_values],
+                                           self._reals[stats])
         self._stepper.update_outputs()
         self._mode = "instantiated"
         self._tolerance = None
         self._register(variables)
 
     def _register(self, variables):
-        """Declare the variables in the order of self._reals, then the Integers."""
-        fixed, continuous = Fmi2Variability.fixed, Fmi2Variability.continuous
-        parameter, output = Fmi2Causality.parameter, Fmi2Causality.output
-        kinds = {  # (causality, variability, initial) of each group, in value-reference order
-            "parameters": (parameter, fixed, None),
-            "inputs": (Fmi2Causality.input, continuous, None),  # held over each communication step
-            "states": (output, continuous, Fmi2Initial.exact),
-            "outputs": (output, continuous, Fmi2Initial.calculated),
-        }
-        for group, (causality, variability, initial) in kinds.items():
-            for v in variables[group]:
-                self.register_variable(Real(v["name"], causality=causality, variability=variability,
-                                            initial=initial, description=v["description"]))
-        for name, text in STATISTICS.items():  # counts, as Real so that one getReal serves every output
-            self.register_variable(Real(name, causality=output, variability=Fmi2Variability.discrete,
-                                        initial=Fmi2Initial.calculated, description=text))
-        for names, kind in ((REAL_SETTINGS, Real), (INTEGER_SETTINGS, Integer)):
-            for name in names:
-                self.register_variable(kind(name, causality=parameter, variability=fixed,
-                                            description=SETTINGS[name].description))
+        """Declare the variables as described, in value-reference order (pythonfmu numbers them)."""
+        for v in variables:
+            self.register_variable(KINDS[v["type"]](
+                v["name"], causality=Fmi2Causality[v["causality"]],
+                variability=Fmi2Variability[v["variability"]],
+                initial=v["initial"] and Fmi2Initial[v["initial"]], description=v["description"]))
 
     def _setting(self, name):
         """A solver setting's current value, by name."""
-        if name in INTEGER_SETTINGS:
-            return self._ints[INTEGER_SETTINGS.index(name)]
-        return float(self._reals[self._setting_vr + REAL_SETTINGS.index(name)])
+        vr = self._vr[name]
+        if vr >= len(self._reals):
+            return self._ints[vr - len(self._reals)]
+        return float(self._reals[vr])
 
     # --- FMI calls -------------------------------------------------------------------
 
@@ -172,7 +174,7 @@ class ConicalPendulum(Fmi2Slave):
     def exit_initialization_mode(self):
         self._check_alive()
         if self._tolerance is not None:
-            self._reals[self._setting_vr + REAL_SETTINGS.index("rtol")] = self._tolerance
+            self._reals[self._vr["rtol"]] = self._tolerance
         self._stepper.update_outputs()
         self._configure()
         self._mode = "step"
@@ -264,8 +266,8 @@ class ConicalPendulum(Fmi2Slave):
         except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:  # no finite step
             return f"{self._step_failure(core.STEP_UNDERFLOW, t, dt)} (scipy: {exc})"
         finally:
-            stepper.stats[0] += solver.nfev if solver else 0
-            stepper.stats[1] += steps
+            stepper.stats[STAT["n_rhs"]] += solver.nfev if solver else 0
+            stepper.stats[STAT["n_steps"]] += steps
         if solver.status == "failed":
             return self._step_failure(core.STEP_UNDERFLOW, t, dt)
         if solver.status == "running":
@@ -352,8 +354,8 @@ class ConicalPendulum(Fmi2Slave):
             refuse(f"fsal = {fsal!r:.80}: must be 0 or 1")
         try:
             reals = [check_value(self.vars[vr].name, value) for vr, value in enumerate(reals)]
-            ints = [check_setting(name, value) for name, value in zip(INTEGER_SETTINGS, ints)]
-            for name, value in zip(INTEGER_SETTINGS, ints):
+            ints = [check_setting(name, value) for name, value in zip(self._int_names, ints)]
+            for name, value in zip(self._int_names, ints):
                 if not -2**31 <= value < 2**31:
                     raise BadValue(f"{name} = {value}: not a 32-bit fmi2Integer")
             tolerance = state["tolerance"]

@@ -30,6 +30,7 @@ cdef extern from "solvers.h":
 
 cdef extern from "dynamics.h":
     int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT
+    int CP_NSTAT, CP_STAT_N_RHS, CP_STAT_N_STEPS, CP_STAT_N_REJECTED
     const char *CP_STATE_NAMES
     const char *CP_PARAMETER_NAMES
     const char *CP_OUTPUT_NAMES
@@ -76,6 +77,7 @@ NSTATE = CP_NSTATE
 NPARAM = CP_NPARAM  # parameters, then inputs: everything in p
 NINPUT = CP_NINPUT
 NOUTPUT = CP_NOUTPUT
+STATISTICS_SLOTS = {"n_rhs": CP_STAT_N_RHS, "n_steps": CP_STAT_N_STEPS, "n_rejected": CP_STAT_N_REJECTED}
 SINGULAR_RATIO = CP_SINGULAR_RATIO
 STATE_NAMES = tuple(CP_STATE_NAMES.decode().split())
 PARAMETER_NAMES = tuple(CP_PARAMETER_NAMES.decode().split())
@@ -253,8 +255,8 @@ cdef class Stepper:
     internal steps of one call, so a step always returns.
 
     Stepper(params, values, stats=None): float64 arrays of NPARAM values, of NSTATE +
-    NOUTPUT values (the state first) and of 3 counters (right-hand side evaluations,
-    accepted and rejected steps), used in place, so whoever owns them sees every step.
+    NOUTPUT values (the state first) and of NSTAT counters (right-hand side evaluations,
+    accepted and rejected steps, in runtime.rules.STATISTICS's order), used in place, so whoever owns them sees every step.
     """
     cdef public object values, params, stats
     cdef double[::1] _values, _params, _stats, _work
@@ -265,28 +267,28 @@ cdef class Stepper:
 
     def __init__(self, params, values, stats=None):
         self.params, self.values = params, values
-        self.stats = np.zeros(3) if stats is None else stats
+        self.stats = np.zeros(CP_NSTAT) if stats is None else stats
         self._params = params
         self._values = values
         self._stats = self.stats
         _check(self._params, CP_NPARAM, "parameters")
         _check(self._values, CP_NSTATE + CP_NOUTPUT, "state and outputs")
-        _check(self._stats, 3, "statistics")
+        _check(self._stats, CP_NSTAT, "statistics")
         self._work = np.zeros(CP_STEP_WORK_SIZE)
         self.h = 0.0
         self._fsal = 0
 
     @property
     def nfev(self):
-        return int(self._stats[0])
+        return int(self._stats[CP_STAT_N_RHS])
 
     @property
     def naccept(self):
-        return int(self._stats[1])
+        return int(self._stats[CP_STAT_N_STEPS])
 
     @property
     def nreject(self):
-        return int(self._stats[2])
+        return int(self._stats[CP_STAT_N_REJECTED])
 
     def memory(self):
         """What the solver carries between steps: step size and cached derivative."""

@@ -6,7 +6,7 @@
 #include "dynamics.h"
 
 int cp_cosim_step(const cp_settings *s, const double *p, double *x, double *y, double t,
-                  double dt, double *h, double *work, int *fsal, double stats[3],
+                  double dt, double *h, double *work, int *fsal, double stats[CP_NSTAT],
                   cp_failure *failure)
 {
     cp_model model = {p, 1.0, -1};
@@ -19,9 +19,9 @@ int cp_cosim_step(const cp_settings *s, const double *p, double *x, double *y, d
         status = cp_integrate(s->method, &system, t, x, dt, s->rtol, s->atol, s->max_step,
                               s->max_steps, h, work, fsal, &counts);
     }
-    stats[0] += (double)counts.nfev;
-    stats[1] += (double)counts.naccept;
-    stats[2] += (double)counts.nreject;
+    stats[CP_STAT_N_RHS] += (double)counts.nfev;
+    stats[CP_STAT_N_STEPS] += (double)counts.naccept;
+    stats[CP_STAT_N_REJECTED] += (double)counts.nreject;
     if (status == CP_OK && CP_NOUTPUT) {
         cp_eval_outputs(x, p, y_new);
         if (cp_all_finite(CP_NOUTPUT, y_new)) {

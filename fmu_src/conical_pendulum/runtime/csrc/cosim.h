@@ -20,10 +20,11 @@ typedef struct {
 
 /* Advance x from t to t + dt and write the outputs there into y; p holds the parameters
  * and inputs. *h and *fsal are the solvers' memory (cp_integrate); stats (right-hand
- * sides, accepted and rejected steps) grow by what the step cost, failed or not. Returns
+ * sides, accepted and rejected steps, at model.h's CP_STAT_*) grow by what the step cost,
+ * failed or not. Returns
  * CP_OK, or a status with *failure filled for cp_diagnose, x and y as they were. */
 int cp_cosim_step(const cp_settings *settings, const double *p, double *x, double *y, double t,
-                  double dt, double *h, double *work, int *fsal, double stats[3],
+                  double dt, double *h, double *work, int *fsal, double stats[CP_NSTAT],
                   cp_failure *failure);
 
 #endif
