@@ -7,7 +7,8 @@ Builds the seed FMU and a trivial pythonfmu FMU with the same number of outputs
 does nothing), then times fmpy.simulate_fmu on both: the seed scenario, 10 s with an
 output every 1/60 s (600 communication steps), median of repeats, in one run. Also
 reports the FMU's size, build time cold (fresh core cache) and cached, and the time
-to instantiate.
+to instantiate. Writes benchmarks/results/fmu_overhead.csv (the figures
+docs/performance.md quotes).
 """
 import tempfile
 import time
@@ -20,6 +21,7 @@ from fmpy.fmi2 import FMU2Slave
 
 from conical_pendulum import Scene
 from conical_pendulum.builder.fmu import build_fmu
+from results_csv import write_rows
 
 
 def build_trivial(outputs: int, directory: Path) -> Path:
@@ -69,10 +71,12 @@ def main():
         outputs = len([v for v in read_model_description(str(fmu)).modelVariables
                        if v.causality == "output"])
         trivial = build_trivial(outputs, tmp)
-        print(f"FMU size {fmu.stat().st_size / 1024:.0f} KiB; build cold {cold_s:.1f} s "
+        size_kib = fmu.stat().st_size / 1024
+        print(f"FMU size {size_kib:.0f} KiB; build cold {cold_s:.1f} s "
               f"(core compile {cold.core.seconds['compile']:.1f} s), cached {cached_s:.2f} s")
-        print(f"instantiate: ConicalPendulum {instantiate_seconds(fmu) * 1e3:.2f} ms, "
-              f"trivial {instantiate_seconds(trivial) * 1e3:.2f} ms")
+        instantiate, instantiate_trivial = instantiate_seconds(fmu), instantiate_seconds(trivial)
+        print(f"instantiate: ConicalPendulum {instantiate * 1e3:.2f} ms, "
+              f"trivial {instantiate_trivial * 1e3:.2f} ms")
         steps = 600
         run = dict(stop_time=10.0, output_interval=10.0 / steps)
         ours, floor = median_seconds(lambda: fmpy.simulate_fmu(str(fmu), **run),
@@ -81,6 +85,16 @@ def main():
         print(f"  ConicalPendulum {ours * 1e3:7.1f} ms ({ours / steps * 1e6:5.1f} us/step)")
         print(f"  trivial FMU     {floor * 1e3:7.1f} ms ({floor / steps * 1e6:5.1f} us/step)")
         print(f"  ratio {ours / floor:.2f} (target: at most 1.0)")
+    write_rows("fmu_overhead", [
+        {"figure": "FMU size", "value": round(size_kib), "unit": "KiB"},
+        {"figure": "build, cold (fresh core cache)", "value": round(cold_s, 1), "unit": "s"},
+        {"figure": "build, core cached", "value": round(cached_s, 2), "unit": "s"},
+        {"figure": "instantiate", "value": round(instantiate * 1e3, 2), "unit": "ms"},
+        {"figure": "instantiate, trivial pythonfmu FMU", "value": round(instantiate_trivial * 1e3, 2), "unit": "ms"},
+        {"figure": f"fmpy.simulate_fmu, {steps} steps", "value": round(ours * 1e3, 1), "unit": "ms"},
+        {"figure": f"fmpy.simulate_fmu, {steps} steps, trivial pythonfmu FMU", "value": round(floor * 1e3, 1),
+         "unit": "ms"},
+        {"figure": "simulate_fmu, ratio to the trivial FMU", "value": round(ours / floor, 2), "unit": ""}])
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@
 Variants of the seed scene (3 links): everything; no calculated outputs (state only);
 massless links (bobs only); no bobs (links only). RHS and output costs are timed in a C
 loop; the FMU time is fmpy.simulate_fmu of 10 s at 60 outputs per second (median of
-repeats, interleaved), each FMU with its own default settings.
+repeats, interleaved), each FMU with its own default settings. Prints the table
+docs/model.md shows and writes benchmarks/results/scene_cost.csv.
 """
 import tempfile
 import time
@@ -17,6 +18,7 @@ import numpy as np
 from conical_pendulum import Scene
 from conical_pendulum.builder.compiler import build_core
 from conical_pendulum.builder.fmu import build_fmu
+from results_csv import write_rows
 
 VARIANTS = {
     "seed (links + bobs, all outputs)": Scene.uniform(3),
@@ -50,9 +52,14 @@ def main():
                 times[label].append(time.perf_counter() - start)
     print(f"{'scene':<36} {'RHS us':>7} {'outputs us':>10} {'outputs':>8} {'params':>7} "
           f"{'C lines':>8} {'fmpy ms':>8}")
+    table = []
     for label, rhs, out, n_out, n_par, lines in rows:
         print(f"{label:<36} {rhs * 1e6:7.3f} {out * 1e6:10.3f} {n_out:8d} {n_par:7d} {lines:8d} "
               f"{np.median(times[label]) * 1e3:8.1f}")
+        table.append({"scene": label, "rhs_us": round(rhs * 1e6, 3), "outputs_us": round(out * 1e6, 3),
+                      "outputs": n_out, "parameters": n_par, "c_lines": lines,
+                      "simulate_fmu_ms": round(float(np.median(times[label])) * 1e3, 1)})
+    write_rows("scene_cost", table)
 
 
 if __name__ == "__main__":
