@@ -159,7 +159,7 @@ class _Frame:
 @dataclass
 class _Parent:
     """What link i inherits from the one above it (the pivot for the first): its frame,
-    the joint (its lower end) and its orientation quaternion."""
+    its lower end (link i's joint) and its orientation quaternion."""
 
     frame: _Frame
     joint: _Point
