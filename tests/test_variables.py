@@ -1,6 +1,7 @@
 """One description of the FMU's variables (builder/variables.py): both FMUs' model
 descriptions, model.json and fmu_config.h say what it says, and a new group of variables
 is one entry in its list."""
+import gc
 import json
 import re
 import xml.etree.ElementTree as ET
@@ -9,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fmpy.fmi1 import FMICallException
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
@@ -17,6 +19,7 @@ from conical_pendulum.builder.compiler import build_core, load_core
 from conical_pendulum.builder.fmu import build_fmu, checked_settings, model_data
 from conical_pendulum.builder.native import config_header, model_description
 from conical_pendulum.runtime.rules import STATISTICS
+from fmu_helpers import Instance
 
 SETTINGS = checked_settings(None)
 SEED, COUPLED = Scene.uniform(3), Scene.uniform(3, coupling=True)
@@ -139,45 +142,66 @@ def test_docs_show_the_order_the_description_gives():
 EXTRA = described.Group("extra", "Real", "output", "discrete", "calculated", "EXTRA",
                         lambda scene, settings: [described.Member("n_extra", None, "an extra count"),
                                                  described.Member("n_more", None, "another one")])
-
+EXTRA_PARAMETER = described.Group("extra_parameter", "Real", "parameter", "fixed", None, "EXTRA_PARAMETER",
+                                  lambda scene, settings: [described.Member("k_extra", 2.5, "a number")])
 
 PLAIN = {v.name: v.value_reference for v in described.variables(SEED, SETTINGS, "native")}
 
 
 @pytest.fixture
-def extra_group(monkeypatch):
-    """GROUPS with a group of two outputs after the statistics, and nothing else changed."""
+def extra_groups(monkeypatch):
+    """GROUPS with a group of two outputs after the statistics and one of a parameter after
+    the real settings, and nothing else changed."""
     groups = list(described.GROUPS)
     groups.insert([g.name for g in groups].index("statistics") + 1, EXTRA)
+    groups.insert([g.name for g in groups].index("real_settings") + 1, EXTRA_PARAMETER)
     monkeypatch.setattr(described, "GROUPS", groups)
 
 
-def test_a_new_group_is_one_entry_in_the_list(extra_group, tmp_path):
-    plain = PLAIN
-    first = plain["rtol"]  # the new group takes the real settings' place; they and the rest move on
+def test_a_new_group_is_one_entry_in_the_list(extra_groups, tmp_path):
+    first, later = PLAIN["rtol"], PLAIN["solver"]  # where the new groups go; the rest moves on
     records = {v["name"]: v for v in model_data(SEED, build_core(SEED), SETTINGS, "native")["variables"]}
-    assert [records[name]["value_reference"] for name in ("n_extra", "n_more")] == [first, first + 1]
-    assert {name: v["value_reference"] for name, v in records.items() if name not in ("n_extra", "n_more")} == {
-        name: vr + (2 if vr >= first else 0) for name, vr in plain.items()}
+    new = ("n_extra", "n_more", "k_extra")
+    assert [records[name]["value_reference"] for name in new] == [first, first + 1, later + 2]
+    assert {name: v["value_reference"] for name, v in records.items() if name not in new} == {
+        name: vr + (vr >= first) * 2 + (vr >= later) for name, vr in PLAIN.items()}
     data = {"variables": list(records.values()), "settings": SETTINGS, "description": "extra"}
-    # fmu_config.h: its value references and the names by value reference
+    # fmu_config.h: its value references, the names and how each may be set
     header = config_header(data, "{guid}")
-    assert f"#define CP_VR_EXTRA {first}\n" in header and f"#define CP_VR_SETTINGS {first + 2}\n" in header
-    assert f"#define CP_NREAL {plain['solver'] + 2}\n" in header
+    for line in (f"CP_VR_EXTRA {first}", f"CP_VR_SETTINGS {first + 2}",
+                 f"CP_VR_EXTRA_PARAMETER {later + 2}", f"CP_NREAL {later + 3}",
+                 f"CP_VR_SOLVER {later + 3}"):
+        assert f"#define {line}\n" in header
+    settable = re.search(r"cp_settable\[CP_NVARIABLE\] = \{(.*)\};", header).group(1).split(", ")
+    assert settable[first] == "CP_SET_NEVER" and settable[later + 2] == "CP_SET_BEFORE_INIT"
     # the native model description
     root = ET.fromstring(model_description(data, "{guid}"))
     rows = {row["name"]: row for row in declared(root)}
     assert rows["n_extra"] == {"name": "n_extra", "value_reference": first, "type": "Real",
                                "causality": "output", "variability": "discrete",
                                "initial": "calculated", "description": "an extra count", "start": None}
+    assert rows["k_extra"] == {"name": "k_extra", "value_reference": later + 2, "type": "Real",
+                               "causality": "parameter", "variability": "fixed", "initial": None,
+                               "description": "a number", "start": 2.5}
     assert str(first + 1) in {u.get("index") for u in root.find("ModelStructure/Outputs")}
-    # both FMUs build with it and run: the slave and the glue read the new layout
+    # both FMUs build with them and run: the slave and the glue read the new layout
     for backend in ("pythonfmu", "native"):
         fmu = build_fmu(SEED, tmp_path / f"{backend}.fmu", backend=backend).path
         root, model = read(fmu)
         rows = {row["name"]: row for row in declared(root)}
         assert [v["name"] for v in model["variables"]] == list(rows) == list(records)[:len(rows)]
         assert rows["n_extra"]["value_reference"] == first
-        assert rows["max_steps"]["value_reference"] == plain["max_steps"] + 2
-        run = run_fmu(fmu, stop_time=0.1, output_interval=0.05, start_values={"max_steps": 1000})
+        assert rows["max_steps"]["value_reference"] == PLAIN["max_steps"] + 3
+        run = run_fmu(fmu, stop_time=0.1, output_interval=0.05,
+                      start_values={"max_steps": 1000, "k_extra": 3.0})
         assert np.all(run["n_extra"] == 0) and run["n_rhs"][-1] > 0 and np.isfinite(run["energy"]).all()
+        # a calculated output is never set; a parameter is, before initialization only
+        for name, initialize, message in (("n_extra", False, "n_extra is a calculated output"),
+                                          ("k_extra", True, "k_extra cannot be set after initialization")):
+            instance = Instance(fmu, start_values={"k_extra": 3.0}, initialize=initialize)
+            assert not initialize or instance.get("k_extra") == [3.0]
+            with pytest.raises(FMICallException):
+                instance.set({name: 1.0})
+            assert any(text.startswith(message) for _, text in instance.messages), instance.messages
+            instance.close(after_fatal=True)
+            gc.collect()  # pythonfmu releases a failed instance twice: the slave makes up for it

@@ -70,6 +70,16 @@ def _c_double(value: float) -> str:
                                                       else repr(float(value)))
 
 
+def settable(variable: dict) -> str:
+    """When a variable may be set, as fmu_config.h's cp_settable says it: an input always, a
+    parameter or an exact start value before initialization, a calculated one never."""
+    if variable["causality"] == "input" or variable["variability"] == "tunable":
+        return "CP_SET_ALWAYS"
+    if variable["causality"] == "parameter" or variable["initial"] in ("exact", "approx"):
+        return "CP_SET_BEFORE_INIT"
+    return "CP_SET_NEVER"
+
+
 def config_header(data: dict, guid: str) -> str:
     """fmu_config.h: value references, start values, names, rules and log categories for
     fmi2_glue.c, from the variables' description (builder.variables, in model.json)."""
@@ -121,6 +131,12 @@ def config_header(data: dict, guid: str) -> str:
         + ", ".join(str(rule_names.index(rule)) for rule, _ in rules) + "};",
         "static const char *const cp_real_what[CP_NREAL] = {"
         + ", ".join(_c_string(what) for _, what in rules) + "};",
+        "/* When each variable may be set, by value reference (its causality, variability and",
+        " * initial). */",
+        "enum { CP_SET_NEVER, CP_SET_BEFORE_INIT, CP_SET_ALWAYS };",
+        f"#define CP_NVARIABLE {len(variables)}",
+        "static const unsigned char cp_settable[CP_NVARIABLE] = {"
+        + ", ".join(settable(v) for v in variables) + "};",
         "static const char *const cp_names[] = {",
         *(f"    {_c_string(name)}," for name in names),
         "};", "",

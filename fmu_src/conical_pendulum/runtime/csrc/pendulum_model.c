@@ -152,8 +152,8 @@ ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time
  * (a parameter or a setting) only before the model is initialized, an input always. */
 static const char *not_settable(unsigned vr, int initialized, char *message, size_t size)
 {
-    int input = vr >= CP_VR_INPUT && vr < CP_VR_STATE;
-    int calculated = (vr >= CP_VR_OUTPUT && vr < CP_VR_SETTINGS) || is_derivative(vr);
+    int how = vr < CP_NVARIABLE ? cp_settable[vr] : CP_SET_NEVER;  /* fmu_config.h */
+    int input = how == CP_SET_ALWAYS, calculated = how == CP_SET_NEVER;
     if (calculated) snprintf(message, size, CP_CALCULATED_MESSAGE, cp_variable_name(vr));
     else if (!input && initialized) snprintf(message, size, CP_FIXED_MESSAGE, cp_variable_name(vr));
     else return NULL;
