@@ -31,7 +31,7 @@ def build_row(n: int, formulation: str, cache: Path) -> dict:
     start = time.perf_counter()
     build_core(scene, cache).load()
     cached = time.perf_counter() - start
-    lines = sum(1 for _ in open(build.directory / "model.c"))
+    lines = len((build.directory / "model.c").read_text().splitlines())
     s = build.seconds
     return {"links": n, "formulation": formulation,
             "auto_picks": Scene.uniform(n).resolved_formulation() == formulation,

@@ -51,7 +51,7 @@ def main():
             def listed(names):
                 return ",".join(str(vr[n]) for n in names) or "-"
 
-            outputs = [n for n in scene.output_names()]
+            outputs = list(scene.output_names())
             derivatives = [u.variable.name for u in md.derivatives]
             n_state = len(scene.state_names())
             calls = max(200, 200_000 // (n_state * n_state))

@@ -78,7 +78,7 @@ def main():
         print(f"instantiate: ConicalPendulum {instantiate * 1e3:.2f} ms, "
               f"trivial {instantiate_trivial * 1e3:.2f} ms")
         steps = 600
-        run = dict(stop_time=10.0, output_interval=10.0 / steps)
+        run = {"stop_time": 10.0, "output_interval": 10.0 / steps}
         ours, floor = median_seconds(lambda: fmpy.simulate_fmu(str(fmu), **run),
                                      lambda: fmpy.simulate_fmu(str(trivial), **run))
         print(f"fmpy.simulate_fmu, {steps} steps, {outputs} outputs, default settings:")

@@ -22,7 +22,7 @@ from conical_pendulum.builder.compiler import load_core
 from results_csv import write_rows
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the seed's pipeline, a test reference
-from references.seed_pipeline import seed_right_hand_side  # noqa: E402
+from references.seed_pipeline import seed_right_hand_side
 
 
 def per_call(f, repeats=7, calls=20000):

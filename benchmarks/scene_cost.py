@@ -39,11 +39,11 @@ def main():
             p = np.array(scene.parameters())
             rhs = np.median([core.seconds_per_call("rhs", x, p, 200000) for _ in range(5)])
             out = np.median([core.seconds_per_call("outputs", x, p, 200000) for _ in range(5)])
-            lines = sum(1 for _ in open(build.directory / "model.c"))
+            lines = len((build.directory / "model.c").read_text().splitlines())
             fmus[label] = build_fmu(scene, Path(tmp) / f"{len(fmus)}.fmu").path
             rows.append([label, rhs, out, core.NOUTPUT, len(scene.parameter_names()), lines])
         times = {label: [] for label in fmus}
-        for label, path in fmus.items():  # warm
+        for path in fmus.values():  # warm
             fmpy.simulate_fmu(str(path), stop_time=10.0, output_interval=1 / 60)
         for _ in range(9):
             for label, path in fmus.items():

@@ -30,8 +30,8 @@ from distributed import LocalCluster
 
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.analysis.sweep import LoadedFmu, random_samples, sweep
+from conical_pendulum.builder.fmu import build_fmu
 from results_csv import write_rows
 
 STOP, INTERVAL = 10.0, 1.0 / 60.0

@@ -8,7 +8,6 @@ from fmpy.fmi2 import FMU2Slave
 
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 
-
 # Values every FMU of the package refuses, whatever its backend, with these words (runtime.rules).
 BAD_VALUES = [
     ("l0", -1.0, "l0 = -1.0: a length must be positive"),

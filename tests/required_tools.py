@@ -28,7 +28,7 @@ def require_tool(name: str, path_or_check: str | Path | Callable[[], object] | N
         found = shutil.which(name)
     elif callable(path_or_check):
         found = path_or_check()
-    elif isinstance(path_or_check, Path) or isinstance(path_or_check, str) and "/" in path_or_check:
+    elif isinstance(path_or_check, Path) or (isinstance(path_or_check, str) and "/" in path_or_check):
         found = path_or_check if os.path.exists(path_or_check) else None
     elif isinstance(path_or_check, str):
         found = shutil.which(path_or_check)

@@ -19,7 +19,7 @@ NAMES = ["build", "check", "show", "page", "sweep", "demo"]
 
 
 def cli(*args, cwd=None, timeout=300):
-    return subprocess.run([COMMAND, *map(str, args)], cwd=cwd, capture_output=True, text=True,
+    return subprocess.run([COMMAND, *map(str, args)], cwd=cwd, check=False, capture_output=True, text=True,
                           timeout=timeout)
 
 
@@ -36,7 +36,7 @@ def test_help_lists_every_command_with_a_summary_and_an_example():
 
 
 def test_python_m_runs_the_same_command():
-    run = subprocess.run([sys.executable, "-m", "conical_pendulum", "--help"], capture_output=True,
+    run = subprocess.run([sys.executable, "-m", "conical_pendulum", "--help"], check=False, capture_output=True,
                          text=True, timeout=60)
     assert run.returncode == 0, run.stderr
     assert run.stdout.startswith("usage: python -m conical_pendulum ")
@@ -373,6 +373,6 @@ def test_a_failed_ecospy_run_is_the_demos_status_1(monkeypatch, capsys, tmp_path
     monkeypatch.setattr(coupled, "build_cart_fmu", lambda path: path)
     monkeypatch.setattr(coupled, "reference", lambda *args: {})
     monkeypatch.setattr(coupled, "cosimulate", failed)
-    status, out, err = run_main(capsys, "demo", "--out", tmp_path, "--steps", "0.5", "--stop-time", "1",
+    status, _out, err = run_main(capsys, "demo", "--out", tmp_path, "--steps", "0.5", "--stop-time", "1",
                                 "--cart-mass", "5", "--scheme", "explicit")
     assert status == 1 and one_line(err, "demo") == "ecospy failed (exit 3): boom"

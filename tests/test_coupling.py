@@ -1,7 +1,7 @@
 """Coupling variables: the pivot's acceleration in, the force on the support out."""
 import math
-import zipfile
 import xml.etree.ElementTree as ET
+import zipfile
 
 import numpy as np
 import pytest
@@ -10,9 +10,9 @@ from fmpy.validation import validate_fmu
 
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.analysis.simulate import simulate
 from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.fmu import build_fmu
-from conical_pendulum.analysis.simulate import simulate
 from fmu_helpers import Instance
 
 COUPLED = Scene.uniform(3, coupling=True)

@@ -10,8 +10,8 @@ from fmpy.fmi1 import FMICallException
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.analysis.simulate import simulate
+from conical_pendulum.builder.fmu import build_fmu
 from fmu_helpers import Instance
 
 SEED = Scene.uniform(3)

@@ -5,8 +5,8 @@ import os
 import shutil
 import subprocess
 import sys
-import zipfile
 import xml.etree.ElementTree as ET
+import zipfile
 
 import numpy as np
 import pytest
@@ -231,7 +231,7 @@ def test_fmutool_check_passes(seed_fmu):
     """fmu-manipulation-toolbox: the FMI 2.0 schema and the semantic rules of section 2.2."""
     fmutool = shutil.which("fmutool", path=os.path.dirname(sys.executable)) or shutil.which("fmutool")
     assert fmutool, "fmutool comes with the test extra: pip install -e .[test]"
-    run = subprocess.run([fmutool, "-input", str(seed_fmu), "-check"], capture_output=True, text=True)
+    run = subprocess.run([fmutool, "-input", str(seed_fmu), "-check"], check=False, capture_output=True, text=True)
     assert run.returncode == 0, run.stdout + run.stderr
     assert "compliant with FMI-2.0" in run.stdout and "No semantic error" in run.stdout
 

@@ -115,7 +115,7 @@ def test_the_page_plays_in_headless_chromium(seed_fmu, tmp_path):
         assert found == count, f"{found} {colour} blobs, expected {count}"  # each apart, none hidden
         for where in ndimage.find_objects(labels):
             rows, cols = where
-            assert 0 < rows.start and rows.stop < inside.shape[0], f"a {colour} blob at the canvas's edge"
-            assert 0 < cols.start and cols.stop < inside.shape[1], f"a {colour} blob at the canvas's edge"
+            assert rows.start > 0 and rows.stop < inside.shape[0], f"a {colour} blob at the canvas's edge"
+            assert cols.start > 0 and cols.stop < inside.shape[1], f"a {colour} blob at the canvas's edge"
         sizes = ndimage.sum_labels(np.ones_like(labels), labels, range(1, found + 1))
         assert sizes.min() >= smallest, f"{colour} blobs of {sizes} pixels: the chain is too far away"

@@ -98,7 +98,7 @@ def test_the_core_the_slave_and_the_scene_name_the_same_things(resources):
     assert core.PARAMETER_NAMES == tuple(SCENE.core_parameter_names()) == group("parameters", "inputs")
     assert core.STATE_NAMES == tuple(SCENE.state_names()) == group("states")
     assert core.OUTPUT_NAMES == tuple(SCENE.output_names()) == group("outputs")
-    assert core.STATISTICS_SLOTS == {name: k for k, name in enumerate(group("statistics"))}
+    assert {name: k for k, name in enumerate(group("statistics"))} == core.STATISTICS_SLOTS
     for method, code in core.METHODS.items():  # the C solvers' codes are the `solver` values
         assert SOLVERS[code] == method
     assert model["settings"] == {name: setting.default for name, setting in SETTINGS.items()}

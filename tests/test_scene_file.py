@@ -1,6 +1,6 @@
 """Scene files: what a user writes decides the equations, the variables and their start values."""
-import zipfile
 import xml.etree.ElementTree as ET
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -84,5 +84,5 @@ def test_a_missing_or_foreign_file_is_named(tmp_path):
     with pytest.raises(SceneError, match="No such file"):
         load_scene(tmp_path / "nowhere.toml")
     (tmp_path / "scene.yaml").write_text("link: []")
-    with pytest.raises(SceneError, match="expected a .toml or .json file"):
+    with pytest.raises(SceneError, match=r"expected a \.toml or \.json file"):
         load_scene(tmp_path / "scene.yaml")

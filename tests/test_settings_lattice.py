@@ -14,13 +14,14 @@ from collections import Counter
 
 import numpy as np
 import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave, fmi2Discard
+
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.runtime.rules import NATIVE_SOLVERS, SOLVERS
-from fmpy import extract, read_model_description
-from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave, fmi2Discard
 
 SEED = Scene.uniform(3)
 STEPS = (1e-9, 1e-6, 0.01, 1.0, 100.0)                  # communication steps [s]

@@ -21,7 +21,7 @@ def results_csv(seed_fmu, tmp_path_factory):
 
 def show(*args):
     return subprocess.run([str(Path(sys.executable).with_name("conical-pendulum")), "show", *map(str, args)],
-                          capture_output=True, text=True, timeout=300)
+                          check=False, capture_output=True, text=True, timeout=300)
 
 
 def test_plot_and_animation(results_csv, tmp_path):

@@ -82,7 +82,7 @@ def test_step_size_carries_over_communication_steps(core, method):
     attempts = run.naccept + run.nreject - before[1] - before[2]
     assert run.nfev - before[0] == stages * attempts
     # and the same trajectory as one call over the whole interval, to the tolerance
-    whole, values_whole = stepper(core)
+    whole, _values_whole = stepper(core)
     whole.step(core.METHODS[method], 0.0, 1.0, 1e-8, 1e-8, 0.0, 10**6)
     assert abs(run.naccept - whole.naccept) <= 2
 

@@ -5,14 +5,31 @@ categories."""
 import shutil
 import xml.etree.ElementTree as ET
 import zipfile
-from ctypes import (CDLL, POINTER, byref, c_char, c_char_p, c_double, c_int, c_size_t, c_uint,
-                    c_void_p, create_string_buffer)
+from ctypes import (
+    CDLL,
+    POINTER,
+    byref,
+    c_char,
+    c_char_p,
+    c_double,
+    c_int,
+    c_size_t,
+    c_uint,
+    c_void_p,
+    create_string_buffer,
+)
 
 import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException, calloc, free
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2EventInfo)
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+    fmi2EventInfo,
+)
 
 from conical_pendulum import Scene
 from conical_pendulum.builder.fmu import build_fmu

@@ -102,7 +102,7 @@ def test_the_statistics_slots_of_the_c_are_the_variables_order():
     core = load_core(SEED)  # model.h's CP_STAT_*, which cosim.c fills
     statistics = [v.name for v in described.variables(SEED, SETTINGS) if v.group == "statistics"]
     assert statistics == list(STATISTICS)
-    assert core.STATISTICS_SLOTS == {name: k for k, name in enumerate(statistics)}
+    assert {name: k for k, name in enumerate(statistics)} == core.STATISTICS_SLOTS
 
 
 def test_fmu_config_h_takes_its_value_references_from_the_description():

@@ -77,7 +77,7 @@ class Scene:
 
     @classmethod
     def uniform(cls, n_links: int = 3, *, massless_links: bool = False, bobs: bool = True,
-                **kwargs) -> "Scene":
+                **kwargs) -> Scene:
         """The seed's chain generalized to n identical links."""
         if isinstance(n_links, bool) or not isinstance(n_links, int):
             raise SceneError(f"links: expected a whole number of links, got {n_links!r}")
@@ -219,7 +219,7 @@ class Scene:
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict) -> "Scene":
+    def from_dict(cls, data: dict) -> Scene:
         """The scene to_dict described."""
         links = tuple(Link(**{**link, "moments": link["moments"] and tuple(link["moments"])})
                       for link in data["links"])

@@ -13,21 +13,21 @@ def seed_right_hand_side(linear_sys_solver="sympy"):
     seed in its parameter order. linear_sys_solver="numpy" solves M numerically instead
     of pydy's symbolic LU.
     """
-    from sympy import symbols
     import sympy.physics.mechanics as me
     from pydy.codegen.ode_function_generators import generate_ode_function
+    from sympy import symbols
 
     n = 3
-    alpha = me.dynamicsymbols('alpha:{}'.format(n))
-    beta = me.dynamicsymbols('beta:{}'.format(n))
-    omega = me.dynamicsymbols('omega:{}'.format(n))
-    delta = me.dynamicsymbols('delta:{}'.format(n))
-    m_bob = symbols('m:{}'.format(n))
-    l = symbols('l:{}'.format(n))
-    m_link = symbols('M:{}'.format(n))
-    Ixx = symbols('Ixx:{}'.format(n))
-    Iyy = symbols('Iyy:{}'.format(n))
-    Izz = symbols('Izz:{}'.format(n))
+    alpha = me.dynamicsymbols(f'alpha:{n}')
+    beta = me.dynamicsymbols(f'beta:{n}')
+    omega = me.dynamicsymbols(f'omega:{n}')
+    delta = me.dynamicsymbols(f'delta:{n}')
+    m_bob = symbols(f'm:{n}')
+    l = symbols(f'l:{n}')
+    m_link = symbols(f'M:{n}')
+    Ixx = symbols(f'Ixx:{n}')
+    Iyy = symbols(f'Iyy:{n}')
+    Izz = symbols(f'Izz:{n}')
     g = symbols('g')
     I = me.ReferenceFrame('I')
     A = me.ReferenceFrame('A')

@@ -9,8 +9,12 @@ def logging_callbacks(on_message):
     only then. Keep the returned object alive as long as the instance.
     """
     from fmpy.fmi1 import calloc, free
-    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+    from fmpy.fmi2 import (
+        fmi2CallbackAllocateMemoryTYPE,
+        fmi2CallbackFreeMemoryTYPE,
+        fmi2CallbackFunctions,
+        fmi2CallbackLoggerTYPE,
+    )
 
     def log(component, instance, status, category, message):
         on_message(status, message.decode(errors="replace"))

@@ -93,7 +93,7 @@ class LoadedFmu:
             try:
                 rows = run_fmu(self.directory, stop_time, output_interval, start_values, output=outputs,
                                model_description=self.md, fmu_instance=self.slave)
-            except Exception as exc:  # noqa: BLE001 - the run failed; the sweep goes on
+            except Exception as exc:
                 return None, False, "; ".join([*problems, str(exc)])
             finally:  # fmi2FreeInstance is all FMI allows after fmi2Fatal
                 self.slave.fmi2FreeInstance(self.slave.component)
@@ -135,7 +135,7 @@ def _run_batch(plugin: str, batch: list[tuple[int, dict]], stop_time: float, out
     for index, start_values in batch:
         rows, ok, message = fmu.run(start_values, stop_time, output_interval, outputs)
         columns = ["time", *outputs]
-        frame = pd.DataFrame(rows if rows is not None else dict.fromkeys(columns, [math.nan]),
+        frame = pd.DataFrame(rows if rows is not None else {key: [math.nan] for key in columns},
                              columns=columns)
         frame.insert(0, "run", index)
         frame.insert(1, "status", "ok" if ok else "failed")
@@ -216,7 +216,7 @@ def _client(scheduler: str | None, n_workers: int, timeout: float):
         return
     try:
         client = Client(scheduler, timeout=timeout)
-    except Exception as exc:  # noqa: BLE001 - bad address, nobody there, or not a scheduler
+    except Exception as exc:
         raise ConnectionError(f"scheduler {scheduler!r}: cannot connect ({exc})") from None
     with client:
         try:

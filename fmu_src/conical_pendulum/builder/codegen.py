@@ -54,7 +54,7 @@ def _analytic(source: str) -> str:
 
 def _needed(definitions, exprs):
     """The definitions the expressions depend on, in evaluation order."""
-    defined = {s: e for s, e in definitions}
+    defined = dict(definitions)
     wanted = set()
     stack = [s for e in exprs for s in e.free_symbols if s in defined]
     while stack:

@@ -10,6 +10,7 @@ with a moving pivot too; the coupled demo's monolithic model builds on `chain`.
 import sympy as sm
 import sympy.physics.mechanics as me
 
+
 def chain(scene, I, O, p):
     """Bodies and gravity loads of the scene's links hanging from point O, and its speeds."""
     n = scene.n

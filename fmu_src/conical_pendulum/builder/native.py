@@ -237,7 +237,7 @@ def compile_binary(sources: Path, folder: Path, platform: str = "linux64") -> Pa
     if shutil.which(compiler[0]) is None:
         raise UserError(f"the {platform} binary needs the compiler {compiler[0]}"
                         + (" (Debian: apt-get install gcc-mingw-w64-x86-64)" if platform == "win64" else ""))
-    run = subprocess.run(command, capture_output=True, text=True)
+    run = subprocess.run(command, check=False, capture_output=True, text=True)
     if run.returncode:
         raise RuntimeError(f"compiling the native FMU failed:\n{' '.join(command)}\n{run.stderr}")
     return library

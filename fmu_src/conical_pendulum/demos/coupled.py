@@ -127,7 +127,7 @@ def plot(errors: list[CouplingError], path: Path) -> None:
 
     masses = sorted({e.cart_mass for e in errors}, reverse=True)
     colours = dict(zip(masses, plt.rcParams["axes.prop_cycle"].by_key()["color"]))
-    styles = {"explicit": dict(ls="--", marker="o", mfc="none"), "apparent-mass": dict(ls="-", marker="s")}
+    styles = {"explicit": {"ls": "--", "marker": "o", "mfc": "none"}, "apparent-mass": {"ls": "-", "marker": "s"}}
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
     for ax, field, label in ((axes[0], "cart_error", "cart x [m]"),
                              (axes[1], "angle_error", "pendulum angles [rad]")):

@@ -89,7 +89,7 @@ def cosimulate(job: dict, timeout: float = 1800.0) -> list[dict]:
     job = check_job(job)
     try:
         run = subprocess.run([sys.executable, "-m", MODULE, json.dumps(job)],
-                             capture_output=True, text=True, timeout=timeout)
+                             check=False, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
         raise RuntimeError(f"ecospy did not finish the co-simulations within {timeout:g} s") from None
     if run.returncode != 0:

@@ -108,7 +108,7 @@ SETTINGS = {
 STATISTICS = {"n_rhs": "right-hand side evaluations so far",
               "n_steps": "accepted internal steps so far",
               "n_rejected": "rejected internal steps so far"}
-QUANTITIES.update({name: ("statistic", "a count") for name in STATISTICS})  # restored states
+QUANTITIES.update(dict.fromkeys(STATISTICS, ("statistic", "a count")))  # restored states
 
 
 # Why a variable cannot be set: the same words in the pythonfmu slave and the native FMU.

@@ -23,8 +23,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 
 from .files import MODEL_FILE
-from .rules import (CALCULATED, FIXED, SETTINGS, SOLVERS, STATISTICS, BadValue, check_setting,
-                    check_value)
+from .rules import CALCULATED, FIXED, SETTINGS, SOLVERS, STATISTICS, BadValue, check_setting, check_value
 
 RADAU = SOLVERS.index("radau")
 STAT = {name: k for k, name in enumerate(STATISTICS)}  # the core's stats slots (model.h's CP_STAT_*)
@@ -118,7 +117,7 @@ class ConicalPendulum(Fmi2Slave):
                 raise ValueError("the Real variables do not come first")
             if [v["value_reference"] for v in variables] != list(range(len(variables))):
                 raise ValueError("the variables are not in value-reference order")
-        except Exception as exc:  # noqa: BLE001 - reported at the next FMI call
+        except Exception as exc:
             self._broken = f"cannot load the model from {self.resources}: {exc!r}"
             self.log(self._broken, Fmi2Status.fatal)
             return
