@@ -8,6 +8,7 @@
 The same as `conical-pendulum build` (conical_pendulum/commands/build.py), which the
 package installs; `python build_fmu.py --help` lists the options.
 """
+
 import sys
 
 from conical_pendulum.cli import run_command

@@ -10,6 +10,7 @@ of the same chain without coupling, and one 0.01 s communication step (RK45 at t
 default tolerances, outputs included) of the coupled scene; M_app's share of a step is
 the difference of the two outputs over the step. Writes benchmarks/results/apparent_mass_cost.csv.
 """
+
 import time
 
 import numpy as np
@@ -31,7 +32,7 @@ def step_seconds(scene: Scene, core) -> tuple[float, float]:
     """Seconds and right-hand sides per communication step along a swinging run."""
     params = np.array(scene.parameters({"a_pivot_x": 0.3}))
     values = np.zeros(len(scene.state_names()) + len(scene.output_names()))
-    values[:len(scene.state_names())] = scene.initial_state({"alpha0": 0.6, "delta1": 0.5})
+    values[: len(scene.state_names())] = scene.initial_state({"alpha0": 0.6, "delta1": 0.5})
     stepper = core.Stepper(params, values)
     stepper.configure(1, SETTINGS["rtol"].default, SETTINGS["atol"].default, 0.0, 100000)
     start = time.perf_counter()
@@ -53,11 +54,18 @@ def main():
         outputs = median_of(lambda: core.seconds_per_call("outputs", x, p, calls))
         plain_outputs = median_of(lambda: plain_core.seconds_per_call("outputs", x, p_plain, calls))
         step, nfev = min(step_seconds(coupled, core) for _ in range(5))
-        rows.append({"links": n, "formulation": "expanded" if n < 6 else "recursive",
-                     "rhs_us": f"{rhs * 1e6:.3f}", "outputs_coupled_us": f"{outputs * 1e6:.3f}",
-                     "outputs_uncoupled_us": f"{plain_outputs * 1e6:.3f}",
-                     "step_us": f"{step * 1e6:.2f}", "rhs_per_step": f"{nfev:.1f}",
-                     "apparent_mass_share_of_step": f"{(outputs - plain_outputs) / step:.3f}"})
+        rows.append(
+            {
+                "links": n,
+                "formulation": "expanded" if n < 6 else "recursive",
+                "rhs_us": f"{rhs * 1e6:.3f}",
+                "outputs_coupled_us": f"{outputs * 1e6:.3f}",
+                "outputs_uncoupled_us": f"{plain_outputs * 1e6:.3f}",
+                "step_us": f"{step * 1e6:.2f}",
+                "rhs_per_step": f"{nfev:.1f}",
+                "apparent_mass_share_of_step": f"{(outputs - plain_outputs) / step:.3f}",
+            }
+        )
         print(rows[-1])
     print(f"wrote {write_rows('apparent_mass_cost', rows)}")
 

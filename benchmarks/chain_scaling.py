@@ -10,6 +10,7 @@ reasonable time, in both (the crossover); and MuJoCo's mj_forward on the same ch
 from Python less the cost of an empty call into MuJoCo's bindings. Medians of repeats.
 Writes benchmarks/results/chain_scaling.csv and chain_scaling.png.
 """
+
 import tempfile
 import time
 from pathlib import Path
@@ -36,12 +37,13 @@ def mujoco_chain(n: int) -> str:
     xml = ""  # built from the lowest link up
     for i in reversed(range(n)):
         top = "0 0 0" if i == 0 else f"0 {-link.length} 0"
-        xml = (f'<body pos="{top}"><joint type="hinge" axis="1 0 0"/><joint type="hinge" axis="0 0 1"/>'
-               f'<geom type="cylinder" fromto="0 0 0 0 {-link.length} 0" size="{link.radius}" '
-               f'mass="{link.mass}"/><geom type="sphere" pos="0 {-link.length} 0" '
-               f'size="{link.bob_radius}" mass="{link.bob_mass}"/>{xml}</body>')
-    return (f'<mujoco><option gravity="0 -9.8 0" integrator="RK4"/><worldbody>{xml}</worldbody>'
-            '</mujoco>')
+        xml = (
+            f'<body pos="{top}"><joint type="hinge" axis="1 0 0"/><joint type="hinge" axis="0 0 1"/>'
+            f'<geom type="cylinder" fromto="0 0 0 0 {-link.length} 0" size="{link.radius}" '
+            f'mass="{link.mass}"/><geom type="sphere" pos="0 {-link.length} 0" '
+            f'size="{link.bob_radius}" mass="{link.bob_mass}"/>{xml}</body>'
+        )
+    return f'<mujoco><option gravity="0 -9.8 0" integrator="RK4"/><worldbody>{xml}</worldbody></mujoco>'
 
 
 def mj_forward_seconds(n: int) -> float:
@@ -99,13 +101,16 @@ def plot(rows):
 
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     n = [r["links"] for r in rows]
-    for key, label, style in (("expanded_rhs_us", "expanded equations (dense LU)", "o-"),
-                              ("recursive_rhs_us", "recursive (articulated bodies)", "s-"),
-                              ("mj_forward_us", "MuJoCo mj_forward", "^--")):
+    for key, label, style in (
+        ("expanded_rhs_us", "expanded equations (dense LU)", "o-"),
+        ("recursive_rhs_us", "recursive (articulated bodies)", "s-"),
+        ("mj_forward_us", "MuJoCo mj_forward", "^--"),
+    ):
         points = [(k, r[key]) for k, r in zip(n, rows) if r[key] != ""]
         ax.loglog(*zip(*points), style, label=label)
-    ax.set(xlabel="links", ylabel="cost per evaluation [us]",
-           title="right-hand side against the number of links")
+    ax.set(
+        xlabel="links", ylabel="cost per evaluation [us]", title="right-hand side against the number of links"
+    )
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     fig.tight_layout()

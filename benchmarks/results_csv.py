@@ -1,4 +1,5 @@
 """Where the benchmark scripts keep their tables: one CSV per script in benchmarks/results."""
+
 import csv
 from pathlib import Path
 

@@ -10,6 +10,7 @@ Compared in one run on this machine:
 Then the seed scenario (10 s, 601 samples) simulated natively (printed only).
 Writes the per-call table (docs/performance.md) to benchmarks/results/rhs_cost.csv.
 """
+
 import sys
 import time
 from pathlib import Path
@@ -21,7 +22,9 @@ from conical_pendulum.analysis.simulate import simulate
 from conical_pendulum.builder.compiler import load_core
 from results_csv import write_rows
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the seed's pipeline, a test reference
+sys.path.insert(
+    0, str(Path(__file__).resolve().parents[1] / "tests")
+)  # the seed's pipeline, a test reference
 from references.seed_pipeline import seed_right_hand_side
 
 
@@ -45,15 +48,21 @@ def main():
     from_python = per_call(lambda: core.rhs(x, p))
     print(f"compiled core RHS, n = 3, timed in C:           {in_c * 1e6:7.3f} us/call")
     print(f"compiled core RHS called from Python:           {from_python * 1e6:7.3f} us/call")
-    rows = [{"rhs": "compiled core, timed in a C loop", "us_per_call": in_c * 1e6},
-            {"rhs": "compiled core called from Python", "us_per_call": from_python * 1e6}]
+    rows = [
+        {"rhs": "compiled core, timed in a C loop", "us_per_call": in_c * 1e6},
+        {"rhs": "compiled core called from Python", "us_per_call": from_python * 1e6},
+    ]
     for solver, label in (("sympy", "symbolic LU"), ("numpy", "numpy solve")):
         rhs, values = seed_right_hand_side(solver)
         pv = np.array(values)
         cost = per_call(lambda: rhs(x, 0.0, pv))
-        print(f"seed pipeline (pydy cython, {solver:>5} LU) from Python: {cost * 1e6:7.3f} us/call"
-              f"  ({cost / in_c:5.1f} x the C loop)")
-        rows.append({"rhs": f"seed pipeline: pydy Cython RHS, {label}, from Python", "us_per_call": cost * 1e6})
+        print(
+            f"seed pipeline (pydy cython, {solver:>5} LU) from Python: {cost * 1e6:7.3f} us/call"
+            f"  ({cost / in_c:5.1f} x the C loop)"
+        )
+        rows.append(
+            {"rhs": f"seed pipeline: pydy Cython RHS, {label}, from Python", "us_per_call": cost * 1e6}
+        )
     for row in rows:
         row["us_per_call"] = round(row["us_per_call"], 3)
         row["times_the_c_loop"] = round(row["us_per_call"] / (in_c * 1e6), 1)

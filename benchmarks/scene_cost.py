@@ -8,6 +8,7 @@ loop; the FMU time is fmpy.simulate_fmu of 10 s at 60 outputs per second (median
 repeats, interleaved), each FMU with its own default settings. Prints the table
 docs/model.md shows and writes benchmarks/results/scene_cost.csv.
 """
+
 import tempfile
 import time
 from pathlib import Path
@@ -50,15 +51,27 @@ def main():
                 start = time.perf_counter()
                 fmpy.simulate_fmu(str(path), stop_time=10.0, output_interval=1 / 60)
                 times[label].append(time.perf_counter() - start)
-    print(f"{'scene':<36} {'RHS us':>7} {'outputs us':>10} {'outputs':>8} {'params':>7} "
-          f"{'C lines':>8} {'fmpy ms':>8}")
+    print(
+        f"{'scene':<36} {'RHS us':>7} {'outputs us':>10} {'outputs':>8} {'params':>7} "
+        f"{'C lines':>8} {'fmpy ms':>8}"
+    )
     table = []
     for label, rhs, out, n_out, n_par, lines in rows:
-        print(f"{label:<36} {rhs * 1e6:7.3f} {out * 1e6:10.3f} {n_out:8d} {n_par:7d} {lines:8d} "
-              f"{np.median(times[label]) * 1e3:8.1f}")
-        table.append({"scene": label, "rhs_us": round(rhs * 1e6, 3), "outputs_us": round(out * 1e6, 3),
-                      "outputs": n_out, "parameters": n_par, "c_lines": lines,
-                      "simulate_fmu_ms": round(float(np.median(times[label])) * 1e3, 1)})
+        print(
+            f"{label:<36} {rhs * 1e6:7.3f} {out * 1e6:10.3f} {n_out:8d} {n_par:7d} {lines:8d} "
+            f"{np.median(times[label]) * 1e3:8.1f}"
+        )
+        table.append(
+            {
+                "scene": label,
+                "rhs_us": round(rhs * 1e6, 3),
+                "outputs_us": round(out * 1e6, 3),
+                "outputs": n_out,
+                "parameters": n_par,
+                "c_lines": lines,
+                "simulate_fmu_ms": round(float(np.median(times[label])) * 1e3, 1),
+            }
+        )
     write_rows("scene_cost", table)
 
 

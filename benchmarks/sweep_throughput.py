@@ -17,6 +17,7 @@ recorded; l0 and alpha0 drawn at random), in one run of the script:
 Every method must give bit-identical results; the methods take turns, in rounds, and
 medians are reported. Writes benchmarks/results/sweep_throughput.csv.
 """
+
 import argparse
 import shutil
 import tempfile
@@ -59,8 +60,9 @@ def methods(path, runs):
         unzipdir = fmpy.extract(str(path))
         try:
             md = fmpy.read_model_description(unzipdir)
-            results, seconds = timed(lambda: [run_fmu(unzipdir, STOP, INTERVAL, run, model_description=md)
-                                              for run in runs])
+            results, seconds = timed(
+                lambda: [run_fmu(unzipdir, STOP, INTERVAL, run, model_description=md) for run in runs]
+            )
         finally:
             shutil.rmtree(unzipdir)
         return [r["energy"] for r in results], seconds, None
@@ -76,16 +78,28 @@ def methods(path, runs):
 
     def on_running_cluster(workers):
         with dask.config.set({"distributed.worker.profile.enabled": False}):  # as sweep() makes its own
-            cluster, start_seconds = timed(lambda: LocalCluster(
-                n_workers=workers, threads_per_worker=1, dashboard_address="127.0.0.1:0"))
+            cluster, start_seconds = timed(
+                lambda: LocalCluster(n_workers=workers, threads_per_worker=1, dashboard_address="127.0.0.1:0")
+            )
         with cluster:
-            results, seconds = timed(lambda: sweep(path, runs, stop_time=STOP, output_interval=INTERVAL,
-                                                   scheduler=cluster.scheduler_address, progress=False))
+            results, seconds = timed(
+                lambda: sweep(
+                    path,
+                    runs,
+                    stop_time=STOP,
+                    output_interval=INTERVAL,
+                    scheduler=cluster.scheduler_address,
+                    progress=False,
+                )
+            )
         return sweep_energies(results, len(runs)), seconds, start_seconds
 
     def end_to_end(workers):
-        results, seconds = timed(lambda: sweep(path, runs, stop_time=STOP, output_interval=INTERVAL,
-                                               n_workers=workers, progress=False))
+        results, seconds = timed(
+            lambda: sweep(
+                path, runs, stop_time=STOP, output_interval=INTERVAL, n_workers=workers, progress=False
+            )
+        )
         return sweep_energies(results, len(runs)), seconds, None
 
     yield "fmpy.simulate_fmu loop", "-", plain
@@ -117,18 +131,29 @@ def main():
                 seconds[k].append(took)
                 if start is not None:
                     starts[k].append(start)
-    print(f"{args.runs} runs of the seed scenario, 10 s at 60 Hz, every output recorded; "
-          f"medians of {args.repeats}")
+    print(
+        f"{args.runs} runs of the seed scenario, 10 s at 60 Hz, every output recorded; "
+        f"medians of {args.repeats}"
+    )
     print(f"{'method':<45} {'workers':>7} {'runs/s':>8} {'seconds':>8}")
     rows = []
     for k, (name, workers, _) in enumerate(table):
         median = float(np.median(seconds[k]))
         start = float(np.median(starts[k])) if starts[k] else None
-        rows.append({"method": name, "workers": workers, "runs": args.runs, "seconds": round(median, 3),
-                     "runs_per_s": round(args.runs / median, 1),
-                     "cluster_start_s": "" if start is None else round(start, 2)})
-        print(f"{name:<45} {workers:>7} {args.runs / median:>8.1f} {median:>8.2f}"
-              + ("" if start is None else f"   (cluster start {start:.1f} s)"))
+        rows.append(
+            {
+                "method": name,
+                "workers": workers,
+                "runs": args.runs,
+                "seconds": round(median, 3),
+                "runs_per_s": round(args.runs / median, 1),
+                "cluster_start_s": "" if start is None else round(start, 2),
+            }
+        )
+        print(
+            f"{name:<45} {workers:>7} {args.runs / median:>8.1f} {median:>8.2f}"
+            + ("" if start is None else f"   (cluster start {start:.1f} s)")
+        )
     print(f"every method bit-identical to the plain loop: {'yes' if identical else 'NO'}")
     path = write_rows("sweep_throughput", rows)
     print(f"wrote {path}")

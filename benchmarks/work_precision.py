@@ -16,6 +16,7 @@ PyDy's pipeline of the seed integrates the published (pydy-example) equations, s
 error is taken against the reference of that model.
 Writes benchmarks/results/work_precision.csv and work_precision_<scenario>.png.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -56,7 +57,7 @@ def median_time(run, repeats):
 def fmu_solver(core, p, x0, method, rtol, atol, max_step, t_end, sample_every=1):
     """The FMU's stepping: one Stepper.step per communication step of 1/60 s."""
     values = np.zeros(core.NSTATE + core.NOUTPUT)
-    values[:core.NSTATE] = x0
+    values[: core.NSTATE] = x0
     stepper = core.Stepper(p.copy(), values)
     stepper.update_outputs()
     steps = round(t_end / STEP)
@@ -67,25 +68,27 @@ def fmu_solver(core, p, x0, method, rtol, atol, max_step, t_end, sample_every=1)
             raise RuntimeError(f"{method} failed: {core.STATUS[status]}")
         if (k + 1) % sample_every == 0:
             rows.append(values.copy())
-    return np.array(rows)[:, :core.NSTATE].copy(), stepper.nfev
+    return np.array(rows)[:, : core.NSTATE].copy(), stepper.nfev
 
 
 def native(rhs, x0, times, method, tol, core=None, p=None):
     if method == "core":  # the compiled core's DOP853 with dense output, no Python per step
         return core.integrate_grid(x0, p, times, tol, tol)
     if method == "odeint":
-        states, info = odeint(lambda x, t: rhs(x), x0, times, rtol=tol, atol=tol, full_output=True,
-                              mxstep=10**7)
+        states, info = odeint(
+            lambda x, t: rhs(x), x0, times, rtol=tol, atol=tol, full_output=True, mxstep=10**7
+        )
         return states, int(info["nfe"][-1])
-    sol = solve_ivp(lambda t, x: rhs(x), (times[0], times[-1]), x0, method=method, t_eval=times,
-                    rtol=tol, atol=tol)
+    sol = solve_ivp(
+        lambda t, x: rhs(x), (times[0], times[-1]), x0, method=method, t_eval=times, rtol=tol, atol=tol
+    )
     if not sol.success:
         raise RuntimeError(sol.message)
     return np.ascontiguousarray(sol.y.T), sol.nfev
 
 
 def errors(core, p, states, reference, ref_outputs, n, bob_index):
-    angles = np.abs(states[:, :2 * n] - reference[:, :2 * n]).max()
+    angles = np.abs(states[:, : 2 * n] - reference[:, : 2 * n]).max()
     outputs = np.array([core.outputs(x, p) for x in states])
     bobs = np.abs(outputs[:, bob_index] - ref_outputs[:, bob_index]).max()
     final = np.abs(states[-1] - reference[-1]).max()
@@ -116,8 +119,10 @@ def main():
         ref_outputs = np.array([core.outputs(x, p) for x in reference])
         names = scene.output_names()
         bob_index = [k for k, v in enumerate(names) if v.startswith("bob")]
-        print(f"\n{name}: reference DOP853 1e-13; its own error (against 1e-12): "
-              f"{np.abs(reference - second).max():.1e}")
+        print(
+            f"\n{name}: reference DOP853 1e-13; its own error (against 1e-12): "
+            f"{np.abs(reference - second).max():.1e}"
+        )
         candidates = []
         for max_step in (STEP, STEP / 2, STEP / 4, STEP / 8):
             candidates.append(("FMU rk4", f"max_step={max_step:.4g}", "rk4", 1.0, max_step))
@@ -142,29 +147,51 @@ def main():
                 seconds, (states, nfev) = median_time(run, 5 if "Radau" not in label else 1)
             except (RuntimeError, core.CoreError) as exc:
                 print(f"  {label:<14} {setting:<20} failed: {exc}", flush=True)
-                rows.append({"scenario": name, "solver": label, "setting": setting, "seconds": math.nan,
-                             "nfev": 0, "angle_error": math.nan, "bob_error": math.nan,
-                             "final_error": math.nan, "energy_drift_1000s": math.nan})
+                rows.append(
+                    {
+                        "scenario": name,
+                        "solver": label,
+                        "setting": setting,
+                        "seconds": math.nan,
+                        "nfev": 0,
+                        "angle_error": math.nan,
+                        "bob_error": math.nan,
+                        "final_error": math.nan,
+                        "energy_drift_1000s": math.nan,
+                    }
+                )
                 continue
             angle, bob, final = errors(core, p, states, reference, ref_outputs, n, bob_index)
             drift = float("nan")
             if long_horizon:
                 try:
                     if max_step is not None:
-                        long_states, _ = fmu_solver(core, p, x0, method, tol, tol, max_step,
-                                                    long_horizon, 60)
+                        long_states, _ = fmu_solver(core, p, x0, method, tol, tol, max_step, long_horizon, 60)
                     else:
-                        long_states, _ = native(rhs, x0, np.arange(0.0, long_horizon + 0.5, 1.0),
-                                                method, tol, core, p)
+                        long_states, _ = native(
+                            rhs, x0, np.arange(0.0, long_horizon + 0.5, 1.0), method, tol, core, p
+                        )
                     drift = energy_drift(core, p, long_states)
                 except (RuntimeError, core.CoreError) as exc:
                     print(f"  {label:<14} {setting:<20} 1000 s run failed: {exc}", flush=True)
-            rows.append({"scenario": name, "solver": label, "setting": setting, "seconds": seconds,
-                         "nfev": nfev, "angle_error": angle, "bob_error": bob, "final_error": final,
-                         "energy_drift_1000s": drift})
-            print(f"  {label:<14} {setting:<20} {seconds * 1e3:9.2f} ms {nfev:>8} rhs  "
-                  f"angle {angle:8.1e}  bob {bob:8.1e}  final {final:8.1e}  drift {drift:8.1e}",
-                  flush=True)
+            rows.append(
+                {
+                    "scenario": name,
+                    "solver": label,
+                    "setting": setting,
+                    "seconds": seconds,
+                    "nfev": nfev,
+                    "angle_error": angle,
+                    "bob_error": bob,
+                    "final_error": final,
+                    "energy_drift_1000s": drift,
+                }
+            )
+            print(
+                f"  {label:<14} {setting:<20} {seconds * 1e3:9.2f} ms {nfev:>8} rhs  "
+                f"angle {angle:8.1e}  bob {bob:8.1e}  final {final:8.1e}  drift {drift:8.1e}",
+                flush=True,
+            )
         if name == "seed":
             rows += seed_pipeline_rows(times, tolerances, long_horizon)
             rows.append(fmu_row(scene, core, p, reference, ref_outputs, bob_index))
@@ -197,13 +224,30 @@ def seed_pipeline_rows(times, tolerances, long_horizon):
 
         seconds, (states, nfev) = median_time(run, 5)
         angle, bob, final = errors(core, p, states, reference, ref_outputs, 3, bob_index)
-        drift = energy_drift(core, p, run(np.arange(0.0, long_horizon + 0.5, 1.0))[0]) if long_horizon else float("nan")
-        rows.append({"scenario": "seed", "solver": "PyDy seed pipeline", "setting": setting,
-                     "seconds": seconds, "nfev": nfev, "angle_error": angle, "bob_error": bob,
-                     "final_error": final, "energy_drift_1000s": drift})
-        print(f"  {'PyDy pipeline':<14} {setting:<20} {seconds * 1e3:9.2f} ms {nfev:>8} rhs  "
-              f"angle {angle:8.1e}  bob {bob:8.1e}  final {final:8.1e}  drift {drift:8.1e}  "
-              "(published model)", flush=True)
+        drift = (
+            energy_drift(core, p, run(np.arange(0.0, long_horizon + 0.5, 1.0))[0])
+            if long_horizon
+            else float("nan")
+        )
+        rows.append(
+            {
+                "scenario": "seed",
+                "solver": "PyDy seed pipeline",
+                "setting": setting,
+                "seconds": seconds,
+                "nfev": nfev,
+                "angle_error": angle,
+                "bob_error": bob,
+                "final_error": final,
+                "energy_drift_1000s": drift,
+            }
+        )
+        print(
+            f"  {'PyDy pipeline':<14} {setting:<20} {seconds * 1e3:9.2f} ms {nfev:>8} rhs  "
+            f"angle {angle:8.1e}  bob {bob:8.1e}  final {final:8.1e}  drift {drift:8.1e}  "
+            "(published model)",
+            flush=True,
+        )
     return rows
 
 
@@ -223,11 +267,22 @@ def fmu_row(scene, core, p, reference, ref_outputs, bob_index):
     states = np.column_stack([result[v] for v in scene.state_names()])
     angle, bob, final = errors(core, p, states, reference, ref_outputs, scene.n, bob_index)
     setting = f"default: solver {DEFAULT_SETTINGS['solver']}, tol {DEFAULT_SETTINGS['rtol']:g}"
-    print(f"  {'FMU via fmpy':<14} {setting:<20} {seconds * 1e3:9.2f} ms {int(result['n_rhs'][-1]):>8} rhs  "
-          f"angle {angle:8.1e}  bob {bob:8.1e}  final {final:8.1e}", flush=True)
-    return {"scenario": "seed", "solver": "FMU via fmpy", "setting": setting, "seconds": seconds,
-            "nfev": int(result["n_rhs"][-1]), "angle_error": angle, "bob_error": bob,
-            "final_error": final, "energy_drift_1000s": float("nan")}
+    print(
+        f"  {'FMU via fmpy':<14} {setting:<20} {seconds * 1e3:9.2f} ms {int(result['n_rhs'][-1]):>8} rhs  "
+        f"angle {angle:8.1e}  bob {bob:8.1e}  final {final:8.1e}",
+        flush=True,
+    )
+    return {
+        "scenario": "seed",
+        "solver": "FMU via fmpy",
+        "setting": setting,
+        "seconds": seconds,
+        "nfev": int(result["n_rhs"][-1]),
+        "angle_error": angle,
+        "bob_error": bob,
+        "final_error": final,
+        "energy_drift_1000s": float("nan"),
+    }
 
 
 def plot(rows):
@@ -240,8 +295,11 @@ def plot(rows):
         fig, ax = plt.subplots(figsize=(8, 5.5))
         picked = [r for r in rows if r["scenario"] == scenario]
         for solver in dict.fromkeys(r["solver"] for r in picked):
-            points = sorted((r["seconds"], max(r["angle_error"], 1e-16)) for r in picked
-                            if r["solver"] == solver and not math.isnan(r["seconds"]))
+            points = sorted(
+                (r["seconds"], max(r["angle_error"], 1e-16))
+                for r in picked
+                if r["solver"] == solver and not math.isnan(r["seconds"])
+            )
             if not points:
                 continue
             xs, ys = zip(*points)

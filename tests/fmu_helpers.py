@@ -1,4 +1,5 @@
 """Driving an FMU through fmpy's low-level API, with its log messages collected."""
+
 from __future__ import annotations
 
 import shutil
@@ -16,10 +17,18 @@ BAD_VALUES = [
     ("Ixx0", -2.0, "Ixx0 = -2.0: a moment of inertia cannot be negative"),
     ("g", float("nan"), "g = nan: must be finite"),
     ("alpha0", float("inf"), "alpha0 = inf: must be finite"),
-    ("rtol", 0.0, "rtol = 0.0: a relative tolerance must be at least 2.22e-14 (100 machine "
-             "epsilons): no solver resolves less"),
-    ("rtol", 1e-15, "rtol = 1e-15: a relative tolerance must be at least 2.22e-14 (100 machine "
-             "epsilons): no solver resolves less"),
+    (
+        "rtol",
+        0.0,
+        "rtol = 0.0: a relative tolerance must be at least 2.22e-14 (100 machine "
+        "epsilons): no solver resolves less",
+    ),
+    (
+        "rtol",
+        1e-15,
+        "rtol = 1e-15: a relative tolerance must be at least 2.22e-14 (100 machine "
+        "epsilons): no solver resolves less",
+    ),
     ("max_steps", 0, "max_steps = 0: must be at least 1"),
     ("energy", 1.0, "energy is a calculated output: it cannot be set"),
 ]
@@ -35,8 +44,12 @@ class Instance:
         self.unzipdir = extract(str(path))
         self.messages = []
         self._callbacks = logging_callbacks(lambda status, text: self.messages.append((status, text)))
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipdir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu = FMU2Slave(
+            guid=self.md.guid,
+            unzipDirectory=self.unzipdir,
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName=name,
+        )
         self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
         self.time = 0.0
         self.set(start_values or {})

@@ -5,6 +5,7 @@ install; under CI=true (GitHub Actions and most CI services set it) a missing to
 the test instead, so that CI cannot go green by skipping what it was meant to run
 (.ci/run installs every tool these tests need).
 """
+
 from __future__ import annotations
 
 import os
@@ -15,8 +16,9 @@ from pathlib import Path
 import pytest
 
 
-def require_tool(name: str, path_or_check: str | Path | Callable[[], object] | None = None,
-                 install_hint: str = "") -> str | Path | object:
+def require_tool(
+    name: str, path_or_check: str | Path | Callable[[], object] | None = None, install_hint: str = ""
+) -> str | Path | object:
     """What was found for the tool `name`, or skip the calling test (fail it under CI=true).
 
     `path_or_check`: None to look `name` up on PATH; a command to look up on PATH (a str

@@ -1,5 +1,6 @@
 """The pivot force's split, F_pivot = F_free - M_app a_pivot: the chain's apparent mass at the
 pivot and the force at rest (issue 14)."""
+
 import numpy as np
 import pytest
 
@@ -41,8 +42,9 @@ def test_one_rigid_link_by_hand(formulation):
         c = -link.length / 2 * R[:, 1]
         inertia = R @ np.diag(link.inertia()) @ R.T + link.mass * (c @ c * np.eye(3) - np.outer(c, c))
         cx = np.array([[0, -c[2], c[1]], [c[2], 0, -c[0]], [-c[1], c[0], 0]])
-        by_hand = link.mass * np.eye(3) - link.mass**2 * cx @ E @ np.linalg.solve(E.T @ inertia @ E,
-                                                                                E.T @ cx.T)
+        by_hand = link.mass * np.eye(3) - link.mass**2 * cx @ E @ np.linalg.solve(
+            E.T @ inertia @ E, E.T @ cx.T
+        )
         np.testing.assert_allclose(M, by_hand, rtol=0, atol=1e-12 * link.mass)
 
 
@@ -52,8 +54,9 @@ def test_it_is_the_pivot_forces_answer_to_the_inputs_through_fmpy(backend, fmu_d
     affine; F_free is the force at a_pivot = 0, the same whatever the inputs. M_app is
     computed without differences (m I - P M^-1 P^T, or the articulated inertia at the
     pivot), so this checks it independently."""
-    path = build_fmu(Scene.uniform(3, coupling=True), fmu_dir / f"Apparent_{backend}.fmu",
-                     backend=backend).path
+    path = build_fmu(
+        Scene.uniform(3, coupling=True), fmu_dir / f"Apparent_{backend}.fmu", backend=backend
+    ).path
     fmu = Instance(path, start_values={"alpha1": 0.7, "delta2": 1.5, "omega0": -0.4})
     for _ in range(30):
         fmu.step(1 / 60)
@@ -72,9 +75,19 @@ def test_it_is_the_pivot_forces_answer_to_the_inputs_through_fmpy(backend, fmu_d
 
 
 def test_symmetric_and_positive_semidefinite_along_a_tumbling_trajectory(coupled_fmu):
-    run = run_fmu(coupled_fmu, stop_time=5.0, output_interval=0.1,
-                  start_values={"alpha0": 1.2, "beta1": -1.0, "omega2": 3.0, "delta0": 2.0,
-                                "a_pivot_x": 1.5, "solver": 2})
+    run = run_fmu(
+        coupled_fmu,
+        stop_time=5.0,
+        output_interval=0.1,
+        start_values={
+            "alpha0": 1.2,
+            "beta1": -1.0,
+            "omega2": 3.0,
+            "delta0": 2.0,
+            "a_pivot_x": 1.5,
+            "solver": 2,
+        },
+    )
     scene = Scene.uniform(3, coupling=True)
     core = load_core(scene)
     total = 3 * (10.0 + 5.0)
@@ -84,8 +97,12 @@ def test_symmetric_and_positive_semidefinite_along_a_tumbling_trajectory(coupled
         assert eigenvalues.min() >= -1e-9 * total and eigenvalues.max() <= total * (1 + 1e-12)
         # the unsymmetrized differences of the core's own pivot force are symmetric too
         x = [run[name][k] for name in scene.state_names()]
-        forces = [core.outputs(x, scene.parameters({f"a_pivot_{axis}": 1.0} if axis else {}))[
-            [scene.output_names().index(name) for name in PIVOT_OUTPUTS]] for axis in ("",) + tuple(AXES)]
+        forces = [
+            core.outputs(x, scene.parameters({f"a_pivot_{axis}": 1.0} if axis else {}))[
+                [scene.output_names().index(name) for name in PIVOT_OUTPUTS]
+            ]
+            for axis in ("",) + tuple(AXES)
+        ]
         full = np.column_stack([forces[0] - f for f in forces[1:]])
         np.testing.assert_allclose(full, full.T, rtol=0, atol=1e-10 * total)
         np.testing.assert_allclose(full, M, rtol=0, atol=1e-10 * total)

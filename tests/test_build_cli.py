@@ -1,5 +1,6 @@
 """build_fmu.py and `conical-pendulum build`: what they build, and clear refusals of options
 they cannot build."""
+
 import subprocess
 import sys
 from pathlib import Path
@@ -8,17 +9,26 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 # the same code behind two names; messages start with the name
-ENTRY_POINTS = {"build_fmu.py": [sys.executable, str(ROOT / "build_fmu.py")],
-                "conical-pendulum build": [str(Path(sys.executable).with_name("conical-pendulum")), "build"]}
+ENTRY_POINTS = {
+    "build_fmu.py": [sys.executable, str(ROOT / "build_fmu.py")],
+    "conical-pendulum build": [str(Path(sys.executable).with_name("conical-pendulum")), "build"],
+}
 
 
 @pytest.fixture(params=list(ENTRY_POINTS))
 def build(request):
     def run(*args, cwd=ROOT):
-        result = subprocess.run([*ENTRY_POINTS[request.param], *args], cwd=cwd,
-                                check=False, capture_output=True, text=True, timeout=600)
+        result = subprocess.run(
+            [*ENTRY_POINTS[request.param], *args],
+            cwd=cwd,
+            check=False,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
         result.name = request.param
         return result
+
     return run
 
 
@@ -30,20 +40,25 @@ def test_builds_the_requested_scene(tmp_path, build):
     assert out.exists()
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--links", "0"], "links: 0 is out of range"),
-    (["--links", "1000"], "links: 1000 is out of range"),
-    (["--massless-links", "--no-bobs"], "scene has no mass"),
-    (["--kinematics", "seed"], "invalid choice: 'seed'"),
-    (["--links", "6", "--kinematics", "pydy-example"], "only reproduced up to 4 links"),
-    (["--coupling", "--kinematics", "pydy-example"], "coupling: the pivot's inputs and force need"),
-    (["--output", "dist/model.zip"], "must end in .fmu"),
-    (["--frobnicate"], "unrecognized arguments: --frobnicate"),
-    (["--scene", str(ROOT / "scenes" / "seed.toml"), "--links", "2"],
-     "--scene describes the whole scene; drop --links"),
-    (["--scene", "missing.toml"], "scene file 'missing.toml': No such file or directory"),
-    (["--win64"], "--win64: only the native FMU carries a Windows binary; add --native"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--links", "0"], "links: 0 is out of range"),
+        (["--links", "1000"], "links: 1000 is out of range"),
+        (["--massless-links", "--no-bobs"], "scene has no mass"),
+        (["--kinematics", "seed"], "invalid choice: 'seed'"),
+        (["--links", "6", "--kinematics", "pydy-example"], "only reproduced up to 4 links"),
+        (["--coupling", "--kinematics", "pydy-example"], "coupling: the pivot's inputs and force need"),
+        (["--output", "dist/model.zip"], "must end in .fmu"),
+        (["--frobnicate"], "unrecognized arguments: --frobnicate"),
+        (
+            ["--scene", str(ROOT / "scenes" / "seed.toml"), "--links", "2"],
+            "--scene describes the whole scene; drop --links",
+        ),
+        (["--scene", "missing.toml"], "scene file 'missing.toml': No such file or directory"),
+        (["--win64"], "--win64: only the native FMU carries a Windows binary; add --native"),
+    ],
+)
 def test_refuses_what_it_cannot_build(tmp_path, build, args, message):
     run = build(*args, "--no-check", cwd=tmp_path)
     assert run.returncode == 2
@@ -63,8 +78,10 @@ def test_a_scene_without_the_outputs_a_picture_needs_still_builds(tmp_path, buil
     lines = run.stdout.splitlines()
     assert lines[-3].endswith("rad: OK")
     assert lines[-2] == f"wrote {tmp_path / 'results.csv'} and {tmp_path / 'pendulum.png'}"
-    assert lines[-1] == ("left out the paths and the animation: the results have neither link poses "
-                         "(link<i>_x/y/z, the scene's output 'poses') nor a bob on every link (bob<i>_x/y/z); "
-                         "the energy drift: the results have no energy output")
+    assert lines[-1] == (
+        "left out the paths and the animation: the results have neither link poses "
+        "(link<i>_x/y/z, the scene's output 'poses') nor a bob on every link (bob<i>_x/y/z); "
+        "the energy drift: the results have no energy output"
+    )
     assert (tmp_path / "pendulum.png").stat().st_size > 10_000 and not (tmp_path / "pendulum.gif").exists()
     assert "Traceback" not in run.stderr

@@ -1,5 +1,6 @@
 """Long chains: the recursive formulation (articulated bodies, runtime/csrc/chain.c) against the
 expanded equations (themselves checked against sympy's KanesMethod), and at 20 to 100 links."""
+
 import numpy as np
 import pytest
 
@@ -16,17 +17,21 @@ VARIANTS = {
     "no bobs": lambda n: Scene.uniform(n, bobs=False),
     "coupling": lambda n: Scene.uniform(n, coupling=True),
     "state only": lambda n: Scene.uniform(n, outputs=()),
-    "mixed": lambda n: Scene(links=tuple(
-        [Link(has_mass=False), Link(has_bob=False, moments=(2.0, 0.3, 1.5)), Link(length=3.0)][k % 3]
-        for k in range(n - 1)) + (Link(),), coupling=n % 2 == 0),
+    "mixed": lambda n: Scene(
+        links=tuple(
+            [Link(has_mass=False), Link(has_bob=False, moments=(2.0, 0.3, 1.5)), Link(length=3.0)][k % 3]
+            for k in range(n - 1)
+        )
+        + (Link(),),
+        coupling=n % 2 == 0,
+    ),
 }
 
 
 def both(scene):
     """The scene in each formulation."""
     fields = {**scene.__dict__, "links": scene.links}
-    return (Scene(**{**fields, "formulation": "expanded"}),
-            Scene(**{**fields, "formulation": "recursive"}))
+    return (Scene(**{**fields, "formulation": "expanded"}), Scene(**{**fields, "formulation": "recursive"}))
 
 
 @pytest.mark.parametrize("variant", list(VARIANTS))
@@ -50,8 +55,9 @@ def test_the_recursive_formulation_equals_the_expanded_one(variant, n):
         np.testing.assert_allclose(rates[1], rates[0], rtol=0, atol=solved * np.abs(rates[0]).max())
         outputs = [core.outputs(x, p) for core in cores]
         if outputs[0].size:
-            np.testing.assert_allclose(outputs[1], outputs[0], rtol=0,
-                                       atol=solved * max(1.0, np.abs(outputs[0]).max()))
+            np.testing.assert_allclose(
+                outputs[1], outputs[0], rtol=0, atol=solved * max(1.0, np.abs(outputs[0]).max())
+            )
 
 
 def test_auto_chooses_by_the_measured_crossover():
@@ -61,13 +67,18 @@ def test_auto_chooses_by_the_measured_crossover():
     assert Scene.uniform(MAX_LINKS).n == 100
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda: Scene.uniform(MAX_LINKS + 1), "out of range"),
-    (lambda: Scene.uniform(21, formulation="expanded"), "offered up to 20 links"),
-    (lambda: Scene.uniform(2, formulation="fast"), "formulation: 'fast' is not one of"),
-    (lambda: Scene.uniform(2, kinematics="pydy-example", formulation="recursive"),
-     "published equations exist only expanded"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: Scene.uniform(MAX_LINKS + 1), "out of range"),
+        (lambda: Scene.uniform(21, formulation="expanded"), "offered up to 20 links"),
+        (lambda: Scene.uniform(2, formulation="fast"), "formulation: 'fast' is not one of"),
+        (
+            lambda: Scene.uniform(2, kinematics="pydy-example", formulation="recursive"),
+            "published equations exist only expanded",
+        ),
+    ],
+)
 def test_bad_formulations_are_named(make, message):
     with pytest.raises(SceneError, match=message):
         make()
@@ -76,8 +87,7 @@ def test_bad_formulations_are_named(make, message):
 def test_energy_is_conserved_at_50_links():
     scene = Scene.uniform(50, outputs=("energy",))
     state = {f"alpha{i}": 0.3 * np.sin(i) for i in range(50)} | {f"delta{i}": 0.1 for i in range(0, 50, 7)}
-    result = simulate(scene, np.linspace(0.0, 2.0, 21), state=state, method="core", rtol=1e-11,
-                      atol=1e-11)
+    result = simulate(scene, np.linspace(0.0, 2.0, 21), state=state, method="core", rtol=1e-11, atol=1e-11)
     energy = result["energy"]
     assert np.all(np.isfinite(result.states))
     assert np.abs(energy - energy[0]).max() <= 1e-8 * np.abs(energy).max()

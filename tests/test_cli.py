@@ -1,4 +1,5 @@
 """The `conical-pendulum` command: its help, check, page, and one-line refusals of bad options."""
+
 import importlib
 import importlib.util
 import json
@@ -19,8 +20,9 @@ NAMES = ["build", "check", "show", "page", "sweep", "demo"]
 
 
 def cli(*args, cwd=None, timeout=300):
-    return subprocess.run([COMMAND, *map(str, args)], cwd=cwd, check=False, capture_output=True, text=True,
-                          timeout=timeout)
+    return subprocess.run(
+        [COMMAND, *map(str, args)], cwd=cwd, check=False, capture_output=True, text=True, timeout=timeout
+    )
 
 
 def test_help_lists_every_command_with_a_summary_and_an_example():
@@ -36,21 +38,29 @@ def test_help_lists_every_command_with_a_summary_and_an_example():
 
 
 def test_python_m_runs_the_same_command():
-    run = subprocess.run([sys.executable, "-m", "conical_pendulum", "--help"], check=False, capture_output=True,
-                         text=True, timeout=60)
+    run = subprocess.run(
+        [sys.executable, "-m", "conical_pendulum", "--help"],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert run.returncode == 0, run.stderr
     assert run.stdout.startswith("usage: python -m conical_pendulum ")
     assert all(f"\n    {name} " in run.stdout for name in NAMES)
 
 
-@pytest.mark.parametrize("name, options", [
-    ("build", ["--links", "--scene", "--output", "--no-check", "--coupling", "--native"]),
-    ("check", ["FMU", "--stop-time", "--interval", "--rtol"]),
-    ("show", ["--plot", "--gif", "--fps"]),
-    ("page", ["FMU", "--out", "--stop-time", "--start NAME=VALUE", "--serve", "--port"]),
-    ("sweep", ["--grid", "--random", "--samples", "--workers", "--scheduler", "--out"]),
-    ("demo", ["--out", "--steps", "--stop-time", "--cart-mass"]),
-])
+@pytest.mark.parametrize(
+    "name, options",
+    [
+        ("build", ["--links", "--scene", "--output", "--no-check", "--coupling", "--native"]),
+        ("check", ["FMU", "--stop-time", "--interval", "--rtol"]),
+        ("show", ["--plot", "--gif", "--fps"]),
+        ("page", ["FMU", "--out", "--stop-time", "--start NAME=VALUE", "--serve", "--port"]),
+        ("sweep", ["--grid", "--random", "--samples", "--workers", "--scheduler", "--out"]),
+        ("demo", ["--out", "--steps", "--stop-time", "--cart-mass"]),
+    ],
+)
 def test_each_command_explains_its_options(name, options):
     run = cli(name, "--help")
     assert run.returncode == 0, run.stderr
@@ -67,9 +77,13 @@ def test_build_checks_and_draws_the_run(tmp_path):
     assert run.returncode == 0, run.stderr
     assert f"built {tmp_path / 'One.fmu'}" in run.stdout and "1 links" in run.stdout
     assert "angles agree to" in run.stdout and run.stdout.count(": OK") == 1
-    assert f"wrote {tmp_path / 'results.csv'}, {tmp_path / 'pendulum.png'} and {tmp_path / 'pendulum.gif'}" \
+    assert (
+        f"wrote {tmp_path / 'results.csv'}, {tmp_path / 'pendulum.png'} and {tmp_path / 'pendulum.gif'}"
         in run.stdout
-    assert all((tmp_path / name).stat().st_size > 10_000 for name in ("results.csv", "pendulum.png", "pendulum.gif"))
+    )
+    assert all(
+        (tmp_path / name).stat().st_size > 10_000 for name in ("results.csv", "pendulum.png", "pendulum.gif")
+    )
 
 
 def test_check_passes_on_the_seed_fmu(seed_fmu):
@@ -90,8 +104,9 @@ def test_check_fails_when_the_fmu_is_run_loosely(seed_fmu):
 
 
 def test_page_writes_the_pydy_page(seed_fmu, tmp_path):
-    run = cli("page", seed_fmu, "--out", tmp_path, "--stop-time", "1", "--start", "alpha0=0.5",
-              "--start", "l0=8")
+    run = cli(
+        "page", seed_fmu, "--out", tmp_path, "--stop-time", "1", "--start", "alpha0=0.5", "--start", "l0=8"
+    )
     assert run.returncode == 0, run.stderr
     folder = tmp_path / "pydy-resources"
     assert f"into {folder}" in run.stdout
@@ -99,15 +114,35 @@ def test_page_writes_the_pydy_page(seed_fmu, tmp_path):
     assert (folder / "index.html").exists()
     scene = json.loads((folder / "conical_pendulum_scene_desc.json").read_text())
     assert {o["name"] for o in scene["objects"].values()} == {
-        "link0", "link1", "link2", "bob0", "bob1", "bob2"}
+        "link0",
+        "link1",
+        "link2",
+        "bob0",
+        "bob1",
+        "bob2",
+    }
     data = json.loads((folder / "conical_pendulum_simulation_data.json").read_text())
     assert len(next(iter(data.values()))) == 61  # 1 s at 60 outputs/s, both ends
 
 
 def test_page_serves_until_interrupted(seed_fmu, tmp_path):
-    server = subprocess.Popen([COMMAND, "page", str(seed_fmu), "--out", str(tmp_path), "--stop-time", "0.5",
-                               "--serve", "--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True)
+    server = subprocess.Popen(
+        [
+            COMMAND,
+            "page",
+            str(seed_fmu),
+            "--out",
+            str(tmp_path),
+            "--stop-time",
+            "0.5",
+            "--serve",
+            "--port",
+            "0",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         lines = []
         while not lines or not lines[-1].startswith("Ctrl-C"):
@@ -127,28 +162,56 @@ def test_page_serves_until_interrupted(seed_fmu, tmp_path):
     assert "stopped" in out and "Traceback" not in err
 
 
-@pytest.mark.parametrize("args, message", [
-    (["frobnicate"], "conical-pendulum: argument COMMAND: invalid choice: 'frobnicate'"),
-    ([], "conical-pendulum: the following arguments are required: COMMAND"),
-    (["check", "missing.fmu"], "conical-pendulum check: missing.fmu: not an FMU built by conical_pendulum"),
-    (["check", "FMU", "--stop-time", "-1"], "conical-pendulum check: --stop-time: must be a positive number, got -1"),
-    (["check", "FMU", "--rtol", "x"], "conical-pendulum check: argument --rtol: invalid float value: 'x'"),
-    (["check", "FMU", "--frobnicate", "3"], "conical-pendulum check: unrecognized arguments: --frobnicate 3"),
-    (["page", "FMU", "--out", "page", "--start", "length=3"],
-     "conical-pendulum page: --start length=3: the FMU has no variable 'length'"),
-    (["page", "FMU", "--out", "page", "--start", "energy=3"], "--start energy=3: energy is calculated"),
-    (["page", "FMU", "--out", "page", "--start", "alpha0"],
-     "conical-pendulum page: argument --start: 'alpha0': expected NAME=NUMBER"),
-    (["page", "FMU", "--out", "page", "--start", "solver=0.5"], "--start solver=0.5: solver is an Integer"),
-    (["page", "FMU"], "conical-pendulum page: the following arguments are required: --out"),
-    (["page", "FMU", "--out", "page", "--port", "70000"], "--port: 70000 is not a port number"),
-    (["show", "RESULTS"], "conical-pendulum show: give --plot and/or --gif"),
-    (["show", "RESULTS", "--plot", "p.png", "--fps", "0"], "conical-pendulum show: --fps: must be positive, got 0"),
-    (["sweep", "FMU", "--grid", "l0=5,x"], "conical-pendulum sweep: argument --grid: 'x' is not a number"),
-    (["sweep", "FMU"], "conical-pendulum sweep: one of the arguments --grid --random is required"),
-    (["demo", "--steps", "0.1,x"], "conical-pendulum demo: argument --steps: expected numbers"),
-    (["build", "--links", "0"], "conical-pendulum build: links: 0 is out of range"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["frobnicate"], "conical-pendulum: argument COMMAND: invalid choice: 'frobnicate'"),
+        ([], "conical-pendulum: the following arguments are required: COMMAND"),
+        (
+            ["check", "missing.fmu"],
+            "conical-pendulum check: missing.fmu: not an FMU built by conical_pendulum",
+        ),
+        (
+            ["check", "FMU", "--stop-time", "-1"],
+            "conical-pendulum check: --stop-time: must be a positive number, got -1",
+        ),
+        (
+            ["check", "FMU", "--rtol", "x"],
+            "conical-pendulum check: argument --rtol: invalid float value: 'x'",
+        ),
+        (
+            ["check", "FMU", "--frobnicate", "3"],
+            "conical-pendulum check: unrecognized arguments: --frobnicate 3",
+        ),
+        (
+            ["page", "FMU", "--out", "page", "--start", "length=3"],
+            "conical-pendulum page: --start length=3: the FMU has no variable 'length'",
+        ),
+        (["page", "FMU", "--out", "page", "--start", "energy=3"], "--start energy=3: energy is calculated"),
+        (
+            ["page", "FMU", "--out", "page", "--start", "alpha0"],
+            "conical-pendulum page: argument --start: 'alpha0': expected NAME=NUMBER",
+        ),
+        (
+            ["page", "FMU", "--out", "page", "--start", "solver=0.5"],
+            "--start solver=0.5: solver is an Integer",
+        ),
+        (["page", "FMU"], "conical-pendulum page: the following arguments are required: --out"),
+        (["page", "FMU", "--out", "page", "--port", "70000"], "--port: 70000 is not a port number"),
+        (["show", "RESULTS"], "conical-pendulum show: give --plot and/or --gif"),
+        (
+            ["show", "RESULTS", "--plot", "p.png", "--fps", "0"],
+            "conical-pendulum show: --fps: must be positive, got 0",
+        ),
+        (
+            ["sweep", "FMU", "--grid", "l0=5,x"],
+            "conical-pendulum sweep: argument --grid: 'x' is not a number",
+        ),
+        (["sweep", "FMU"], "conical-pendulum sweep: one of the arguments --grid --random is required"),
+        (["demo", "--steps", "0.1,x"], "conical-pendulum demo: argument --steps: expected numbers"),
+        (["build", "--links", "0"], "conical-pendulum build: links: 0 is out of range"),
+    ],
+)
 def test_bad_options_are_one_line_and_exit_2(seed_fmu, tmp_path, args, message):
     results = tmp_path / "results.csv"
     results.write_text("time,alpha0\n0,0\n")
@@ -166,6 +229,7 @@ def test_in_process_a_bad_option_is_returned_not_raised(capsys):
 
 
 # ---- every command's error paths, in process: one line on stderr and an exit status, never a traceback
+
 
 def run_main(capsys, *argv):
     status = main([str(a) for a in argv])
@@ -186,20 +250,29 @@ def hide(monkeypatch, *packages):
         monkeypatch.setitem(sys.modules, package, None)
 
 
-@pytest.mark.parametrize("name, args, hidden, message", [
-    ("page", ["FMU", "--out", "OUT"], "pydy", 'needs pydy: pip install pydy (or -e ".[test]")'),
-    ("sweep", ["FMU", "--grid", "l0=5,6", "--out", "OUT/s.parquet"], "dask",
-     'needs dask: pip install -e ".[sweep]"'),
-    ("demo", ["--out", "OUT"], "ecospy", 'needs ecospy: pip install -e ".[cosim]"'),
-])
+@pytest.mark.parametrize(
+    "name, args, hidden, message",
+    [
+        ("page", ["FMU", "--out", "OUT"], "pydy", 'needs pydy: pip install pydy (or -e ".[test]")'),
+        (
+            "sweep",
+            ["FMU", "--grid", "l0=5,6", "--out", "OUT/s.parquet"],
+            "dask",
+            'needs dask: pip install -e ".[sweep]"',
+        ),
+        ("demo", ["--out", "OUT"], "ecospy", 'needs ecospy: pip install -e ".[cosim]"'),
+    ],
+)
 def test_a_missing_optional_package_is_one_line_saying_what_to_install(
-        monkeypatch, capsys, tmp_path, seed_fmu, name, args, hidden, message):
+    monkeypatch, capsys, tmp_path, seed_fmu, name, args, hidden, message
+):
     hide(monkeypatch, hidden)
     # a module an earlier test imported would not import its package again: drop them
     for module in ("conical_pendulum.analysis.sweep", "conical_pendulum.commands.sweep"):
         monkeypatch.delitem(sys.modules, module, raising=False)
-    status, out, err = run_main(capsys, name, *[{"FMU": seed_fmu}.get(a, a.replace("OUT", str(tmp_path / "out")))
-                                                 for a in args])
+    status, out, err = run_main(
+        capsys, name, *[{"FMU": seed_fmu}.get(a, a.replace("OUT", str(tmp_path / "out"))) for a in args]
+    )
     assert status == 2 and one_line(err, name) == message
     assert not out and not list(tmp_path.iterdir())  # found before any work
 
@@ -208,8 +281,11 @@ def test_demo_without_tbb_says_what_to_install(monkeypatch, capsys, tmp_path):
     from conical_pendulum.demos import ecospy_run
 
     find_spec = importlib.util.find_spec
-    monkeypatch.setattr(importlib.util, "find_spec",  # ecospy itself is there
-                        lambda name, *a: object() if name == "ecospy" else find_spec(name, *a))
+    monkeypatch.setattr(
+        importlib.util,
+        "find_spec",  # ecospy itself is there
+        lambda name, *a: object() if name == "ecospy" else find_spec(name, *a),
+    )
     monkeypatch.setattr(ecospy_run, "TBB", str(tmp_path / "libtbb.so.12"))
     status, _, err = run_main(capsys, "demo", "--out", tmp_path / "out")
     assert status == 2 and one_line(err, "demo") == 'needs tbb: pip install -e ".[cosim]"'
@@ -219,10 +295,14 @@ def test_demo_without_tbb_says_what_to_install(monkeypatch, capsys, tmp_path):
 def test_build_without_mingw_says_what_to_install(monkeypatch, capsys, tmp_path):
     which = shutil.which
     monkeypatch.setattr(shutil, "which", lambda cmd, *a, **k: None if "mingw" in cmd else which(cmd, *a, **k))
-    status, _, err = run_main(capsys, "build", "--native", "--win64", "--no-check", "--output", tmp_path / "W.fmu")
+    status, _, err = run_main(
+        capsys, "build", "--native", "--win64", "--no-check", "--output", tmp_path / "W.fmu"
+    )
     assert status == 2
-    assert one_line(err, "build") == ("the win64 binary needs the compiler x86_64-w64-mingw32-gcc "
-                                      "(Debian: apt-get install gcc-mingw-w64-x86-64)")
+    assert one_line(err, "build") == (
+        "the win64 binary needs the compiler x86_64-w64-mingw32-gcc "
+        "(Debian: apt-get install gcc-mingw-w64-x86-64)"
+    )
     assert not (tmp_path / "W.fmu").exists()
 
 
@@ -231,8 +311,10 @@ def test_build_without_a_c_compiler_says_what_to_install(monkeypatch, capsys, tm
     monkeypatch.setenv("CC", "no-such-cc")
     status, _, err = run_main(capsys, "build", "--links", "1", "--no-check", "--output", tmp_path / "P.fmu")
     assert status == 2
-    assert one_line(err, "build") == ("the compiled core needs the C compiler no-such-cc, which is "
-                                      "not on PATH (Debian: apt-get install gcc; or set CC)")
+    assert one_line(err, "build") == (
+        "the compiled core needs the C compiler no-such-cc, which is "
+        "not on PATH (Debian: apt-get install gcc; or set CC)"
+    )
     assert not (tmp_path / "P.fmu").exists()
 
 
@@ -272,33 +354,41 @@ def bad_file(folder: Path, kind: str, suffix: str) -> Path:
 
 
 @pytest.mark.parametrize("kind", ["missing", "directory", "garbage", "text", "unreadable"])
-@pytest.mark.parametrize("name, args, suffix", [
-    ("build", ["--scene", "BAD", "--output", "OUT/x.fmu"], ".toml"),
-    ("check", ["BAD"], ".fmu"),
-    ("show", ["BAD", "--plot", "OUT/p.png"], ".csv"),
-    ("page", ["BAD", "--out", "OUT"], ".fmu"),
-    ("sweep", ["BAD", "--grid", "l0=5,6", "--out", "OUT/s.parquet"], ".fmu"),
-])
+@pytest.mark.parametrize(
+    "name, args, suffix",
+    [
+        ("build", ["--scene", "BAD", "--output", "OUT/x.fmu"], ".toml"),
+        ("check", ["BAD"], ".fmu"),
+        ("show", ["BAD", "--plot", "OUT/p.png"], ".csv"),
+        ("page", ["BAD", "--out", "OUT"], ".fmu"),
+        ("sweep", ["BAD", "--grid", "l0=5,6", "--out", "OUT/s.parquet"], ".fmu"),
+    ],
+)
 def test_a_bad_or_unreadable_file_is_one_line(capsys, tmp_path, name, args, suffix, kind):
     path = bad_file(tmp_path, kind, suffix)
     (tmp_path / "out").mkdir()
-    status, out, err = run_main(capsys, name, *[str(path) if a == "BAD" else a.replace("OUT", str(tmp_path / "out"))
-                                                 for a in args])
+    status, out, err = run_main(
+        capsys, name, *[str(path) if a == "BAD" else a.replace("OUT", str(tmp_path / "out")) for a in args]
+    )
     assert status == 2 and str(path) in one_line(err, name)
     assert not out and not list((tmp_path / "out").iterdir())
 
 
-@pytest.mark.parametrize("name, args, message", [
-    ("build", ["--no-check", "--output", "FOLDER"], "output: 'FOLDER' is a directory"),
-    ("build", ["--no-check", "--output", "FILE/x.fmu"], "'FILE' is not a directory"),
-    ("show", ["RESULTS", "--plot", "FOLDER"], "--plot FOLDER: is a directory"),
-    ("show", ["RESULTS", "--gif", "FILE/x.gif"], "--gif FILE/x.gif: FILE is not a directory"),
-    ("page", ["FMU", "--out", "FILE"], "--out FILE: not a directory"),
-    ("sweep", ["FMU", "--grid", "l0=5,6", "--out", "FOLDER"], "out: FOLDER is a directory"),
-    ("demo", ["--out", "FILE"], "--out FILE: not a directory"),
-])
+@pytest.mark.parametrize(
+    "name, args, message",
+    [
+        ("build", ["--no-check", "--output", "FOLDER"], "output: 'FOLDER' is a directory"),
+        ("build", ["--no-check", "--output", "FILE/x.fmu"], "'FILE' is not a directory"),
+        ("show", ["RESULTS", "--plot", "FOLDER"], "--plot FOLDER: is a directory"),
+        ("show", ["RESULTS", "--gif", "FILE/x.gif"], "--gif FILE/x.gif: FILE is not a directory"),
+        ("page", ["FMU", "--out", "FILE"], "--out FILE: not a directory"),
+        ("sweep", ["FMU", "--grid", "l0=5,6", "--out", "FOLDER"], "out: FOLDER is a directory"),
+        ("demo", ["--out", "FILE"], "--out FILE: not a directory"),
+    ],
+)
 def test_an_output_where_a_file_or_folder_cannot_be_is_one_line(
-        monkeypatch, capsys, tmp_path, seed_fmu, name, args, message):
+    monkeypatch, capsys, tmp_path, seed_fmu, name, args, message
+):
     from conical_pendulum.demos import ecospy_run
 
     monkeypatch.setattr(ecospy_run, "missing", lambda: None)  # the demo's --out, even without ecospy
@@ -324,7 +414,11 @@ WORK = {  # what each command spends its time in, and a command line that gets t
     "check": ("conical_pendulum.analysis.compare", "compare", ["FMU", "--stop-time", "1"]),
     "show": ("conical_pendulum.viz.plots", "plot", ["RESULTS", "--plot", "OUT/p.png"]),
     "page": ("conical_pendulum.analysis.fmpy_runs", "run_fmu", ["FMU", "--out", "OUT"]),
-    "sweep": ("conical_pendulum.analysis.sweep", "sweep", ["FMU", "--grid", "l0=5,6", "--out", "OUT/s.parquet"]),
+    "sweep": (
+        "conical_pendulum.analysis.sweep",
+        "sweep",
+        ["FMU", "--grid", "l0=5,6", "--out", "OUT/s.parquet"],
+    ),
     "demo": ("conical_pendulum.builder.fmu", "build_fmu", ["--out", "OUT"]),
 }
 
@@ -344,8 +438,9 @@ def test_ctrl_c_is_one_line_and_status_130(monkeypatch, capsys, tmp_path, seed_f
     results.write_text("time,alpha0\n0,0\n1,0.1\n")
     (tmp_path / "out").mkdir()
     places = {"FMU": str(seed_fmu), "RESULTS": str(results)}
-    status, _, err = run_main(capsys, name, *[places.get(a, a.replace("OUT", str(tmp_path / "out")))
-                                              for a in args])
+    status, _, err = run_main(
+        capsys, name, *[places.get(a, a.replace("OUT", str(tmp_path / "out"))) for a in args]
+    )
     assert status == 130 and err == f"conical-pendulum {name}: interrupted\n"
 
 
@@ -356,7 +451,9 @@ def test_build_fmu_py_names_itself_when_interrupted(monkeypatch, capsys, tmp_pat
         raise KeyboardInterrupt
 
     monkeypatch.setattr(conical_pendulum.builder.fmu, "build_fmu", interrupted)
-    assert run_command("build", ["--no-check", "--output", str(tmp_path / "x.fmu")], prog="build_fmu.py") == 130
+    assert (
+        run_command("build", ["--no-check", "--output", str(tmp_path / "x.fmu")], prog="build_fmu.py") == 130
+    )
     assert capsys.readouterr().err == "build_fmu.py: interrupted\n"
 
 
@@ -369,10 +466,24 @@ def test_a_failed_ecospy_run_is_the_demos_status_1(monkeypatch, capsys, tmp_path
         raise RuntimeError("ecospy failed (exit 3): boom")
 
     monkeypatch.setattr(ecospy_run, "missing", lambda: None)
-    monkeypatch.setattr(conical_pendulum.builder.fmu, "build_fmu", lambda scene, path: type("B", (), {"path": path}))
+    monkeypatch.setattr(
+        conical_pendulum.builder.fmu, "build_fmu", lambda scene, path: type("B", (), {"path": path})
+    )
     monkeypatch.setattr(coupled, "build_cart_fmu", lambda path: path)
     monkeypatch.setattr(coupled, "reference", lambda *args: {})
     monkeypatch.setattr(coupled, "cosimulate", failed)
-    status, _out, err = run_main(capsys, "demo", "--out", tmp_path, "--steps", "0.5", "--stop-time", "1",
-                                "--cart-mass", "5", "--scheme", "explicit")
+    status, _out, err = run_main(
+        capsys,
+        "demo",
+        "--out",
+        tmp_path,
+        "--steps",
+        "0.5",
+        "--stop-time",
+        "1",
+        "--cart-mass",
+        "5",
+        "--scheme",
+        "explicit",
+    )
     assert status == 1 and one_line(err, "demo") == "ecospy failed (exit 3): boom"

@@ -1,4 +1,5 @@
 """The coupled demo: the Cart FMU, the monolithic reference, ecospy's co-simulation."""
+
 import csv
 import math
 
@@ -50,8 +51,14 @@ def test_cart_extrapolates_its_force_linearly_when_asked(cart_fmu):
     slope, dt, steps = 40.0, 0.25, 8
 
     def motion(force, start, span):
-        return solve_ivp(lambda t, y: [y[1], (force(t) - k * y[0] - c * y[1]) / m], span, start,
-                         dense_output=True, rtol=1e-13, atol=1e-13).sol
+        return solve_ivp(
+            lambda t, y: [y[1], (force(t) - k * y[0] - c * y[1]) / m],
+            span,
+            start,
+            dense_output=True,
+            rtol=1e-13,
+            atol=1e-13,
+        ).sol
 
     first = motion(lambda t: 0.0, [1.0, 0.0], (0.0, dt))  # the first step: F_x = 0 held
     rest = motion(lambda t: slope * t, first(dt), (dt, steps * dt))
@@ -66,11 +73,14 @@ def test_cart_extrapolates_its_force_linearly_when_asked(cart_fmu):
     assert errors[1] < 1e-11 and errors[0] > 1e-3, errors
 
 
-@pytest.mark.parametrize("name, value, message", [
-    ("m_cart", -1.0, "m_cart = -1.0: a mass must be positive"),
-    ("M_x", -2.0, "M_x = -2.0: an apparent mass cannot be negative"),
-    ("F_x_order", 2, "F_x_order = 2: choose 0 (held over the step) or 1 (extrapolated linearly)"),
-])
+@pytest.mark.parametrize(
+    "name, value, message",
+    [
+        ("m_cart", -1.0, "m_cart = -1.0: a mass must be positive"),
+        ("M_x", -2.0, "M_x = -2.0: an apparent mass cannot be negative"),
+        ("F_x_order", 2, "F_x_order = 2: choose 0 (held over the step) or 1 (extrapolated linearly)"),
+    ],
+)
 def test_cart_with_a_bad_value_discards_its_step_and_says_why(cart_fmu, name, value, message):
     fmu = Instance(cart_fmu, start_values={name: value})
     with pytest.raises(FMICallException) as failure:
@@ -91,8 +101,8 @@ def test_monolithic_model_is_the_coupled_pieces_physics():
     for i in range(31):
         state = [reference[name][i] for name in names]
         p = SCENE.parameters({"a_pivot_x": reference["a_cart"][i]})
-        rates = core.rhs(state, p)[2 * n:]
-        expected = [reference[f"d{name}"][i] for name in names[2 * n:]]
+        rates = core.rhs(state, p)[2 * n :]
+        expected = [reference[f"d{name}"][i] for name in names[2 * n :]]
         assert np.abs(rates - expected).max() < 1e-9 * max(1.0, np.abs(expected).max())
         cart_force = core.outputs(state, p)[force] - k * reference["x_cart"][i] - c * reference["v_cart"][i]
         assert m * reference["a_cart"][i] == pytest.approx(cart_force, rel=1e-9, abs=1e-9)
@@ -120,15 +130,20 @@ def test_the_demo_command_converges_at_first_order_in_both_schemes(tmp_path):
     assert (tmp_path / "coupling.png").stat().st_size > 20_000
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--steps", "0.1,x"], "--steps: expected numbers"),
-    (["--steps", "0.3", "--stop-time", "1"], "must be positive, divide --stop-time"),
-    (["--steps", "0.1,0.15"], "multiple of the smallest"),
-    (["--cart-mass", "-1"], "--cart-mass: must be a positive number of kg, got -1.0"),
-    (["--cart-mass", "5,nan"], "--cart-mass: must be a positive number of kg, got nan"),
-    (["--scheme", "explicit,implicit"], "--scheme: unknown scheme(s) 'implicit'; choose from explicit, "
-                                        "apparent-mass"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--steps", "0.1,x"], "--steps: expected numbers"),
+        (["--steps", "0.3", "--stop-time", "1"], "must be positive, divide --stop-time"),
+        (["--steps", "0.1,0.15"], "multiple of the smallest"),
+        (["--cart-mass", "-1"], "--cart-mass: must be a positive number of kg, got -1.0"),
+        (["--cart-mass", "5,nan"], "--cart-mass: must be a positive number of kg, got nan"),
+        (
+            ["--scheme", "explicit,implicit"],
+            "--scheme: unknown scheme(s) 'implicit'; choose from explicit, apparent-mass",
+        ),
+    ],
+)
 def test_bad_demo_options_are_named(argv, message, capsys, tmp_path):
     assert cli(["demo", "--out", str(tmp_path / "out"), *argv]) == 2
     err = capsys.readouterr().err

@@ -1,4 +1,5 @@
 """Coupling variables: the pivot's acceleration in, the force on the support out."""
+
 import math
 import xml.etree.ElementTree as ET
 import zipfile
@@ -24,8 +25,9 @@ TIGHT = {"solver": 2, "rtol": 1e-12, "atol": 1e-12}
 def constant_input(**values):
     """An fmpy input signal holding the pivot's acceleration at these values."""
     names = ["a_pivot_x", "a_pivot_y", "a_pivot_z"]
-    return np.array([(0.0, *(values.get(n, 0.0) for n in names))],
-                    dtype=[("time", float)] + [(n, float) for n in names])
+    return np.array(
+        [(0.0, *(values.get(n, 0.0) for n in names))], dtype=[("time", float)] + [(n, float) for n in names]
+    )
 
 
 def test_model_description_declares_inputs_and_feedthrough(coupled_fmu):
@@ -39,8 +41,10 @@ def test_model_description_declares_inputs_and_feedthrough(coupled_fmu):
         assert float(var.find("Real").get("start")) == 0.0
         assert "held constant over each communication step" in var.get("description")
     inputs = " ".join(str(index[f"a_pivot_{axis}"]) for axis in "xyz")
-    outputs = {int(u.get("index")): u.get("dependencies")
-               for u in root.find("ModelStructure/Outputs").findall("Unknown")}
+    outputs = {
+        int(u.get("index")): u.get("dependencies")
+        for u in root.find("ModelStructure/Outputs").findall("Unknown")
+    }
     for name, k in index.items():
         if k in outputs:
             assert outputs[k] == (inputs if name.startswith("F_pivot_") else ""), name
@@ -57,16 +61,20 @@ def test_hanging_at_rest_the_pivot_carries_the_weight(coupled_fmu):
 def test_upward_pivot_acceleration_is_stronger_gravity(coupled_fmu):
     """Seen from the support, accelerating up by a is gravity g + a: the same motion."""
     result = run_fmu(coupled_fmu, input=constant_input(a_pivot_y=5.0), start_values=TIGHT)
-    native = simulate(Scene.uniform(3), result["time"], parameters={"g": 9.8 + 5.0},
-                      rtol=1e-12, atol=1e-12)
+    native = simulate(Scene.uniform(3), result["time"], parameters={"g": 9.8 + 5.0}, rtol=1e-12, atol=1e-12)
     for name in ("alpha0", "beta1", "delta2", "bob2_x"):
         assert np.abs(result[name] - native[name]).max() < 1e-9, name
 
 
 def swing_period(fmu, a_up):
     """Period of a small planar swing (beta) of one link, from its zero crossings."""
-    result = run_fmu(fmu, stop_time=20.0, output_interval=1e-3, input=constant_input(a_pivot_y=a_up),
-                     start_values={**TIGHT, "alpha0": 0.0, "beta0": 0.01})
+    result = run_fmu(
+        fmu,
+        stop_time=20.0,
+        output_interval=1e-3,
+        input=constant_input(a_pivot_y=a_up),
+        start_values={**TIGHT, "alpha0": 0.0, "beta0": 0.01},
+    )
     t, beta = result["time"], result["beta0"]
     k = np.nonzero((beta[:-1] > 0) & (beta[1:] <= 0))[0]
     crossings = t[k] + (t[k + 1] - t[k]) * beta[k] / (beta[k] - beta[k + 1])
@@ -88,13 +96,23 @@ def test_pivot_force_and_acceleration_obey_newton_for_the_whole_chain(coupled_fm
     """-F_pivot + M g = M (a_pivot + r_cm''), r_cm'' by finite differences of the outputs."""
     a = np.array([1.3, -2.1, 0.7])
     dt = 1e-3
-    result = run_fmu(coupled_fmu, stop_time=3.0, output_interval=dt, start_values=TIGHT,
-                     input=constant_input(a_pivot_x=a[0], a_pivot_y=a[1], a_pivot_z=a[2]))
-    centre = sum(10.0 * np.column_stack([result[f"link{i}_{c}"] for c in "xyz"])
-                 + 5.0 * np.column_stack([result[f"bob{i}_{c}"] for c in "xyz"]) for i in range(3))
+    result = run_fmu(
+        coupled_fmu,
+        stop_time=3.0,
+        output_interval=dt,
+        start_values=TIGHT,
+        input=constant_input(a_pivot_x=a[0], a_pivot_y=a[1], a_pivot_z=a[2]),
+    )
+    centre = sum(
+        10.0 * np.column_stack([result[f"link{i}_{c}"] for c in "xyz"])
+        + 5.0 * np.column_stack([result[f"bob{i}_{c}"] for c in "xyz"])
+        for i in range(3)
+    )
     centre /= TOTAL_MASS
     # fourth-order central difference for the second derivative
-    acc = (-centre[4:] + 16 * centre[3:-1] - 30 * centre[2:-2] + 16 * centre[1:-3] - centre[:-4]) / (12 * dt**2)
+    acc = (-centre[4:] + 16 * centre[3:-1] - 30 * centre[2:-2] + 16 * centre[1:-3] - centre[:-4]) / (
+        12 * dt**2
+    )
     force = np.column_stack([result[f"F_pivot_{c}"] for c in "xyz"])[2:-2]
     gravity = np.array([0.0, -9.8, 0.0])
     residual = -force + TOTAL_MASS * gravity - TOTAL_MASS * (a + acc)
@@ -128,8 +146,15 @@ def test_input_held_over_a_step_equals_the_native_constant_input(coupled_fmu):
         inputs = {"a_pivot_x": math.sin(k), "a_pivot_y": 0.5 * k, "a_pivot_z": -math.cos(k)}
         fmu.set(inputs)
         fmu.step(0.25)
-        native = simulate(COUPLED, [0.0, 0.25], parameters=inputs, core=core, rtol=1e-12, atol=1e-12,
-                          state=dict(zip(COUPLED.state_names(), state)))
+        native = simulate(
+            COUPLED,
+            [0.0, 0.25],
+            parameters=inputs,
+            core=core,
+            rtol=1e-12,
+            atol=1e-12,
+            state=dict(zip(COUPLED.state_names(), state)),
+        )
         state = native.states[-1]
         assert np.abs(np.array(fmu.get(*COUPLED.state_names())) - state).max() < 1e-9
     fmu.close()

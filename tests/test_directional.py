@@ -1,5 +1,6 @@
 """fmi2GetDirectionalDerivative of the native FMU (complex step of the model's own C) against
 finite differences, at random states, in Model Exchange and Co-Simulation."""
+
 import ctypes
 
 import numpy as np
@@ -14,9 +15,11 @@ from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.fmu import build_fmu
 from fmu_helpers import Instance
 
-SCENES = {"seed": Scene.uniform(3),                                  # expanded, no inputs
-          "coupled": Scene.uniform(3, coupling=True),                # expanded, a_pivot inputs
-          "recursive": Scene.uniform(7, coupling=True)}              # chain.c, with inputs
+SCENES = {
+    "seed": Scene.uniform(3),  # expanded, no inputs
+    "coupled": Scene.uniform(3, coupling=True),  # expanded, a_pivot inputs
+    "recursive": Scene.uniform(7, coupling=True),
+}  # chain.c, with inputs
 SEEDS = range(5)
 
 
@@ -45,8 +48,12 @@ class Model:
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.messages = []
         self._callbacks = logging_callbacks(lambda status, text: self.messages.append((status, text)))
-        self.fmu = FMU2Model(guid=self.md.guid, unzipDirectory=extract(str(path)),
-                             modelIdentifier=self.md.modelExchange.modelIdentifier, instanceName="me")
+        self.fmu = FMU2Model(
+            guid=self.md.guid,
+            unzipDirectory=extract(str(path)),
+            modelIdentifier=self.md.modelExchange.modelIdentifier,
+            instanceName="me",
+        )
         self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
@@ -59,8 +66,9 @@ class Model:
         # says each depends on
         structure = list(self.md.derivatives) + list(self.md.outputs)
         self.unknowns = [u.variable.valueReference for u in structure]
-        self.depends = np.array([[k in {d.valueReference for d in u.dependencies} for k in self.knowns]
-                                 for u in structure])
+        self.depends = np.array(
+            [[k in {d.valueReference for d in u.dependencies} for k in self.knowns] for u in structure]
+        )
 
     def set(self, x, a=()):
         self.fmu.setContinuousStates(doubles(x), len(x))
@@ -76,8 +84,7 @@ class Model:
 
     def jacobian(self):
         """Every column by fmi2GetDirectionalDerivative along a unit known."""
-        return np.array([self.fmu.getDirectionalDerivative(self.unknowns, [k], [1.0])
-                         for k in self.knowns]).T
+        return np.array([self.fmu.getDirectionalDerivative(self.unknowns, [k], [1.0]) for k in self.knowns]).T
 
     def central(self, x, a, h):
         """Central differences of values() with the absolute step h in each known."""
@@ -87,9 +94,9 @@ class Model:
             plus, minus = point.copy(), point.copy()
             plus[k] += h
             minus[k] -= h
-            self.set(plus[:len(x)], plus[len(x):])
+            self.set(plus[: len(x)], plus[len(x) :])
             f_plus = self.values()
-            self.set(minus[:len(x)], minus[len(x):])
+            self.set(minus[: len(x)], minus[len(x) :])
             columns.append((f_plus - self.values()) / (2 * h))
         self.set(x, a)
         return np.array(columns).T
@@ -183,10 +190,12 @@ def test_it_agrees_with_differences_of_the_compiled_core(models, scene):
     n_unknown = len(model.unknowns)
     columns = []
     for k in range(len(point)):
+
         def central(h):
             e = np.zeros_like(point)
             e[k] = h
             return (f(point + e) - f(point - e)) / (2 * h)
+
         columns.append((4 * central(1e-3) - central(2e-3)) / 3)
     FD = np.array(columns).T
     # the FMU's unknowns: derivatives, then states (their own values), the calculated outputs
@@ -213,6 +222,7 @@ def test_co_simulation_gives_them_too(native, models):
     J = np.array([fmu.fmu.getDirectionalDerivative(outputs, [k], [1.0]) for k in knowns]).T
     h, point = 2e-3, np.concatenate([x, a])
     for k, known in enumerate(knowns):
+
         def central(h):
             values = []
             for sign in (1, -1):
@@ -220,6 +230,7 @@ def test_co_simulation_gives_them_too(native, models):
                 values.append(np.array(fmu.fmu.getReal(outputs)))
             fmu.fmu.setReal([known], [point[k]])
             return (values[0] - values[1]) / (2 * h)
+
         richardson = (4 * central(h) - central(2 * h)) / 3
         assert np.abs(richardson - J[:, k]).max() < 1e-8 * max(np.abs(J[:, k]).max(), 1.0), k
     fmu.fmu.exitInitializationMode()
@@ -229,8 +240,9 @@ def test_co_simulation_gives_them_too(native, models):
     J_cs = np.array([fmu.fmu.getDirectionalDerivative(outputs, [k], [1.0]) for k in knowns]).T
     model = models("coupled")
     model.set(x_now, a)
-    J_me = np.array([model.fmu.getDirectionalDerivative(outputs, [model.vr[n]], [1.0])
-                     for n in states + inputs]).T
+    J_me = np.array(
+        [model.fmu.getDirectionalDerivative(outputs, [model.vr[n]], [1.0]) for n in states + inputs]
+    ).T
     np.testing.assert_array_equal(J_cs, J_me)
     fmu.close()
 
@@ -240,13 +252,15 @@ def test_bad_references_are_errors_naming_them_and_the_instance_goes_on(native, 
     vr = model.vr
     der = model.unknowns[0]
     unknown, known = ": only outputs and state derivatives are", ": only states and inputs are"
-    cases = [([vr["l0"]], [vr["alpha0"]], [1.0], f"value reference {vr['l0']} (l0) as an unknown{unknown}"),
-             ([vr["rtol"]], [vr["alpha0"]], [1.0], f"value reference {vr['rtol']} (rtol) as an unknown{unknown}"),
-             ([der], [vr["energy"]], [1.0], f"value reference {vr['energy']} (energy) as a known{known}"),
-             ([der], [vr["g"]], [1.0], f"value reference {vr['g']} (g) as a known{known}"),
-             ([10_000], [vr["alpha0"]], [1.0], f"value reference 10000 (?) as an unknown{unknown}"),
-             ([der], [10_000], [1.0], f"value reference 10000 (?) as a known{known}"),
-             ([der], [vr["alpha0"]], [float("nan")], "dvKnown of alpha0 = nan: must be finite")]
+    cases = [
+        ([vr["l0"]], [vr["alpha0"]], [1.0], f"value reference {vr['l0']} (l0) as an unknown{unknown}"),
+        ([vr["rtol"]], [vr["alpha0"]], [1.0], f"value reference {vr['rtol']} (rtol) as an unknown{unknown}"),
+        ([der], [vr["energy"]], [1.0], f"value reference {vr['energy']} (energy) as a known{known}"),
+        ([der], [vr["g"]], [1.0], f"value reference {vr['g']} (g) as a known{known}"),
+        ([10_000], [vr["alpha0"]], [1.0], f"value reference 10000 (?) as an unknown{unknown}"),
+        ([der], [10_000], [1.0], f"value reference 10000 (?) as a known{known}"),
+        ([der], [vr["alpha0"]], [float("nan")], "dvKnown of alpha0 = nan: must be finite"),
+    ]
     for unknowns, knowns, seed, message in cases:
         model.messages.clear()
         with pytest.raises(FMICallException) as failure:
@@ -258,8 +272,9 @@ def test_bad_references_are_errors_naming_them_and_the_instance_goes_on(native, 
     assert np.isfinite(model.jacobian()).all()
     # a state as unknown is its own value: the identity; a statistic depends on nothing
     n_rhs = vr["n_rhs"]
-    assert model.fmu.getDirectionalDerivative([vr["alpha1"], vr["alpha0"], n_rhs],
-                                              [vr["alpha0"], vr["a_pivot_x"]], [2.0, 5.0]) == [0.0, 2.0, 0.0]
+    assert model.fmu.getDirectionalDerivative(
+        [vr["alpha1"], vr["alpha0"], n_rhs], [vr["alpha0"], vr["a_pivot_x"]], [2.0, 5.0]
+    ) == [0.0, 2.0, 0.0]
 
 
 def test_a_singular_mass_matrix_is_discarded_with_the_diagnosis_never_nan(tmp_path):
@@ -271,7 +286,7 @@ def test_a_singular_mass_matrix_is_discarded_with_the_diagnosis_never_nan(tmp_pa
     x[scene.state_names().index("alpha1")] = np.pi / 2
     model.set(x)
     with pytest.raises(FMICallException) as failure:
-        model.fmu.getDirectionalDerivative(model.unknowns[:len(x)], [model.states[0]], [1.0])
+        model.fmu.getDirectionalDerivative(model.unknowns[: len(x)], [model.states[0]], [1.0])
     assert failure.value.status == 2  # fmi2Discard, as fmi2GetDerivatives
     assert any(status == 2 and "singular mass matrix" in text for status, text in model.messages)
     # what does not need the accelerations is still defined there

@@ -1,6 +1,7 @@
 """The envelope: extreme motion, parameters, steps and loads, through fmpy against the native
 reference. Each case either matches the reference or ends in a discarded step with a
 message that says what happened; never NaN reported as success."""
+
 import math
 import os
 
@@ -22,8 +23,7 @@ DEG = math.pi / 180
 def scaled_link_mass(i, factor):
     """Link i's mass and inertias scaled together (a lighter or heavier cylinder)."""
     ixx, iyy, izz = Link().inertia()
-    return {f"M{i}": 10.0 * factor, f"Ixx{i}": ixx * factor, f"Iyy{i}": iyy * factor,
-            f"Izz{i}": izz * factor}
+    return {f"M{i}": 10.0 * factor, f"Ixx{i}": ixx * factor, f"Iyy{i}": iyy * factor, f"Izz{i}": izz * factor}
 
 
 CASES = {
@@ -33,8 +33,10 @@ CASES = {
     "thin links": {f"Iyy{i}": 10.0 * 1e-4**2 for i in range(3)},
     "mass ratio 1e6": {"m0": 5e6, **scaled_link_mass(0, 1e6)},
     "mass ratio 1e-6": {"m2": 5e-6, **scaled_link_mass(2, 1e-6)},
-    "lengths 1e-3 m": {**{f"l{i}": 1e-3 for i in range(3)},
-                       **{f"Ixx{i}": 10 * (3 * 0.25 + 1e-6) / 12 for i in range(3)}},
+    "lengths 1e-3 m": {
+        **{f"l{i}": 1e-3 for i in range(3)},
+        **{f"Ixx{i}": 10 * (3 * 0.25 + 1e-6) / 12 for i in range(3)},
+    },
     "lengths 1e3 m": {f"l{i}": 1e3 for i in range(3)},
     "g = 0, spinning": {"g": 0.0, "omega0": 1.0, "delta1": -2.0, "omega2": 0.5},
     "g = 1e4": {"g": 1e4},
@@ -63,8 +65,7 @@ def test_ten_links(fmu_dir):
     path = build_fmu(scene, fmu_dir / "Ten.fmu").path
     start = {**TIGHT, "alpha4": 0.8, "delta9": 1.0}
     result = run_fmu(path, stop_time=2.0, output_interval=0.05, start_values=start)
-    native = simulate(scene, result["time"], state={"alpha4": 0.8, "delta9": 1.0},
-                      rtol=1e-13, atol=1e-13)
+    native = simulate(scene, result["time"], state={"alpha4": 0.8, "delta9": 1.0}, rtol=1e-13, atol=1e-13)
     assert max(np.abs(result[n] - native[n]).max() for n in scene.state_names()[:20]) < 1e-6
 
 
@@ -80,8 +81,9 @@ def test_communication_steps_from_1e9_to_100_s(seed_fmu):
     native = simulate(SEED, times, rtol=1e-13, atol=1e-13)
     for k, t in enumerate(times):
         # errors grow with the 111 s simulated: 1e-10 per unit time is the tolerance asked
-        np.testing.assert_allclose(states[k][:6], native.states[k, :6], rtol=0,
-                                   atol=1e-10 * max(t, 1.0) * 100, err_msg=f"t = {t}")
+        np.testing.assert_allclose(
+            states[k][:6], native.states[k, :6], rtol=0, atol=1e-10 * max(t, 1.0) * 100, err_msg=f"t = {t}"
+        )
 
 
 def test_a_tolerance_time_cannot_resolve_is_discarded_with_a_message(seed_fmu):
@@ -122,14 +124,16 @@ def test_approaching_the_joint_singularity(fmu_dir):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("solver, settings, bound", [
-    ("rk4", {"solver": 0, "max_step": 0.01}, 1e-6),
-    ("rk45", {"solver": 1, "rtol": 1e-8, "atol": 1e-8}, 1e-5),
-    ("dop853", {"solver": 2, "rtol": 1e-8, "atol": 1e-8}, 1e-6),
-])
+@pytest.mark.parametrize(
+    "solver, settings, bound",
+    [
+        ("rk4", {"solver": 0, "max_step": 0.01}, 1e-6),
+        ("rk45", {"solver": 1, "rtol": 1e-8, "atol": 1e-8}, 1e-5),
+        ("dop853", {"solver": 2, "rtol": 1e-8, "atol": 1e-8}, 1e-6),
+    ],
+)
 def test_energy_drift_over_1e4_s(seed_fmu, solver, settings, bound):
-    result = run_fmu(seed_fmu, stop_time=1e4, output_interval=1.0, start_values=settings,
-                     output=["energy"])
+    result = run_fmu(seed_fmu, stop_time=1e4, output_interval=1.0, start_values=settings, output=["energy"])
     energy = result["energy"]
     drift = np.abs(energy - energy[0]).max() / abs(energy[0])
     print(f"{solver}: relative energy drift over 1e4 s = {drift:.2e}")
@@ -176,9 +180,14 @@ def test_a_massive_link_on_its_parents_x_axis(fmu_dir, radius, outcome):
     start = {"alpha1": math.pi / 2, "beta1": 0.0, "omega0": 0.3, "Iyy1": 10.0 * radius**2}
     if outcome == "matches":
         result = run_fmu(path, stop_time=2.0, output_interval=0.05, start_values={**TIGHT, **start})
-        native = simulate(scene, result["time"], parameters={"Iyy1": start["Iyy1"]},
-                          state={k: v for k, v in start.items() if k != "Iyy1"},
-                          rtol=1e-13, atol=1e-13)
+        native = simulate(
+            scene,
+            result["time"],
+            parameters={"Iyy1": start["Iyy1"]},
+            state={k: v for k, v in start.items() if k != "Iyy1"},
+            rtol=1e-13,
+            atol=1e-13,
+        )
         assert np.abs(result["alpha1"] - native["alpha1"]).max() < 1e-6
         assert result["alpha1"][-1] != pytest.approx(math.pi / 2)  # it moved off the axis
         return

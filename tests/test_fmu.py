@@ -1,4 +1,5 @@
 """The FMU as fmpy users meet it: conformant, equal to the native integrator, robust."""
+
 import gc
 import math
 import os
@@ -77,8 +78,16 @@ def test_other_chains_match_native(chain_fmu, n):
 
 
 def test_parameters_and_start_values_reach_the_model(seed_fmu):
-    start = {"l0": 4.0, "m1": 1.5, "M2": 3.0, "Iyy2": 0.1, "g": 3.7,
-             "alpha1": -0.7, "beta2": 1.2, "omega0": 0.4}
+    start = {
+        "l0": 4.0,
+        "m1": 1.5,
+        "M2": 3.0,
+        "Iyy2": 0.1,
+        "g": 3.7,
+        "alpha1": -0.7,
+        "beta2": 1.2,
+        "omega0": 0.4,
+    }
     comparison = compare(seed_fmu, Scene.uniform(3), start_values=start)
     assert comparison.angle_error() < 1e-8
     result = run_fmu(seed_fmu, stop_time=0.0, start_values=start)
@@ -87,10 +96,12 @@ def test_parameters_and_start_values_reach_the_model(seed_fmu):
 
 
 def test_setup_experiment_tolerance_replaces_rtol(seed_fmu):
-    loose = run_fmu(seed_fmu, stop_time=4.0, output_interval=2.0, relative_tolerance=1e-3,
-                    output=["rtol", "n_rhs"])
-    tight = run_fmu(seed_fmu, stop_time=4.0, output_interval=2.0, relative_tolerance=1e-11,
-                    output=["rtol", "n_rhs"])
+    loose = run_fmu(
+        seed_fmu, stop_time=4.0, output_interval=2.0, relative_tolerance=1e-3, output=["rtol", "n_rhs"]
+    )
+    tight = run_fmu(
+        seed_fmu, stop_time=4.0, output_interval=2.0, relative_tolerance=1e-11, output=["rtol", "n_rhs"]
+    )
     assert loose["rtol"][-1] == 1e-3 and tight["rtol"][-1] == 1e-11
     assert loose["n_rhs"][-1] < tight["n_rhs"][-1]
 
@@ -123,9 +134,13 @@ def test_state_restores_bit_identically(seed_fmu):
     other.close()
 
 
-@pytest.mark.parametrize("name, value, message", BAD_VALUES + [
-    ("solver", 7, "solver = 7: choose 0 to 3 (0 = rk4, 1 = rk45, 2 = dop853, 3 = radau)"),
-])
+@pytest.mark.parametrize(
+    "name, value, message",
+    BAD_VALUES
+    + [
+        ("solver", 7, "solver = 7: choose 0 to 3 (0 = rk4, 1 = rk45, 2 = dop853, 3 = radau)"),
+    ],
+)
 def test_bad_input_is_refused_and_named(seed_fmu, name, value, message):
     fmu = Instance(seed_fmu, initialize=False)
     with pytest.raises(FMICallException) as failure:
@@ -138,12 +153,15 @@ def test_bad_input_is_refused_and_named(seed_fmu, name, value, message):
     assert run_fmu(seed_fmu, stop_time=0.5)["alpha0"][-1] == run_fmu(seed_fmu, stop_time=0.5)["alpha0"][-1]
 
 
-@pytest.mark.parametrize("name, initialize, message", [
-    ("l1", True, "l1 cannot be set after initialization"),
-    ("alpha0", True, "alpha0 cannot be set after initialization"),
-    ("rtol", True, "rtol cannot be set after initialization"),
-    ("energy", False, "energy is a calculated output: it cannot be set"),
-])
+@pytest.mark.parametrize(
+    "name, initialize, message",
+    [
+        ("l1", True, "l1 cannot be set after initialization"),
+        ("alpha0", True, "alpha0 cannot be set after initialization"),
+        ("rtol", True, "rtol cannot be set after initialization"),
+        ("energy", False, "energy is a calculated output: it cannot be set"),
+    ],
+)
 def test_variables_are_set_only_when_the_standard_allows(seed_fmu, name, initialize, message):
     fmu = Instance(seed_fmu, initialize=initialize)
     if initialize:
@@ -161,8 +179,9 @@ def test_step_that_cannot_complete_is_discarded_and_state_kept(seed_fmu):
         fmu.step(1.0)
     assert failure.value.status == 2  # fmi2Discard
     assert fmu.get("alpha0", "beta2", "omega1", "energy") == before
-    assert any(status == 2 and "too many steps" in text and "max_steps = 2" in text
-               for status, text in fmu.messages)
+    assert any(
+        status == 2 and "too many steps" in text and "max_steps = 2" in text for status, text in fmu.messages
+    )
     fmu.time = 0.0
     fmu.step(1e-3)  # a shorter step still works from the kept state
     assert all(math.isfinite(v) for v in fmu.get("alpha0", "energy"))
@@ -194,8 +213,10 @@ def test_two_builds_side_by_side(seed_fmu, chain_fmu):
     setups = [(seed_fmu, {}, "alpha2"), (chain_fmu(2), {"l0": 2.0}, "alpha1"), (chain_fmu(2), {}, "alpha1")]
 
     def run(chosen):
-        instances = [(Instance(path, name=f"i{k}", start_values=start), name)
-                     for k, (path, start, name) in enumerate(chosen)]
+        instances = [
+            (Instance(path, name=f"i{k}", start_values=start), name)
+            for k, (path, start, name) in enumerate(chosen)
+        ]
         for _ in range(60):
             for fmu, _ in instances:
                 fmu.step(1 / 60)
@@ -231,7 +252,9 @@ def test_fmutool_check_passes(seed_fmu):
     """fmu-manipulation-toolbox: the FMI 2.0 schema and the semantic rules of section 2.2."""
     fmutool = shutil.which("fmutool", path=os.path.dirname(sys.executable)) or shutil.which("fmutool")
     assert fmutool, "fmutool comes with the test extra: pip install -e .[test]"
-    run = subprocess.run([fmutool, "-input", str(seed_fmu), "-check"], check=False, capture_output=True, text=True)
+    run = subprocess.run(
+        [fmutool, "-input", str(seed_fmu), "-check"], check=False, capture_output=True, text=True
+    )
     assert run.returncode == 0, run.stdout + run.stderr
     assert "compliant with FMI-2.0" in run.stdout and "No semantic error" in run.stdout
 
@@ -254,7 +277,10 @@ def test_wrong_types_are_refused_and_named(seed_fmu, name, setter, value):
     with pytest.raises(FMICallException):
         getattr(fmu.fmu, setter)([fmu.vr[name]], [value])
     kind = "an Integer" if setter == "setInteger" else "a Real"
-    assert any(f"value reference {fmu.vr[name]} is not {kind} variable" in text
-               for status, text in fmu.messages if status == 3)
+    assert any(
+        f"value reference {fmu.vr[name]} is not {kind} variable" in text
+        for status, text in fmu.messages
+        if status == 3
+    )
     fmu.close(after_fatal=True)
     gc.collect()

@@ -7,6 +7,7 @@ and answers fmi2Reset. A mutation fuzz of serialized states (header intact, body
 overwritten): each one is refused, or is taken and steps to finite outputs or to a
 discarded step with a message; fmi2Reset works after every one.
 """
+
 import ctypes
 import json
 import math
@@ -41,8 +42,10 @@ def integer_names(instance):
 
 def values(instance):
     """Every Real (but the native FMU's derivatives) and Integer of an instance."""
-    return (instance.fmu.getReal([instance.vr[n] for n in real_names(instance)]),
-            instance.fmu.getInteger([instance.vr[n] for n in integer_names(instance)]))
+    return (
+        instance.fmu.getReal([instance.vr[n] for n in real_names(instance)]),
+        instance.fmu.getInteger([instance.vr[n] for n in integer_names(instance)]),
+    )
 
 
 def initialize(instance):
@@ -69,6 +72,7 @@ def serialized_state(instance):
 
 # --- the two formats ----------------------------------------------------------------------
 
+
 class NativeState:
     """The native FMU's serialized state: a header (magic, size, GUID), then fmi2_glue.c's
     SavedState as it lies in memory: the glue's Machine (state word, time, last successful
@@ -86,22 +90,44 @@ class NativeState:
         self.data = bytes(data)
         after_r = self.MODEL + 8 * len(reals)
         tail = size - 8 * n_state - 8
-        self.offsets = {"state": 0, "time": 8, "last_successful_time": 16, "solver": after_r,
-                        "max_steps": after_r + 4, "tolerance": after_r + 8, "h": after_r + 16,
-                        "fsal": after_r + 24, "work": after_r + 32, "dx": tail,
-                        "dx_valid": tail + 8 * n_state, "outputs_valid": tail + 8 * n_state + 4}
-        self.fields = {"state": "i", "time": "d", "solver": "i", "max_steps": "i", "tolerance": "d",
-                       "h": "d", "fsal": "i", "dx_valid": "i", "outputs_valid": "i",
-                       "last_successful_time": "d"}
+        self.offsets = {
+            "state": 0,
+            "time": 8,
+            "last_successful_time": 16,
+            "solver": after_r,
+            "max_steps": after_r + 4,
+            "tolerance": after_r + 8,
+            "h": after_r + 16,
+            "fsal": after_r + 24,
+            "work": after_r + 32,
+            "dx": tail,
+            "dx_valid": tail + 8 * n_state,
+            "outputs_valid": tail + 8 * n_state + 4,
+        }
+        self.fields = {
+            "state": "i",
+            "time": "d",
+            "solver": "i",
+            "max_steps": "i",
+            "tolerance": "d",
+            "h": "d",
+            "fsal": "i",
+            "dx_valid": "i",
+            "outputs_valid": "i",
+            "last_successful_time": "d",
+        }
         self.offsets["mode"], self.fields["mode"] = 0, "i"  # the state word: the slave's mode
         work = (tail - self.offsets["work"]) / 8
         assert work == int(work) and work >= 32 * n_state, "ModelData's layout is not the one assumed"
         # the meaningful part: all but the solvers' scratch after the carried derivative
-        self.meaningful = np.r_[0:self.offsets["work"] + 8 * n_state, tail:size]
+        self.meaningful = np.r_[0 : self.offsets["work"] + 8 * n_state, tail:size]
         reals_now, integers_now = values(instance)  # taken where the state was
-        assert ([self.get(name) for name in reals], [self.get(name) for name in integer_names(instance)],
-                self.get("time"), self.get("state")) == (reals_now, integers_now, instance.time,
-                                                         STEP_COMPLETE), "not the layout assumed"
+        assert (
+            [self.get(name) for name in reals],
+            [self.get(name) for name in integer_names(instance)],
+            self.get("time"),
+            self.get("state"),
+        ) == (reals_now, integers_now, instance.time, STEP_COMPLETE), "not the layout assumed"
 
     def offset(self, field):
         return self.MODEL + 8 * self.reals[field] if field in self.reals else self.offsets[field]
@@ -117,7 +143,7 @@ class NativeState:
     def overwritten(self, at, raw, data=None):
         """The bytes (the saved ones unless given) with raw written at body offset at."""
         data = bytearray(data or self.data)
-        data[self.header + at:self.header + at + len(raw)] = raw
+        data[self.header + at : self.header + at + len(raw)] = raw
         return bytes(data)
 
     def time(self, data):
@@ -137,10 +163,12 @@ class PythonState:
         names = real_names(instance)
         self.paths = {name: ("reals", k) for k, name in enumerate(names)}
         self.paths.update({name: ("ints", k) for k, name in enumerate(integer_names(instance))})
-        self.paths.update(h=("solver", "h"), fsal=("solver", "fsal"), mode=("mode",),
-                          tolerance=("tolerance",))
-        self.leaves = (list(self.paths.values())
-                       + [("solver", "f", k) for k in range(len(self.state["solver"]["f"]))])
+        self.paths.update(
+            h=("solver", "h"), fsal=("solver", "fsal"), mode=("mode",), tolerance=("tolerance",)
+        )
+        self.leaves = list(self.paths.values()) + [
+            ("solver", "f", k) for k in range(len(self.state["solver"]["f"]))
+        ]
 
     def with_path(self, path, value):
         state = json.loads(self.data)
@@ -172,6 +200,7 @@ def codec(backend, instance, data):
 
 
 # --- good states -----------------------------------------------------------------------------
+
 
 def restore(instance, data):
     state = instance.fmu.deSerializeFMUstate(data)
@@ -211,10 +240,10 @@ def test_every_state_an_instance_gives_is_taken_back(path):
 
 # --- a bad state, field by field --------------------------------------------------------------
 
+
 def rule_message(field, value):
     """What runtime.rules says of the value, as a message names it (the FMUs say the same)."""
-    name, quantity = (("tolerance (from setupExperiment)", "rtol") if field == "tolerance"
-                      else (field, None))
+    name, quantity = ("tolerance (from setupExperiment)", "rtol") if field == "tolerance" else (field, None)
     with pytest.raises(BadValue) as refusal:
         check_value(name, value, quantity)
     return str(refusal.value)
@@ -241,8 +270,9 @@ CASES = [
 
 
 @pytest.mark.parametrize("what, field, value, native_value, message", CASES, ids=[c[0] for c in CASES])
-def test_a_bad_state_is_refused_naming_it_and_changes_nothing(backend, path, what, field, value,
-                                                              native_value, message):
+def test_a_bad_state_is_refused_naming_it_and_changes_nothing(
+    backend, path, what, field, value, native_value, message
+):
     fmu, twin = started(path), started(path, name="twin")
     data = serialized_state(fmu)
     state = codec(backend, fmu, data)
@@ -251,15 +281,18 @@ def test_a_bad_state_is_refused_naming_it_and_changes_nothing(backend, path, wha
     if message is None:
         message = rule_message(field, value)
     elif what == "no FMI state":  # a state word, or mode, that names none
-        message = ("instance state = 6: not one state a Co-Simulation instance can be in"
-                   if backend == "native" else "mode = 'running': choose one of")
+        message = (
+            "instance state = 6: not one state a Co-Simulation instance can be in"
+            if backend == "native"
+            else "mode = 'running': choose one of"
+        )
     message = message.format(value)
     bad = state.with_field(field, value)
     before = values(fmu)
     refusals = []  # (function, status)
     if backend == "native":  # both ways in: a state in memory, and bytes
         saved = fmu.fmu.getFMUstate()
-        body = bad[state.header:]
+        body = bad[state.header :]
         ctypes.memmove(saved.value, body, len(body))
         with pytest.raises(FMICallException) as failure:
             fmu.fmu.setFMUstate(saved)
@@ -277,8 +310,10 @@ def test_a_bad_state_is_refused_naming_it_and_changes_nothing(backend, path, wha
     for function, status in refusals:
         assert status == state.refused_status
         wanted = f"{function}: the state's {message}"
-        assert any(s == ERROR and text.startswith(wanted) for s, text in fmu.messages), \
-            (wanted, fmu.messages[-3:])
+        assert any(s == ERROR and text.startswith(wanted) for s, text in fmu.messages), (
+            wanted,
+            fmu.messages[-3:],
+        )
     assert values(fmu) == before
     fmu.step(STEP)
     twin.step(STEP)
@@ -295,14 +330,21 @@ def test_a_co_simulation_state_is_no_model_exchange_state(native_seed_fmu):
     data = serialized_state(fmu)
     messages = []
     callbacks = logging_callbacks(lambda status, text: messages.append((status, text)))
-    model = FMU2Model(guid=fmu.md.guid, unzipDirectory=fmu.unzipdir,
-                      modelIdentifier=fmu.md.modelExchange.modelIdentifier, instanceName="me")
+    model = FMU2Model(
+        guid=fmu.md.guid,
+        unzipDirectory=fmu.unzipdir,
+        modelIdentifier=fmu.md.modelExchange.modelIdentifier,
+        instanceName="me",
+    )
     model.instantiate(callbacks=callbacks, loggingOn=True)
     with pytest.raises(FMICallException) as failure:
         model.deSerializeFMUstate(data)
     assert failure.value.status == ERROR
-    assert (ERROR, "fmi2DeSerializeFMUstate: the state's instance state = 4: not one state a "
-                   "Model Exchange instance can be in") in messages
+    assert (
+        ERROR,
+        "fmi2DeSerializeFMUstate: the state's instance state = 4: not one state a "
+        "Model Exchange instance can be in",
+    ) in messages
     model.reset()
     model.freeInstance()
     fmu.close()
@@ -327,7 +369,7 @@ def test_reset_and_free_state_are_never_refused(native_seed_fmu):
 
 # --- the fuzz ---------------------------------------------------------------------------------
 
-SPECIAL = [math.nan, math.inf, -math.inf, -1.0, 1e308, -1e308, 5e-324, 0.0, 0.5, 2.0 ** 53]
+SPECIAL = [math.nan, math.inf, -math.inf, -1.0, 1e308, -1e308, 5e-324, 0.0, 0.5, 2.0**53]
 
 
 def native_mutation(state, rng):
@@ -338,7 +380,7 @@ def native_mutation(state, rng):
         if kind == 0:
             raw = struct.pack("<d", SPECIAL[rng.integers(len(SPECIAL))])
         elif kind == 1:
-            raw = struct.pack("<i", [-1, 2**31 - 1, -2**31, 2, 3, 7][rng.integers(6)])
+            raw = struct.pack("<i", [-1, 2**31 - 1, -(2**31), 2, 3, 7][rng.integers(6)])
         elif kind == 2:
             raw = struct.pack("<q", [2**63 - 1, -1, 2**53 + 1][rng.integers(3)])
         elif kind == 3:
@@ -356,8 +398,27 @@ def native_mutation(state, rng):
     return data
 
 
-PYTHON_VALUES = [math.nan, math.inf, -math.inf, -1, -1.0, 2**31 - 1, 2**63 - 1, 10**400, 1e308, 0,
-                 0.0, 1.5, 3, None, "x", True, [], {}, "instantiated"]
+PYTHON_VALUES = [
+    math.nan,
+    math.inf,
+    -math.inf,
+    -1,
+    -1.0,
+    2**31 - 1,
+    2**63 - 1,
+    10**400,
+    1e308,
+    0,
+    0.0,
+    1.5,
+    3,
+    None,
+    "x",
+    True,
+    [],
+    {},
+    "instantiated",
+]
 
 
 def python_mutation(state, rng):
@@ -383,7 +444,7 @@ def python_mutation(state, rng):
     for _ in range(int(rng.integers(1, 4))):
         at = int(rng.integers(0, len(data)))
         raw = rng.bytes(1) if rng.random() < 0.5 else bytes([b"0123456789-.eN"[rng.integers(14)]])
-        data[at:at + 1] = raw
+        data[at : at + 1] = raw
     return bytes(data)
 
 
@@ -396,7 +457,8 @@ def outcome(fmu, state, data):
         fmu.fmu.setFMUstate(restored)
     except FMICallException as exc:
         said = any(s == ERROR and "the state's" in text for s, text in fmu.messages) or any(
-            "not a state of this FMU" in text for s, text in fmu.messages)
+            "not a state of this FMU" in text for s, text in fmu.messages
+        )
         return "refused" if exc.status == state.refused_status and said else f"refused badly: {exc}"
     finally:
         if restored is not None:
@@ -426,8 +488,10 @@ def test_mutated_states_are_refused_or_run_to_finite_outputs(backend, path):
             named[re.sub(r"\d+$", "#", next(g for g in found.groups() if g))] += 1
         fmu.fmu.reset()  # every time: fmpy raises if it is not fmi2OK
         initialize(fmu)
-    print(f"\n{backend}: {FUZZ_CASES} mutated states: {dict(outcomes)}; the refusals named "
-          f"{len(named)} fields, most often {dict(named.most_common(8))}")
+    print(
+        f"\n{backend}: {FUZZ_CASES} mutated states: {dict(outcomes)}; the refusals named "
+        f"{len(named)} fields, most often {dict(named.most_common(8))}"
+    )
     assert set(outcomes) <= {"refused", "ran", "discarded"}, outcomes
     assert outcomes["refused"] and outcomes["ran"]
     fmu.close()

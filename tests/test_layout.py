@@ -11,6 +11,7 @@ build or the host side; builder/ nothing of analysis/, viz/, demos/ or the comma
 line; library code nothing of the command line (commands/ and cli.py), which alone
 turns errors into a line and an exit status.
 """
+
 from __future__ import annotations
 
 import ast
@@ -67,8 +68,10 @@ def imports_of(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
             else:
                 origin = node.module or ""
             # `from a import b`: b is a module of a, or a name in a
-            targets = [f"{origin}.{alias.name}" if f"{origin}.{alias.name}" in modules else origin
-                       for alias in node.names]
+            targets = [
+                f"{origin}.{alias.name}" if f"{origin}.{alias.name}" in modules else origin
+                for alias in node.names
+            ]
         else:
             continue
         for target in targets:
@@ -132,9 +135,13 @@ def test_no_import_cycles():
 
 @pytest.mark.parametrize("layer", sorted(FORBIDDEN))
 def test_layers_point_one_way(layer):
-    wrong = sorted(f"{module} imports {target}"
-                   for module, targets in import_graph().items() if part(module) == layer
-                   for target in targets if part(target) in FORBIDDEN[layer])
+    wrong = sorted(
+        f"{module} imports {target}"
+        for module, targets in import_graph().items()
+        if part(module) == layer
+        for target in targets
+        if part(target) in FORBIDDEN[layer]
+    )
     assert not wrong, "\n".join(wrong)
 
 
@@ -165,8 +172,11 @@ def shipped(fmu) -> tuple[str, dict[str, str]]:
         names = [n for n in archive.namelist() if n.startswith("resources/cp_runtime_")]
         packages = {n.split("/")[1] for n in names}
         assert len(packages) == 1, packages
-        return packages.pop(), {n.rsplit("/", 1)[1].removesuffix(".py"): archive.read(n).decode()
-                                for n in names if n.endswith(".py")}
+        return packages.pop(), {
+            n.rsplit("/", 1)[1].removesuffix(".py"): archive.read(n).decode()
+            for n in names
+            if n.endswith(".py")
+        }
 
 
 @pytest.fixture(scope="module")
@@ -176,10 +186,13 @@ def cart_fmu(tmp_path_factory):
     return build_cart_fmu(tmp_path_factory.mktemp("cart") / "Cart.fmu")
 
 
-@pytest.mark.parametrize("which, slave, modules", [
-    ("seed", "slave", {"__init__", "slave", "rules", "files"}),
-    ("cart", "cart_slave", {"__init__", "cart_slave", "rules"}),
-])
+@pytest.mark.parametrize(
+    "which, slave, modules",
+    [
+        ("seed", "slave", {"__init__", "slave", "rules", "files"}),
+        ("cart", "cart_slave", {"__init__", "cart_slave", "rules"}),
+    ],
+)
 def test_an_fmu_ships_exactly_the_runtime_its_slave_imports(seed_fmu, cart_fmu, which, slave, modules):
     from conical_pendulum.builder.fmu import runtime_digest, runtime_modules
 
@@ -211,4 +224,7 @@ def test_each_subcommand_is_a_module_of_its_own():
         defined = {node.name for node in tree.body if isinstance(node, ast.FunctionDef)}
         assert {"add_arguments", "run"} <= defined, name
     cli = ast.parse((ROOT / "cli.py").read_text())
-    assert not {node.name for node in cli.body if isinstance(node, ast.FunctionDef)} & {"add_arguments", "run"}
+    assert not {node.name for node in cli.body if isinstance(node, ast.FunctionDef)} & {
+        "add_arguments",
+        "run",
+    }

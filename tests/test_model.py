@@ -1,4 +1,5 @@
 """The equations: physically right, equal to sympy's KanesMethod, compiled faithfully."""
+
 import numpy as np
 import pytest
 import sympy as sm
@@ -29,8 +30,11 @@ def relative_error(a, b):
     return np.abs(a - b).max() / np.abs(b).max()
 
 
-@pytest.mark.parametrize("scene", [Scene.uniform(1), Scene.uniform(2), Scene.uniform(3), MIXED, COUPLED],
-                         ids=["n1", "n2", "n3", "mixed", "moving-pivot"])
+@pytest.mark.parametrize(
+    "scene",
+    [Scene.uniform(1), Scene.uniform(2), Scene.uniform(3), MIXED, COUPLED],
+    ids=["n1", "n2", "n3", "mixed", "moving-pivot"],
+)
 def test_derivation_equals_sympy_kanes_method(scene):
     eqs = derive(scene)
     mass, forcing, _ = eqs.lambdify()
@@ -42,8 +46,11 @@ def test_derivation_equals_sympy_kanes_method(scene):
         assert relative_error(forcing(x, p), ref_forcing(x, p)) < 1e-12
 
 
-@pytest.mark.parametrize("scene", [Scene.uniform(3), MIXED, Scene.uniform(2, kinematics="pydy-example"),
-                                   COUPLED], ids=["n3", "mixed", "pydy-example", "moving-pivot"])
+@pytest.mark.parametrize(
+    "scene",
+    [Scene.uniform(3), MIXED, Scene.uniform(2, kinematics="pydy-example"), COUPLED],
+    ids=["n3", "mixed", "pydy-example", "moving-pivot"],
+)
 def test_compiled_core_equals_lambdify(scene):
     eqs = derive(scene)
     mass, forcing, outputs = eqs.lambdify()
@@ -54,9 +61,9 @@ def test_compiled_core_equals_lambdify(scene):
         assert relative_error(F, np.ravel(forcing(x, p))) < 1e-12
         expected_accel = np.linalg.solve(np.array(mass(x, p), float), np.ravel(forcing(x, p)))
         # the symbolic outputs; the apparent mass after them is the core's (test_apparent_mass)
-        assert relative_error(core.outputs(x, p)[:len(eqs.outputs)], outputs(x, p, expected_accel)) < 1e-10
-        assert relative_error(core.rhs(x, p)[2 * scene.n:], expected_accel) < 1e-10
-        np.testing.assert_array_equal(core.rhs(x, p)[:2 * scene.n], x[2 * scene.n:])
+        assert relative_error(core.outputs(x, p)[: len(eqs.outputs)], outputs(x, p, expected_accel)) < 1e-10
+        assert relative_error(core.rhs(x, p)[2 * scene.n :], expected_accel) < 1e-10
+        np.testing.assert_array_equal(core.rhs(x, p)[: 2 * scene.n], x[2 * scene.n :])
 
 
 def test_default_model_conserves_energy():
@@ -80,8 +87,13 @@ def test_conical_orbit_keeps_its_height():
     length, g, theta = 10.0, 9.8, np.radians(30.0)
     rate = np.sqrt(g / (length * np.cos(theta)))  # Omega^2 = g / (l cos theta)
     times = np.linspace(0.0, 10 * 2 * np.pi / rate, 2001)
-    result = simulate(scene, times, state={"alpha0": theta, "beta0": 0.0, "omega0": 0.0,
-                                           "delta0": -rate * np.tan(theta)}, rtol=1e-12, atol=1e-12)
+    result = simulate(
+        scene,
+        times,
+        state={"alpha0": theta, "beta0": 0.0, "omega0": 0.0, "delta0": -rate * np.tan(theta)},
+        rtol=1e-12,
+        atol=1e-12,
+    )
     height = result["bob0_y"]
     assert height[0] == pytest.approx(-length * np.cos(theta), rel=1e-14)
     assert np.abs(height - height[0]).max() < 1e-8
@@ -136,34 +148,40 @@ def test_every_chain_builds_and_conserves_energy(n, variant):
     assert np.abs(energy - energy[0]).max() <= 1e-8 * np.abs(energy).max()
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda: Scene.uniform(0), "out of range"),
-    (lambda: Scene.uniform(1000), "out of range"),
-    (lambda: Scene(links=(Link(has_mass=False, has_bob=False),)), "no mass"),
-    (lambda: Scene(links=(Link(), Link(has_mass=False, has_bob=False))), "links 1..1 carry no mass"),
-    (lambda: Scene(kinematics="seed"), "kinematics"),
-    (lambda: Scene.uniform(5, kinematics="pydy-example"), "only reproduced up to 4"),
-    (lambda: Scene(links=(Link(length=-1.0),)), "length"),
-    (lambda: Scene.uniform(3).parameters({"mass": 1.0}), "unknown parameter 'mass'"),
-    (lambda: Scene.uniform(3, massless_links=True).parameters({"M0": 1.0}), "unknown parameter 'M0'"),
-    (lambda: Scene.uniform(3).parameters({"a_pivot_x": 1.0}), "unknown parameter 'a_pivot_x'"),
-    (lambda: Scene.uniform(2, kinematics="pydy-example", coupling=True), "coupling: .* 'consistent'"),
-    (lambda: Scene.uniform(2, coupling="yes"), "coupling: expected true or false, got 'yes'"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: Scene.uniform(0), "out of range"),
+        (lambda: Scene.uniform(1000), "out of range"),
+        (lambda: Scene(links=(Link(has_mass=False, has_bob=False),)), "no mass"),
+        (lambda: Scene(links=(Link(), Link(has_mass=False, has_bob=False))), "links 1..1 carry no mass"),
+        (lambda: Scene(kinematics="seed"), "kinematics"),
+        (lambda: Scene.uniform(5, kinematics="pydy-example"), "only reproduced up to 4"),
+        (lambda: Scene(links=(Link(length=-1.0),)), "length"),
+        (lambda: Scene.uniform(3).parameters({"mass": 1.0}), "unknown parameter 'mass'"),
+        (lambda: Scene.uniform(3, massless_links=True).parameters({"M0": 1.0}), "unknown parameter 'M0'"),
+        (lambda: Scene.uniform(3).parameters({"a_pivot_x": 1.0}), "unknown parameter 'a_pivot_x'"),
+        (lambda: Scene.uniform(2, kinematics="pydy-example", coupling=True), "coupling: .* 'consistent'"),
+        (lambda: Scene.uniform(2, coupling="yes"), "coupling: expected true or false, got 'yes'"),
+    ],
+)
 def test_bad_scenes_and_values_are_named(make, message):
     with pytest.raises(SceneError, match=message):
         make()
 
 
-@pytest.mark.parametrize("parameters, state, message", [
-    ({"l0": 0.0}, None, "l0 = 0.0: a length must be positive"),
-    ({"m2": -5.0}, None, "m2 = -5.0: a bob mass must be positive"),
-    ({"Ixx1": -1.0}, None, "Ixx1 = -1.0: a moment of inertia cannot be negative"),
-    ({"g": float("nan")}, None, "g = nan: must be finite"),
-    ({"M0": "heavy"}, None, "M0: expected a number, got 'heavy'"),
-    (None, {"alpha0": float("inf")}, "alpha0 = inf: must be finite"),
-    ({"a_pivot_y": float("nan")}, None, "a_pivot_y = nan: must be finite"),
-])
+@pytest.mark.parametrize(
+    "parameters, state, message",
+    [
+        ({"l0": 0.0}, None, "l0 = 0.0: a length must be positive"),
+        ({"m2": -5.0}, None, "m2 = -5.0: a bob mass must be positive"),
+        ({"Ixx1": -1.0}, None, "Ixx1 = -1.0: a moment of inertia cannot be negative"),
+        ({"g": float("nan")}, None, "g = nan: must be finite"),
+        ({"M0": "heavy"}, None, "M0: expected a number, got 'heavy'"),
+        (None, {"alpha0": float("inf")}, "alpha0 = inf: must be finite"),
+        ({"a_pivot_y": float("nan")}, None, "a_pivot_y = nan: must be finite"),
+    ],
+)
 def test_bad_values_are_named(parameters, state, message):
     scene = Scene.uniform(3, coupling=True)
     core = load_core(scene)

@@ -1,4 +1,5 @@
 """The native FMU: the same C as the pythonfmu FMU with FMI glue in C, in hosts that are not Python."""
+
 import os
 import re
 import shutil
@@ -23,9 +24,12 @@ from fmu_helpers import BAD_VALUES, Instance
 from required_tools import require_tool
 
 HOST_SOURCE = Path(__file__).parent / "hosts" / "fmi_host.c"
-SCENES = {"seed": Scene.uniform(3), "coupled": Scene.uniform(3, coupling=True),
-          "mixed": Scene(links=(Link(has_mass=False), Link(has_bob=False), Link(length=4.0))),
-          "published": Scene.uniform(2, kinematics="pydy-example", outputs=("energy",))}
+SCENES = {
+    "seed": Scene.uniform(3),
+    "coupled": Scene.uniform(3, coupling=True),
+    "mixed": Scene(links=(Link(has_mass=False), Link(has_bob=False), Link(length=4.0))),
+    "published": Scene.uniform(2, kinematics="pydy-example", outputs=("energy",)),
+}
 START = {"l0": 8.0, "alpha0": 0.5, "delta2": 0.3}
 
 
@@ -36,9 +40,10 @@ def fmus(tmp_path_factory):
 
     def get(name):
         if name not in built:
-            built[name] = tuple(build_fmu(SCENES[name], folder / f"{name}_{backend}.fmu",
-                                          backend=backend).path
-                                for backend in ("native", "pythonfmu"))
+            built[name] = tuple(
+                build_fmu(SCENES[name], folder / f"{name}_{backend}.fmu", backend=backend).path
+                for backend in ("native", "pythonfmu")
+            )
         return built[name]
 
     return get
@@ -53,8 +58,21 @@ def native(fmus):
 def host(tmp_path_factory):
     """tests/hosts/fmi_host.c compiled: a host that is a plain C program."""
     program = tmp_path_factory.mktemp("host") / "fmi_host"
-    subprocess.run(["cc", "-std=c99", "-O1", "-Wall", "-Werror", f"-I{fmi_headers()}",
-                    str(HOST_SOURCE), "-o", str(program), "-ldl"], check=True)
+    subprocess.run(
+        [
+            "cc",
+            "-std=c99",
+            "-O1",
+            "-Wall",
+            "-Werror",
+            f"-I{fmi_headers()}",
+            str(HOST_SOURCE),
+            "-o",
+            str(program),
+            "-ldl",
+        ],
+        check=True,
+    )
     return program
 
 
@@ -76,7 +94,9 @@ def vrs(path, names):
 def test_fmpy_and_fmutool_validate_it(native):
     assert validate_fmu(str(native)) == []
     fmutool = shutil.which("fmutool", path=os.path.dirname(sys.executable)) or shutil.which("fmutool")
-    run = subprocess.run([fmutool, "-input", str(native), "-check"], check=False, capture_output=True, text=True)
+    run = subprocess.run(
+        [fmutool, "-input", str(native), "-check"], check=False, capture_output=True, text=True
+    )
     assert run.returncode == 0, run.stdout + run.stderr
     assert "compliant with FMI-2.0" in run.stdout and "No semantic error" in run.stdout
 
@@ -86,8 +106,9 @@ def test_binary_needs_only_libc_and_libm_and_exports_only_fmi(native, tmp_path):
     dynamic = subprocess.run(["readelf", "-d", str(so)], capture_output=True, text=True, check=True).stdout
     needed = {line.split("[")[1].rstrip("]") for line in dynamic.splitlines() if "(NEEDED)" in line}
     assert needed == {"libc.so.6", "libm.so.6"}
-    symbols = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True,
-                             check=True).stdout.split()[2::3]
+    symbols = subprocess.run(
+        ["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True
+    ).stdout.split()[2::3]
     assert symbols and all(name.startswith("fmi2") for name in symbols)
 
 
@@ -97,9 +118,15 @@ def test_model_description_matches_the_pythonfmu_fmu_and_is_complete(fmus):
     by_name = {v.name: v for v in ours.modelVariables}
     for v in theirs.modelVariables:
         mine = by_name[v.name]
-        assert (mine.valueReference, mine.type, mine.causality, mine.variability, mine.initial,
-                mine.start, mine.description) == (v.valueReference, v.type, v.causality,
-                                                  v.variability, v.initial, v.start, v.description)
+        assert (
+            mine.valueReference,
+            mine.type,
+            mine.causality,
+            mine.variability,
+            mine.initial,
+            mine.start,
+            mine.description,
+        ) == (v.valueReference, v.type, v.causality, v.variability, v.initial, v.start, v.description)
     derivatives = [v for v in ours.modelVariables if v.name.startswith("der(")]
     assert [d.derivative.name for d in derivatives] == SCENES["coupled"].state_names()
     assert len(ours.derivatives) == len(derivatives)
@@ -116,13 +143,20 @@ def test_model_description_matches_the_pythonfmu_fmu_and_is_complete(fmus):
 
 
 @pytest.mark.parametrize("scene", list(SCENES))
-@pytest.mark.parametrize("settings", [{}, {"solver": 2, "rtol": 1e-11, "atol": 1e-11},
-                                      {"solver": 0, "max_step": 0.005}])
+@pytest.mark.parametrize(
+    "settings", [{}, {"solver": 2, "rtol": 1e-11, "atol": 1e-11}, {"solver": 0, "max_step": 0.005}]
+)
 def test_co_simulation_equals_the_pythonfmu_fmu_bit_for_bit(fmus, scene, settings):
     """Same generated C, same solvers, same settings: the same numbers."""
     native, python = fmus(scene)
-    start = {**{k: v for k, v in START.items() if k in SCENES[scene].parameter_names()
-                + SCENES[scene].state_names()}, **settings}
+    start = {
+        **{
+            k: v
+            for k, v in START.items()
+            if k in SCENES[scene].parameter_names() + SCENES[scene].state_names()
+        },
+        **settings,
+    }
     if scene == "coupled":
         start["a_pivot_x"] = 0.7
     ours, theirs = (run_fmu(path, stop_time=5.0, start_values=start) for path in (native, python))
@@ -133,10 +167,17 @@ def test_co_simulation_equals_the_pythonfmu_fmu_bit_for_bit(fmus, scene, setting
 
 def test_model_exchange_matches_the_native_reference(fmus):
     native, _ = fmus("seed")
-    run = run_fmu(native, stop_time=10.0, fmi_type="ModelExchange", relative_tolerance=1e-10,
-                  start_values=START)
-    reference = simulate(SCENES["seed"], run["time"], parameters={"l0": 8.0},
-                         state={"alpha0": 0.5, "delta2": 0.3}, rtol=1e-12, atol=1e-12)
+    run = run_fmu(
+        native, stop_time=10.0, fmi_type="ModelExchange", relative_tolerance=1e-10, start_values=START
+    )
+    reference = simulate(
+        SCENES["seed"],
+        run["time"],
+        parameters={"l0": 8.0},
+        state={"alpha0": 0.5, "delta2": 0.3},
+        rtol=1e-12,
+        atol=1e-12,
+    )
     for name in SCENES["seed"].state_names()[:6]:  # the angles
         assert np.abs(run[name] - reference[name]).max() < 1e-6, name
     assert np.abs(run["energy"] - reference["energy"]).max() < 1e-6 * abs(reference["energy"][0])
@@ -166,9 +207,22 @@ def test_the_fmi_layer_knows_the_model_only_through_the_contract(native):
         model = archive.read("sources/pendulum_model.c").decode()
     included = re.findall(r'#include "([^"]+)"', glue)
     assert included == ["fmi2Functions.h", "fmu_config.h", "fmu_model.h"]
-    for word in ("CP_VR_", "CP_NREAL", "CP_NSTATE", "CP_NPARAM", "CP_NOUTPUT", "cp_rules",
-                 "cp_real_", "cp_rhs", "cp_cosim", "cp_directional", "CP_STEP", "CP_SOLVER",
-                 "CP_FIXED", "CP_CALCULATED"):
+    for word in (
+        "CP_VR_",
+        "CP_NREAL",
+        "CP_NSTATE",
+        "CP_NPARAM",
+        "CP_NOUTPUT",
+        "cp_rules",
+        "cp_real_",
+        "cp_rhs",
+        "cp_cosim",
+        "cp_directional",
+        "CP_STEP",
+        "CP_SOLVER",
+        "CP_FIXED",
+        "CP_CALCULATED",
+    ):
         assert word not in glue, word
     assert "fmi2" not in model
 
@@ -177,9 +231,23 @@ def test_a_c_host_runs_it_with_a_clean_environment(native, host, tmp_path):
     """dlopen and the FMI calls from a C program: no Python, no preload, no paths."""
     md = read_model_description(str(native))
     names = ["alpha0", "beta2", "bob2_x", "energy"]
-    run = subprocess.run([str(host), str(library(native, tmp_path)), md.guid, "10", repr(1 / 60), "1",
-                          ",".join(map(str, vrs(native, names))), "--", f"{vrs(native, ['l0'])[0]}=8"],
-                         capture_output=True, text=True, env={}, check=True)
+    run = subprocess.run(
+        [
+            str(host),
+            str(library(native, tmp_path)),
+            md.guid,
+            "10",
+            repr(1 / 60),
+            "1",
+            ",".join(map(str, vrs(native, names))),
+            "--",
+            f"{vrs(native, ['l0'])[0]}=8",
+        ],
+        capture_output=True,
+        text=True,
+        env={},
+        check=True,
+    )
     rows = np.array([[float(x) for x in line.split(",")] for line in run.stdout.split()])
     ours = run_fmu(native, stop_time=10.0, start_values={"l0": 8.0})
     assert rows.shape == (601, 1 + len(names))
@@ -190,9 +258,25 @@ def test_a_c_host_runs_it_with_a_clean_environment(native, host, tmp_path):
 def test_two_instances_side_by_side_keep_their_own_parameters(native, host, tmp_path):
     md = read_model_description(str(native))
     l0, alpha0 = vrs(native, ["l0", "alpha0"])
-    run = subprocess.run([str(host), str(library(native, tmp_path)), md.guid, "3", "0.05", "1",
-                          str(alpha0), "--", f"{l0}=5", "--", f"{l0}=12"],
-                         capture_output=True, text=True, env={}, check=True)
+    run = subprocess.run(
+        [
+            str(host),
+            str(library(native, tmp_path)),
+            md.guid,
+            "3",
+            "0.05",
+            "1",
+            str(alpha0),
+            "--",
+            f"{l0}=5",
+            "--",
+            f"{l0}=12",
+        ],
+        capture_output=True,
+        text=True,
+        env={},
+        check=True,
+    )
     rows = np.array([[float(x) for x in line.split(",")] for line in run.stdout.split()])
     for column, length in ((1, 5.0), (2, 12.0)):
         alone = run_fmu(native, stop_time=3.0, output_interval=0.05, start_values={"l0": length})
@@ -210,29 +294,65 @@ def test_ecos_command_line_engine_runs_it_with_a_clean_environment(native, tmp_p
     ecos.chmod(0o755)
     tbb = Path(sys.prefix) / "lib"  # ecos' own dependency, libtbb, from the tbb wheel
     step = 1 / 600
-    run = subprocess.run([str(ecos), "simulate", "--path", str(native), "--stopTime", "10",
-                          "--stepSize", repr(step), "--noParallel", "-l", "warn"], cwd=tmp_path,
-                         check=False, capture_output=True, text=True, env={"LD_LIBRARY_PATH": str(tbb)}, timeout=300)
+    run = subprocess.run(
+        [
+            str(ecos),
+            "simulate",
+            "--path",
+            str(native),
+            "--stopTime",
+            "10",
+            "--stepSize",
+            repr(step),
+            "--noParallel",
+            "-l",
+            "warn",
+        ],
+        cwd=tmp_path,
+        check=False,
+        capture_output=True,
+        text=True,
+        env={"LD_LIBRARY_PATH": str(tbb)},
+        timeout=300,
+    )
     assert run.returncode == 0, run.stdout + run.stderr
-    table = np.genfromtxt(next(tmp_path.glob("*.csv")), delimiter=",", names=True, deletechars="",
-                          autostrip=True)
+    table = np.genfromtxt(
+        next(tmp_path.glob("*.csv")), delimiter=",", names=True, deletechars="", autostrip=True
+    )
     columns = {name.split("::")[-1].split("[")[0]: name for name in table.dtype.names}
     ours = run_fmu(native, stop_time=10.0, output_interval=step)
     assert len(table) == 6000  # ecos writes the points before each of its 6000 steps
     np.testing.assert_allclose(table["time"], ours["time"][:6000], rtol=0, atol=1e-5)
     for name in ("alpha0", "bob2_x", "energy"):  # ecos writes six decimals
-        np.testing.assert_allclose(table[columns[name]], ours[name][:6000], rtol=1e-6, atol=1e-6,
-                                   err_msg=name)
+        np.testing.assert_allclose(
+            table[columns[name]], ours[name][:6000], rtol=1e-6, atol=1e-6, err_msg=name
+        )
 
 
 def test_a_thousand_cycles_under_valgrind(native, host, tmp_path):
     require_tool("valgrind", None, "Debian's valgrind (.ci/run installs it)")
     md = read_model_description(str(native))
-    run = subprocess.run(["valgrind", "--error-exitcode=3", "--leak-check=full",
-                          "--errors-for-leak-kinds=definite,indirect,possible", "--quiet",
-                          str(host), str(library(native, tmp_path)), md.guid, "1", repr(1 / 60),
-                          "1000", ",".join(map(str, vrs(native, ["alpha0", "energy"])))],
-                         check=False, capture_output=True, text=True, env={}, timeout=1200)
+    run = subprocess.run(
+        [
+            "valgrind",
+            "--error-exitcode=3",
+            "--leak-check=full",
+            "--errors-for-leak-kinds=definite,indirect,possible",
+            "--quiet",
+            str(host),
+            str(library(native, tmp_path)),
+            md.guid,
+            "1",
+            repr(1 / 60),
+            "1000",
+            ",".join(map(str, vrs(native, ["alpha0", "energy"]))),
+        ],
+        check=False,
+        capture_output=True,
+        text=True,
+        env={},
+        timeout=1200,
+    )
     assert run.returncode == 0, run.stderr[-3000:]
     assert len(run.stdout.split()) == 61
 
@@ -266,9 +386,13 @@ def test_fmu_state_get_set_and_serialize_replay_bit_for_bit(native):
     other.close()
 
 
-@pytest.mark.parametrize("name, value, message", BAD_VALUES + [
-    ("solver", 3, "solver = 3: choose 0 to 2 (0 = rk4, 1 = rk45, 2 = dop853); Radau needs"),
-])
+@pytest.mark.parametrize(
+    "name, value, message",
+    BAD_VALUES
+    + [
+        ("solver", 3, "solver = 3: choose 0 to 2 (0 = rk4, 1 = rk45, 2 = dop853); Radau needs"),
+    ],
+)
 def test_a_bad_value_is_an_error_and_the_instance_goes_on(native, name, value, message):
     fmu = Instance(native, initialize=False)
     with pytest.raises(FMICallException) as failure:
@@ -289,9 +413,13 @@ def test_wrong_references_and_states_are_errors_not_crashes(native):
     fmu = Instance(native, initialize=False)
     fmu.fmu.setupExperiment(startTime=0.0)
     fmu.fmu.enterInitializationMode()  # where getters are allowed (tests/test_state_machine.py)
-    for call in (lambda: fmu.fmu.getReal([10_000]), lambda: fmu.fmu.setInteger([0], [1]),
-                 lambda: fmu.fmu.doStep(0.0, 0.1), lambda: fmu.fmu.getBoolean([0]),
-                 lambda: fmu.fmu.fmi2GetReal(fmu.fmu.component, None, 1, None)):  # null pointers
+    for call in (
+        lambda: fmu.fmu.getReal([10_000]),
+        lambda: fmu.fmu.setInteger([0], [1]),
+        lambda: fmu.fmu.doStep(0.0, 0.1),
+        lambda: fmu.fmu.getBoolean([0]),
+        lambda: fmu.fmu.fmi2GetReal(fmu.fmu.component, None, 1, None),
+    ):  # null pointers
         with pytest.raises(FMICallException) as failure:
             call()
         assert failure.value.status == 3
@@ -328,31 +456,63 @@ def test_a_failed_step_is_discarded_with_the_diagnosis_and_reset_goes_on(tmp_pat
 def test_the_windows_binary_runs_under_wine(tmp_path, host):
     """binaries/win64 cross-compiled with Debian's mingw-w64, run by the same C host built
     for Windows, under Debian's wine64; it agrees with the Linux binary."""
-    compiler = require_tool("x86_64-w64-mingw32-gcc", None, "Debian's gcc-mingw-w64-x86-64 (.ci/run installs it)")
+    compiler = require_tool(
+        "x86_64-w64-mingw32-gcc", None, "Debian's gcc-mingw-w64-x86-64 (.ci/run installs it)"
+    )
     wine = require_tool("wine64", "/usr/lib/wine/wine64", "Debian's wine64 (.ci/run installs it)")
-    both = build_fmu(SCENES["seed"], tmp_path / "Both.fmu", backend="native",
-                     platforms=("linux64", "win64")).path
+    both = build_fmu(
+        SCENES["seed"], tmp_path / "Both.fmu", backend="native", platforms=("linux64", "win64")
+    ).path
     assert validate_fmu(str(both)) == []
     folder = unzipped(both, tmp_path / "fmu")
     dll = folder / "binaries" / "win64" / "ConicalPendulum.dll"
-    objdump = subprocess.run(["x86_64-w64-mingw32-objdump", "-p", str(dll)], capture_output=True,
-                             text=True, check=True).stdout
+    objdump = subprocess.run(
+        ["x86_64-w64-mingw32-objdump", "-p", str(dll)], capture_output=True, text=True, check=True
+    ).stdout
     assert {line.split(":")[1].strip() for line in objdump.splitlines() if "DLL Name" in line} == {
-        "KERNEL32.dll", "msvcrt.dll"}
+        "KERNEL32.dll",
+        "msvcrt.dll",
+    }
     exe = tmp_path / "fmi_host.exe"
-    subprocess.run([compiler, "-std=c99", "-O1", "-Wall", "-Werror", f"-I{fmi_headers()}",
-                    str(HOST_SOURCE), "-o", str(exe), "-static-libgcc"], check=True)
+    subprocess.run(
+        [
+            compiler,
+            "-std=c99",
+            "-O1",
+            "-Wall",
+            "-Werror",
+            f"-I{fmi_headers()}",
+            str(HOST_SOURCE),
+            "-o",
+            str(exe),
+            "-static-libgcc",
+        ],
+        check=True,
+    )
     shutil.copy2(dll, tmp_path / dll.name)
     guid = read_model_description(str(both)).guid
     outputs = ",".join(map(str, vrs(both, ["alpha0", "bob2_x", "energy"])))
     args = [guid, "10", repr(1 / 60), "1", outputs, "--", f"{vrs(both, ['l0'])[0]}=8"]
-    windows = subprocess.run([wine, str(exe), dll.name, *args], cwd=tmp_path, check=False, capture_output=True,
-                             text=True, timeout=600, env={"WINEDEBUG": "-all", "HOME": str(tmp_path),
-                                                          "WINEPREFIX": str(tmp_path / "wine")})
+    windows = subprocess.run(
+        [wine, str(exe), dll.name, *args],
+        cwd=tmp_path,
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env={"WINEDEBUG": "-all", "HOME": str(tmp_path), "WINEPREFIX": str(tmp_path / "wine")},
+    )
     assert windows.returncode == 0, windows.stderr[-2000:]
-    linux = subprocess.run([str(host), str(folder / "binaries" / "linux64" / "ConicalPendulum.so"),
-                            *args], capture_output=True, text=True, env={}, check=True)
-    rows = [np.array([[float(x) for x in line.split(",")] for line in run.stdout.split()])
-            for run in (windows, linux)]
+    linux = subprocess.run(
+        [str(host), str(folder / "binaries" / "linux64" / "ConicalPendulum.so"), *args],
+        capture_output=True,
+        text=True,
+        env={},
+        check=True,
+    )
+    rows = [
+        np.array([[float(x) for x in line.split(",")] for line in run.stdout.split()])
+        for run in (windows, linux)
+    ]
     assert rows[0].shape == rows[1].shape == (601, 4)
     np.testing.assert_allclose(rows[0], rows[1], rtol=1e-12, atol=1e-12)  # libm differs, not the C

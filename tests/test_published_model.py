@@ -1,4 +1,5 @@
 """kinematics="pydy-example" reproduces the seed's own pipeline, number for number."""
+
 import numpy as np
 
 from conical_pendulum import Scene

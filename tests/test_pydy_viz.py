@@ -1,4 +1,5 @@
 """pydy.viz's page (the seed's viewer) fed with the FMU's trajectories."""
+
 import json
 
 import numpy as np
@@ -11,8 +12,9 @@ from required_tools import require_tool
 
 
 def test_the_page_carries_the_fmu_trajectories(seed_fmu, tmp_path):
-    run = run_fmu(seed_fmu, stop_time=1.0, output_interval=1 / 60,
-                  start_values={"alpha0": 1.0, "delta2": 2.0})
+    run = run_fmu(
+        seed_fmu, stop_time=1.0, output_interval=1 / 60, start_values={"alpha0": 1.0, "delta2": 2.0}
+    )
     results = {name: run[name] for name in run.dtype.names}
     folder, address = write_pydy_page(Scene.uniform(3), results, tmp_path)
     assert (folder / "index.html").exists() and address.endswith(f"?load={PREFIX}_scene_desc.json")
@@ -29,8 +31,9 @@ def test_the_page_carries_the_fmu_trajectories(seed_fmu, tmp_path):
         where = np.column_stack([run[f"{name}_{c}"] for c in "xyz"])
         np.testing.assert_allclose(matrices[:, 12:15], where, rtol=0, atol=1e-9)
         rotation = matrices[:, [0, 1, 2, 4, 5, 6, 8, 9, 10]].reshape(-1, 3, 3)
-        np.testing.assert_allclose(rotation @ rotation.transpose(0, 2, 1),
-                                   np.broadcast_to(np.eye(3), rotation.shape), atol=1e-12)
+        np.testing.assert_allclose(
+            rotation @ rotation.transpose(0, 2, 1), np.broadcast_to(np.eye(3), rotation.shape), atol=1e-12
+        )
 
 
 def test_a_scene_without_bobs_draws_only_links(seed_fmu, tmp_path, fmu_dir):
@@ -75,10 +78,20 @@ def test_the_page_plays_in_headless_chromium(seed_fmu, tmp_path):
     threading.Thread(target=server.serve_forever, daemon=True).start()
     options = webdriver.ChromeOptions()
     options.binary_location = browser
-    for flag in ["--headless=new", "--no-sandbox", "--disable-gpu", "--use-gl=swiftshader",
-                 "--enable-unsafe-swiftshader", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                 "--window-size=1000,800", f"--user-data-dir={tmp_path / 'profile'}"]:
+    for flag in [
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--use-gl=swiftshader",
+        "--enable-unsafe-swiftshader",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--window-size=1000,800",
+        f"--user-data-dir={tmp_path / 'profile'}",
+    ]:
         options.add_argument(flag)
     options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
     driver = webdriver.Chrome(service=Service(driver_path), options=options)
@@ -95,22 +108,29 @@ def test_the_page_plays_in_headless_chromium(seed_fmu, tmp_path):
         assert canvas is not None, "pydy never loaded the simulation data"
         shot = tmp_path / "page.png"
         driver.save_screenshot(str(shot))
-        errors = [entry["message"] for entry in driver.get_log("browser")
-                  if entry["level"] == "SEVERE" and not any(
-                      benign in entry["message"] for benign in ("favicon.ico", "/fonts/"))]
+        errors = [
+            entry["message"]
+            for entry in driver.get_log("browser")
+            if entry["level"] == "SEVERE"
+            and not any(benign in entry["message"] for benign in ("favicon.ico", "/fonts/"))
+        ]
         box = canvas.rect
     finally:
         driver.quit()
         server.shutdown()
     assert errors == []
     pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=int)
-    inside = pixels[int(box["y"]):int(box["y"] + box["height"]), int(box["x"]):int(box["x"] + box["width"])]
+    inside = pixels[
+        int(box["y"]) : int(box["y"] + box["height"]), int(box["x"]) : int(box["x"] + box["width"])
+    ]
     # pydy's Lambert shading draws links in shades of pure red (k, 0, 0) and bobs in shades
     # of pure blue (0, 0, k) on a grey (155, 155, 151) background. The axes' 1-pixel lines
     # (red to orange along x, from the pivot to beyond the canvas) go with an opening.
     r, g, b = np.moveaxis(inside, -1, 0)
-    for colour, mask, count, smallest in [("red", r - np.maximum(g, b) > 50, 3, 60),
-                                          ("blue", b - np.maximum(r, g) > 50, 3, 30)]:
+    for colour, mask, count, smallest in [
+        ("red", r - np.maximum(g, b) > 50, 3, 60),
+        ("blue", b - np.maximum(r, g) > 50, 3, 30),
+    ]:
         labels, found = ndimage.label(ndimage.binary_opening(mask, np.ones((3, 3))))
         assert found == count, f"{found} {colour} blobs, expected {count}"  # each apart, none hidden
         for where in ndimage.find_objects(labels):

@@ -1,4 +1,5 @@
 """require_tool: a missing tool skips a test with a reason, except under CI=true, where it fails it."""
+
 import sys
 
 import pytest

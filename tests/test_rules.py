@@ -3,6 +3,7 @@
 The slave is an ordinary module: these tests instantiate it in this process on the
 resources of a built FMU, as pythonfmu would, and call its FMI methods directly.
 """
+
 import math
 import zipfile
 
@@ -63,9 +64,15 @@ def test_native_reference_slave_and_scene_refuse_the_same_values(resources):
         is_parameter = name in SCENE.core_parameter_names()
         for value in VALUES:
             given = {name: value}
-            native = refusal(lambda: simulate(
-                SCENE, [0.0], method="core", parameters=given if is_parameter else None,
-                state=None if is_parameter else given))
+            native = refusal(
+                lambda: simulate(
+                    SCENE,
+                    [0.0],
+                    method="core",
+                    parameters=given if is_parameter else None,
+                    state=None if is_parameter else given,
+                )
+            )
             fmu = refusal(lambda: slave.set_real([vr[name]], [value]))
             assert native == fmu, (name, value)
             if name in SCENE.parameter_names():
@@ -74,9 +81,16 @@ def test_native_reference_slave_and_scene_refuse_the_same_values(resources):
     assert checked >= 2 * len(SCENE.core_parameter_names() + SCENE.state_names())  # nan, inf at least
 
 
-@pytest.mark.parametrize("name, bad, good", [("rtol", 0.0, 1e-6), ("atol", -1.0, 1e-9),
-                                             ("max_step", -0.1, 0.0), ("solver", 4, 0),
-                                             ("max_steps", 0, 1)])
+@pytest.mark.parametrize(
+    "name, bad, good",
+    [
+        ("rtol", 0.0, 1e-6),
+        ("atol", -1.0, 1e-9),
+        ("max_step", -0.1, 0.0),
+        ("solver", 4, 0),
+        ("max_steps", 0, 1),
+    ],
+)
 def test_the_slave_refuses_settings_by_their_rules(resources, name, bad, good):
     slave = ConicalPendulum(instance_name="settings", resources=resources)
     variable = next(v for v in slave.vars.values() if v.name == name)
@@ -104,9 +118,13 @@ def test_the_core_the_slave_and_the_scene_name_the_same_things(resources):
     assert model["settings"] == {name: setting.default for name, setting in SETTINGS.items()}
     slave = ConicalPendulum(instance_name="names", resources=resources)
     assert [v.name for v in slave.vars.values()] == (
-        SCENE.core_parameter_names() + SCENE.state_names() + SCENE.output_names()
-        + list(STATISTICS) + [n for n, s in SETTINGS.items() if not s.integer]
-        + [n for n, s in SETTINGS.items() if s.integer])
+        SCENE.core_parameter_names()
+        + SCENE.state_names()
+        + SCENE.output_names()
+        + list(STATISTICS)
+        + [n for n, s in SETTINGS.items() if not s.integer]
+        + [n for n, s in SETTINGS.items() if s.integer]
+    )
 
 
 def test_the_slave_steps_in_process_as_it_does_in_fmpy(coupled_fmu, resources):

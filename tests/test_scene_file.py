@@ -1,4 +1,5 @@
 """Scene files: what a user writes decides the equations, the variables and their start values."""
+
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
@@ -44,33 +45,39 @@ radius = 0.1
 inertia = [0.07, 0.015, 0.07]
 """)
     scene = load_scene(path)
-    assert scene.links == (Link(has_mass=False, length=2.0, bob_mass=1.5),
-                           Link(has_bob=False, length=0.5, mass=3.0, radius=0.1,
-                                moments=(0.07, 0.015, 0.07)))
+    assert scene.links == (
+        Link(has_mass=False, length=2.0, bob_mass=1.5),
+        Link(has_bob=False, length=0.5, mass=3.0, radius=0.1, moments=(0.07, 0.015, 0.07)),
+    )
     built = variables(build_fmu(scene, fmu_dir / "FromFile.fmu").path)
     assert {"M0", "Ixx0", "m1", "bob0_x", "link0_qw"}.isdisjoint(built)
-    starts = {name: float(built[name].find("Real").get("start"))
-              for name in ["l0", "m0", "l1", "M1", "Ixx1", "Iyy1", "g"]}
+    starts = {
+        name: float(built[name].find("Real").get("start"))
+        for name in ["l0", "m0", "l1", "M1", "Ixx1", "Iyy1", "g"]
+    }
     assert starts == {"l0": 2.0, "m0": 1.5, "l1": 0.5, "M1": 3.0, "Ixx1": 0.07, "Iyy1": 0.015, "g": 3.7}
     assert built["energy"].get("causality") == "output"
     assert built["a_pivot_y"].get("causality") == "input" and "F_pivot_y" in built
 
 
-@pytest.mark.parametrize("text, message", [
-    ("", "link: give one [[link]] table per link"),
-    ("[[link]]\nlenght = 3.0", "link[0]: unknown field(s) ['lenght']"),
-    ("[[link]]\nlength = -3.0", "link[0].length: must be a positive finite number, got -3.0"),
-    ("[[link]]\nmass = -1", "link[0].mass: must be a positive finite number (or 0 for a massless link"),
-    ("[[link]]\nbob = { mass = 0 }", "link[0].bob.mass: must be a positive finite number, got 0"),
-    ("[[link]]\nbob = 5.0", "link[0].bob: expected a table"),
-    ("[[link]]\ninertia = [1.0, -2.0, 1.0]", "link[0].inertia: must be three finite numbers >= 0"),
-    ("[[link]]\nmass = 0", "scene has no mass"),
-    ('kinematics = "seed"\n[[link]]', "kinematics: 'seed' is not one of"),
-    ('outputs = ["bobz"]\n[[link]]', "outputs: unknown group(s) ['bobz']"),
-    ('gravity = "down"\n[[link]]', "gravity: expected a number"),
-    ('coupling = "yes"\n[[link]]', "coupling: expected true or false, got 'yes'"),
-    ("[[link]\nlength = 1", "Expected ']]' at the end of an array declaration (at line 1"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("", "link: give one [[link]] table per link"),
+        ("[[link]]\nlenght = 3.0", "link[0]: unknown field(s) ['lenght']"),
+        ("[[link]]\nlength = -3.0", "link[0].length: must be a positive finite number, got -3.0"),
+        ("[[link]]\nmass = -1", "link[0].mass: must be a positive finite number (or 0 for a massless link"),
+        ("[[link]]\nbob = { mass = 0 }", "link[0].bob.mass: must be a positive finite number, got 0"),
+        ("[[link]]\nbob = 5.0", "link[0].bob: expected a table"),
+        ("[[link]]\ninertia = [1.0, -2.0, 1.0]", "link[0].inertia: must be three finite numbers >= 0"),
+        ("[[link]]\nmass = 0", "scene has no mass"),
+        ('kinematics = "seed"\n[[link]]', "kinematics: 'seed' is not one of"),
+        ('outputs = ["bobz"]\n[[link]]', "outputs: unknown group(s) ['bobz']"),
+        ('gravity = "down"\n[[link]]', "gravity: expected a number"),
+        ('coupling = "yes"\n[[link]]', "coupling: expected true or false, got 'yes'"),
+        ("[[link]\nlength = 1", "Expected ']]' at the end of an array declaration (at line 1"),
+    ],
+)
 def test_a_bad_scene_file_names_the_field(tmp_path, text, message):
     path = tmp_path / "bad.toml"
     path.write_text(text)

@@ -8,6 +8,7 @@ from the tolerance), or it is discarded with a diagnosis and the state kept. Nev
 success with a state that did not move, never more internal steps in one doStep than
 `max_steps`, and every case within a time bound.
 """
+
 import math
 import time
 from collections import Counter
@@ -24,11 +25,16 @@ from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.runtime.rules import NATIVE_SOLVERS, SOLVERS
 
 SEED = Scene.uniform(3)
-STEPS = (1e-9, 1e-6, 0.01, 1.0, 100.0)                  # communication steps [s]
+STEPS = (1e-9, 1e-6, 0.01, 1.0, 100.0)  # communication steps [s]
 MAX_STEPS = (1, 10, 10**6)
-CASE_SECONDS = 60.0      # a hang detector: the slowest case (Radau, 1e5 steps) takes about 20 s
-DIAGNOSES = ("too many steps", "step size underflow", "max_step below the resolution of time",
-             "non-finite acceleration", "singular mass matrix")
+CASE_SECONDS = 60.0  # a hang detector: the slowest case (Radau, 1e5 steps) takes about 20 s
+DIAGNOSES = (
+    "too many steps",
+    "step size underflow",
+    "max_step below the resolution of time",
+    "non-finite acceleration",
+    "singular mass matrix",
+)
 
 
 def steps_per_case(h):
@@ -39,8 +45,13 @@ def max_step_values(h):
     return (0.0, 1e-300, 1e-20, 1e-9, 1e-3, h / 3, h, 10 * h)
 
 
-CASES = [(solver, max_step, max_steps, h) for solver in range(len(SOLVERS)) for h in STEPS
-         for max_step in max_step_values(h) for max_steps in MAX_STEPS]
+CASES = [
+    (solver, max_step, max_steps, h)
+    for solver in range(len(SOLVERS))
+    for h in STEPS
+    for max_step in max_step_values(h)
+    for max_steps in MAX_STEPS
+]
 
 
 @pytest.fixture(scope="module")
@@ -58,8 +69,12 @@ class Lattice:
         self.counters = [self.vr["n_steps"], self.vr["n_rejected"]]
         self.messages = []
         self._callbacks = logging_callbacks(lambda status, text: self.messages.append(text))
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(path)),
-                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName="case")
+        self.fmu = FMU2Slave(
+            guid=md.guid,
+            unzipDirectory=extract(str(path)),
+            modelIdentifier=md.coSimulation.modelIdentifier,
+            instanceName="case",
+        )
 
     def run(self, solver, max_step, max_steps, h, rtol=1e-8, atol=1e-8):
         """(outcome, state at the last good point, its time, the message, attempts per step)."""
@@ -67,8 +82,7 @@ class Lattice:
         fmu.instantiate(callbacks=self._callbacks, loggingOn=True)  # pythonfmu logs only then
         try:
             fmu.setInteger([self.vr["solver"], self.vr["max_steps"]], [solver, max_steps])
-            fmu.setReal([self.vr[name] for name in ("max_step", "rtol", "atol")],
-                        [max_step, rtol, atol])
+            fmu.setReal([self.vr[name] for name in ("max_step", "rtol", "atol")], [max_step, rtol, atol])
             fmu.setupExperiment(startTime=0.0)
             fmu.enterInitializationMode()
             fmu.exitInitializationMode()
@@ -158,8 +172,9 @@ def test_every_setting_is_honoured_or_the_step_discarded(request, core, backend)
             check_completed(core, solver, max_step, h, t, state)
         counts[outcome] += 1
     lattice.close()
-    print(f"\n{backend}: {sum(counts.values())} cases, {dict(counts)}; slowest {slowest[0]:.2f} s "
-          f"{slowest[1]}")
+    print(
+        f"\n{backend}: {sum(counts.values())} cases, {dict(counts)}; slowest {slowest[0]:.2f} s {slowest[1]}"
+    )
     assert counts["completed"] and counts["discarded"]
 
 
@@ -169,8 +184,11 @@ def test_every_tolerance_is_met_or_the_step_discarded(request, core, backend):
     to 10: the adaptive solvers meet them, or discard the step with the diagnosis."""
     path = request.getfixturevalue("seed_fmu" if backend == "pythonfmu" else "native_seed_fmu")
     lattice = Lattice(path)
-    adaptive = [k for k, name in enumerate(SOLVERS)
-                if name != "rk4" and (backend == "pythonfmu" or name in NATIVE_SOLVERS)]
+    adaptive = [
+        k
+        for k, name in enumerate(SOLVERS)
+        if name != "rk4" and (backend == "pythonfmu" or name in NATIVE_SOLVERS)
+    ]
     counts = Counter()
     for solver in adaptive:
         for rtol in (2.3e-14, 1e-9, 1e-3, 10.0):
@@ -180,9 +198,9 @@ def test_every_tolerance_is_met_or_the_step_discarded(request, core, backend):
                         case = (SOLVERS[solver], rtol, atol, h, max_steps)
                         started = time.perf_counter()
                         outcome, state, t, message, attempts = lattice.run(
-                            solver, 0.0, max_steps, h, rtol, atol)
-                        check_case(case, outcome, message, attempts, max_steps,
-                                   time.perf_counter() - started)
+                            solver, 0.0, max_steps, h, rtol, atol
+                        )
+                        check_case(case, outcome, message, attempts, max_steps, time.perf_counter() - started)
                         if outcome == "completed":
                             check_completed(core, solver, 0.0, h, t, state, rtol, atol)
                         counts[outcome] += 1

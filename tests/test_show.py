@@ -1,4 +1,5 @@
 """Plots and the animation from an FMU run, as `conical-pendulum show` makes them."""
+
 import subprocess
 import sys
 from pathlib import Path
@@ -14,14 +15,21 @@ from conical_pendulum.analysis.fmpy_runs import run_fmu
 @pytest.fixture(scope="module")
 def results_csv(seed_fmu, tmp_path_factory):
     path = tmp_path_factory.mktemp("show") / "results.csv"
-    write_csv(str(path), run_fmu(seed_fmu, stop_time=1.0, output_interval=1 / 60,
-                                 start_values={"alpha0": 1.0, "delta2": 2.0}))
+    write_csv(
+        str(path),
+        run_fmu(seed_fmu, stop_time=1.0, output_interval=1 / 60, start_values={"alpha0": 1.0, "delta2": 2.0}),
+    )
     return path
 
 
 def show(*args):
-    return subprocess.run([str(Path(sys.executable).with_name("conical-pendulum")), "show", *map(str, args)],
-                          check=False, capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [str(Path(sys.executable).with_name("conical-pendulum")), "show", *map(str, args)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_plot_and_animation(results_csv, tmp_path):
@@ -41,10 +49,13 @@ def test_plot_and_animation(results_csv, tmp_path):
     assert np.abs(frames[0] - frames[1]).mean() > 0.1  # the chain moved
 
 
-@pytest.mark.parametrize("args, message", [
-    (["missing.csv", "--plot", "x.png"], "missing.csv"),
-    (["RESULTS"], "give --plot and/or --gif"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["missing.csv", "--plot", "x.png"], "missing.csv"),
+        (["RESULTS"], "give --plot and/or --gif"),
+    ],
+)
 def test_refusals(results_csv, args, message):
     run = show(*[results_csv if a == "RESULTS" else a for a in args])
     assert run.returncode == 2
@@ -56,8 +67,10 @@ def test_refusals(results_csv, args, message):
 def test_results_without_positions_give_what_they_can_and_say_what_they_left_out(tmp_path, seed_fmu):
     """Angles only: the plot of the angles, without paths and energy drift, and no animation."""
     path = tmp_path / "state.csv"
-    write_csv(str(path), run_fmu(seed_fmu, stop_time=0.1, output=["alpha0", "beta0", "alpha1",
-                                                                    "beta1", "alpha2", "beta2"]))
+    write_csv(
+        str(path),
+        run_fmu(seed_fmu, stop_time=0.1, output=["alpha0", "beta0", "alpha1", "beta1", "alpha2", "beta2"]),
+    )
     png, gif = tmp_path / "p.png", tmp_path / "p.gif"
     run = show(path, "--plot", png, "--gif", gif)
     assert run.returncode == 0, run.stderr
@@ -65,7 +78,8 @@ def test_results_without_positions_give_what_they_can_and_say_what_they_left_out
         f"wrote {png}",
         "left out the paths and the animation: the results have neither link poses (link<i>_x/y/z, "
         "the scene's output 'poses') nor a bob on every link (bob<i>_x/y/z); "
-        "the energy drift: the results have no energy output"]
+        "the energy drift: the results have no energy output",
+    ]
     assert np.asarray(Image.open(png).convert("L")).std() > 10 and not gif.exists()
     assert run.stderr == ""
     run = show(path, "--gif", gif)  # what is left out is only what was asked for

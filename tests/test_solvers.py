@@ -1,4 +1,5 @@
 """The compiled core's solvers against scipy's implementations of the same methods."""
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -16,14 +17,20 @@ def core():
 
 def stepper(core, state=None):
     values = np.zeros(core.NSTATE + core.NOUTPUT)
-    values[:core.NSTATE] = SCENE.initial_state(state)
+    values[: core.NSTATE] = SCENE.initial_state(state)
     return core.Stepper(np.array(SCENE.parameters()), values), values
 
 
 def reference(core, t_end, state=None):
     p = np.array(SCENE.parameters())
-    sol = solve_ivp(lambda t, x: core.rhs(x, p), (0.0, t_end), SCENE.initial_state(state),
-                    method="DOP853", rtol=1e-13, atol=1e-13)
+    sol = solve_ivp(
+        lambda t, x: core.rhs(x, p),
+        (0.0, t_end),
+        SCENE.initial_state(state),
+        method="DOP853",
+        rtol=1e-13,
+        atol=1e-13,
+    )
     return sol.y[:, -1]
 
 
@@ -36,14 +43,20 @@ def test_adaptive_pairs_step_as_scipy_does(core, method, scipy_name, tol):
     status = run.step(core.METHODS[method], 0.0, 10.0, tol, tol, 0.0, 10**7)
     assert status == 0
     p = np.array(SCENE.parameters())
-    sol = solve_ivp(lambda t, x: core.rhs(x, p), (0.0, 10.0), SCENE.initial_state(state),
-                    method=scipy_name, rtol=tol, atol=tol)
+    sol = solve_ivp(
+        lambda t, x: core.rhs(x, p),
+        (0.0, 10.0),
+        SCENE.initial_state(state),
+        method=scipy_name,
+        rtol=tol,
+        atol=tol,
+    )
     assert run.naccept == len(sol.t) - 1
     assert run.nfev == sol.nfev
     assert abs(run.naccept + run.nreject - (sol.nfev - 2) / (6 if method == "rk45" else 12)) < 1e-9
-    np.testing.assert_allclose(values[:core.NSTATE], sol.y[:, -1], rtol=0, atol=tol)
+    np.testing.assert_allclose(values[: core.NSTATE], sol.y[:, -1], rtol=0, atol=tol)
     # and the answer is as good as the tolerance asks, relative to a tight reference
-    error = np.abs(values[:core.NSTATE] - reference(core, 10.0, state)).max()
+    error = np.abs(values[: core.NSTATE] - reference(core, 10.0, state)).max()
     assert error < 2e3 * tol
 
 
@@ -54,7 +67,7 @@ def test_rk4_is_fourth_order(core):
         run, values = stepper(core)
         assert run.step(core.METHODS["rk4"], 0.0, 2.0, 1.0, 1.0, max_step, 10**7) == 0
         assert run.naccept == round(2.0 / max_step)
-        errors.append(np.abs(values[:core.NSTATE] - exact).max())
+        errors.append(np.abs(values[: core.NSTATE] - exact).max())
     assert 14 < errors[0] / errors[1] < 18  # 2^4 = 16
 
 
@@ -105,8 +118,9 @@ def test_dense_output_grid_equals_scipy_dop853_with_t_eval(core, tol):
     x0 = SCENE.initial_state({"alpha2": 1.2})
     p = np.array(SCENE.parameters())
     states, nfev = core.integrate_grid(x0, p, times, tol, tol)
-    sol = solve_ivp(lambda t, x: core.rhs(x, p), (0.0, 10.0), x0, method="DOP853", t_eval=times,
-                    rtol=tol, atol=tol)
+    sol = solve_ivp(
+        lambda t, x: core.rhs(x, p), (0.0, 10.0), x0, method="DOP853", t_eval=times, rtol=tol, atol=tol
+    )
     assert nfev == sol.nfev
     np.testing.assert_allclose(states, sol.y.T, rtol=0, atol=tol)
     exact = reference(core, 10.0, {"alpha2": 1.2})

@@ -2,6 +2,7 @@
 be in, for Co-Simulation and Model Exchange, against the standard's tables written out below
 (independently of fmi2_glue.c's); and fmi2SetDebugLogging with the model description's log
 categories."""
+
 import shutil
 import xml.etree.ElementTree as ET
 import zipfile
@@ -122,8 +123,10 @@ fmi2GetNominalsOfContinuousStates  x            x               x           x   
 # 1, 2 and 3 as there, 4 an input or tunable parameter, 5 a continuous input or a
 # continuous-time state (a_pivot_x), 8 "only for a Pure Discrete-Time FMU": this FMU has
 # continuous states, so fmi2SetTime in eventMode is not allowed.
-CONDITIONS = {CO_SIMULATION: {"1": True, "2": True, "3": True, "6": True, "8": True},
-              MODEL_EXCHANGE: {"1": True, "2": True, "3": True, "4": True, "5": True, "8": False}}
+CONDITIONS = {
+    CO_SIMULATION: {"1": True, "2": True, "3": True, "6": True, "8": True},
+    MODEL_EXCHANGE: {"1": True, "2": True, "3": True, "4": True, "5": True, "8": False},
+}
 
 
 def parse(table, interface):
@@ -134,16 +137,19 @@ def parse(table, interface):
     for row in rows:
         function, *marks = row.split()
         assert len(marks) == len(states), function
-        allowed[function] = {state: mark == "x" or CONDITIONS[interface].get(mark, False)
-                             for state, mark in zip(states, marks)}
+        allowed[function] = {
+            state: mark == "x" or CONDITIONS[interface].get(mark, False) for state, mark in zip(states, marks)
+        }
     return states, allowed
 
 
 SCENE = Scene.uniform(3, coupling=True)  # inputs (a_pivot_*), so that conditions 4 to 6 can hold
 C = c_void_p
 SIGNATURES = {  # name: (result, argument types)
-    "fmi2Instantiate": (c_void_p, [c_char_p, c_int, c_char_p, c_char_p, POINTER(fmi2CallbackFunctions),
-                                   c_int, c_int]),
+    "fmi2Instantiate": (
+        c_void_p,
+        [c_char_p, c_int, c_char_p, c_char_p, POINTER(fmi2CallbackFunctions), c_int, c_int],
+    ),
     "fmi2FreeInstance": (None, [C]),
     "fmi2SetDebugLogging": (c_int, [C, c_int, c_size_t, POINTER(c_char_p)]),
     "fmi2SetupExperiment": (c_int, [C, c_int, c_double, c_double, c_int, c_double]),
@@ -165,8 +171,10 @@ SIGNATURES = {  # name: (result, argument types)
     "fmi2SerializedFMUstateSize": (c_int, [C, c_void_p, POINTER(c_size_t)]),
     "fmi2SerializeFMUstate": (c_int, [C, c_void_p, POINTER(c_char), c_size_t]),
     "fmi2DeSerializeFMUstate": (c_int, [C, POINTER(c_char), c_size_t, POINTER(c_void_p)]),
-    "fmi2GetDirectionalDerivative": (c_int, [C, POINTER(c_uint), c_size_t, POINTER(c_uint), c_size_t,
-                                             POINTER(c_double), POINTER(c_double)]),
+    "fmi2GetDirectionalDerivative": (
+        c_int,
+        [C, POINTER(c_uint), c_size_t, POINTER(c_uint), c_size_t, POINTER(c_double), POINTER(c_double)],
+    ),
     "fmi2EnterEventMode": (c_int, [C]),
     "fmi2NewDiscreteStates": (c_int, [C, POINTER(fmi2EventInfo)]),
     "fmi2EnterContinuousTimeMode": (c_int, [C]),
@@ -177,10 +185,11 @@ SIGNATURES = {  # name: (result, argument types)
     "fmi2GetContinuousStates": (c_int, [C, POINTER(c_double), c_size_t]),
     "fmi2GetDerivatives": (c_int, [C, POINTER(c_double), c_size_t]),
     "fmi2GetNominalsOfContinuousStates": (c_int, [C, POINTER(c_double), c_size_t]),
-    "fmi2SetRealInputDerivatives": (c_int, [C, POINTER(c_uint), c_size_t, POINTER(c_int),
-                                            POINTER(c_double)]),
-    "fmi2GetRealOutputDerivatives": (c_int, [C, POINTER(c_uint), c_size_t, POINTER(c_int),
-                                             POINTER(c_double)]),
+    "fmi2SetRealInputDerivatives": (c_int, [C, POINTER(c_uint), c_size_t, POINTER(c_int), POINTER(c_double)]),
+    "fmi2GetRealOutputDerivatives": (
+        c_int,
+        [C, POINTER(c_uint), c_size_t, POINTER(c_int), POINTER(c_double)],
+    ),
     "fmi2DoStep": (c_int, [C, c_double, c_double, c_int]),
     "fmi2CancelStep": (c_int, [C]),
     "fmi2GetStatus": (c_int, [C, c_int, POINTER(c_int)]),
@@ -215,7 +224,9 @@ class Binary:
         self.callbacks = fmi2CallbackFunctions()
         self.callbacks.logger = fmi2CallbackLoggerTYPE(
             lambda env, name, status, category, message: self.messages.append(
-                (status, category.decode(), message.decode())))
+                (status, category.decode(), message.decode())
+            )
+        )
         self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
 
@@ -289,6 +300,7 @@ def calls(fmu, interface, serialized):
             size = c_size_t()
             assert fmu.fmi2SerializedFMUstateSize(c, state, byref(size)) == OK
             return fmu.fmi2SerializeFMUstate(c, state, create_string_buffer(size.value), size.value)
+
         return with_state(c, action)
 
     def deserialize(c, _):
@@ -326,23 +338,28 @@ def calls(fmu, interface, serialized):
         "fmi2SerializeFMUstate": serialize,
         "fmi2DeSerializeFMUstate": deserialize,
         "fmi2GetDirectionalDerivative": lambda c, s: fmu.fmi2GetDirectionalDerivative(
-            c, reals("F_pivot_x"), 1, reals("alpha0"), 1, array(c_double, [1.0]), array(c_double, [0])),
+            c, reals("F_pivot_x"), 1, reals("alpha0"), 1, array(c_double, [1.0]), array(c_double, [0])
+        ),
         "fmi2EnterEventMode": lambda c, s: fmu.fmi2EnterEventMode(c),
         "fmi2NewDiscreteStates": lambda c, s: fmu.fmi2NewDiscreteStates(c, byref(fmi2EventInfo())),
         "fmi2EnterContinuousTimeMode": lambda c, s: fmu.fmi2EnterContinuousTimeMode(c),
         "fmi2CompletedIntegratorStep": lambda c, s: fmu.fmi2CompletedIntegratorStep(
-            c, 1, byref(flags[0]), byref(flags[1])),
+            c, 1, byref(flags[0]), byref(flags[1])
+        ),
         "fmi2SetTime": lambda c, s: fmu.fmi2SetTime(c, 0.0),
         "fmi2SetContinuousStates": lambda c, s: fmu.fmi2SetContinuousStates(c, x, nx),
         "fmi2GetEventIndicators": lambda c, s: fmu.fmi2GetEventIndicators(c, array(c_double, []), 0),
         "fmi2GetContinuousStates": lambda c, s: fmu.fmi2GetContinuousStates(c, array(c_double, [0] * nx), nx),
         "fmi2GetDerivatives": lambda c, s: fmu.fmi2GetDerivatives(c, array(c_double, [0] * nx), nx),
         "fmi2GetNominalsOfContinuousStates": lambda c, s: fmu.fmi2GetNominalsOfContinuousStates(
-            c, array(c_double, [0] * nx), nx),
+            c, array(c_double, [0] * nx), nx
+        ),
         "fmi2SetRealInputDerivatives": lambda c, s: fmu.fmi2SetRealInputDerivatives(
-            c, none, 0, array(c_int, []), array(c_double, [])),
+            c, none, 0, array(c_int, []), array(c_double, [])
+        ),
         "fmi2GetRealOutputDerivatives": lambda c, s: fmu.fmi2GetRealOutputDerivatives(
-            c, none, 0, array(c_int, []), array(c_double, [])),
+            c, none, 0, array(c_int, []), array(c_double, [])
+        ),
         "fmi2DoStep": lambda c, s: fmu.fmi2DoStep(c, 0.0, 0.01, 1),  # every instance here is at t = 0
         "fmi2CancelStep": lambda c, s: fmu.fmi2CancelStep(c),
         "fmi2GetStatus": lambda c, s: fmu.fmi2GetStatus(c, DO_STEP_STATUS, byref(c_int())),
@@ -367,8 +384,10 @@ def binary(native, tmp_path_factory):
 def test_every_function_in_every_state_as_the_standard_allows(binary):
     fmu, checked = binary, 0
     every_function = [name for name in SIGNATURES if name not in ("fmi2Instantiate", "fmi2FreeInstance")]
-    for interface, table, name in ((CO_SIMULATION, CO_SIMULATION_TABLE, "Co-Simulation"),
-                                   (MODEL_EXCHANGE, MODEL_EXCHANGE_TABLE, "Model Exchange")):
+    for interface, table, name in (
+        (CO_SIMULATION, CO_SIMULATION_TABLE, "Co-Simulation"),
+        (MODEL_EXCHANGE, MODEL_EXCHANGE_TABLE, "Model Exchange"),
+    ):
         states, allowed = parse(table, interface)
         c = fmu.instantiate(interface)
         serialized_state = saved_state(fmu, c)
@@ -419,6 +438,7 @@ def test_the_tables_cover_the_whole_api(binary):
 
 # ---- fmi2SetDebugLogging and the log categories --------------------------------------------
 
+
 def categories_declared(path):
     root = ET.fromstring(zipfile.ZipFile(path).read("modelDescription.xml"))
     return [c.get("name") for c in root.find("LogCategories")]
@@ -434,12 +454,18 @@ class Logged:
         self.callbacks = fmi2CallbackFunctions()
         self.callbacks.logger = fmi2CallbackLoggerTYPE(
             lambda env, name, status, category, message: self.messages.append(
-                (status, category.decode(), message.decode())))
+                (status, category.decode(), message.decode())
+            )
+        )
         self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         self.unzipped = extract(str(path))
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=self.unzipped,
-                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName="logged")
+        self.fmu = FMU2Slave(
+            guid=md.guid,
+            unzipDirectory=self.unzipped,
+            modelIdentifier=md.coSimulation.modelIdentifier,
+            instanceName="logged",
+        )
         self.fmu.instantiate(callbacks=self.callbacks, loggingOn=logging_on)
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.fmu.setInteger([self.vr["max_steps"]], [1])
@@ -476,7 +502,7 @@ def test_the_log_categories_are_written_once_and_the_glue_logs_in_no_other(nativ
     with zipfile.ZipFile(native) as archive:
         config = archive.read("sources/fmu_config.h").decode()
         glue = archive.read("sources/fmi2_glue.c").decode()
-    assert 'enum { CP_LOG_STATUS_ERROR, CP_LOG_STATUS_DISCARD, CP_NLOG };' in config
+    assert "enum { CP_LOG_STATUS_ERROR, CP_LOG_STATUS_DISCARD, CP_NLOG };" in config
     assert '{"logStatusError", "logStatusDiscard"}' in config
     assert "logStatus" not in glue  # categories by their constants only: a new one must be declared
 
@@ -492,9 +518,13 @@ def test_set_debug_logging_honours_the_declared_categories(native):
     with pytest.raises(FMICallException) as refused:
         fmu.fmu.setDebugLogging(True, ["logStatusError", "logEverything"])
     assert refused.value.status == ERROR
-    assert fmu.messages[-1] == (ERROR, "logStatusError", 'fmi2SetDebugLogging: log category '
-                                '"logEverything" is not this FMU\'s (its model description declares '
-                                'logStatusError, logStatusDiscard)')
+    assert fmu.messages[-1] == (
+        ERROR,
+        "logStatusError",
+        "fmi2SetDebugLogging: log category "
+        '"logEverything" is not this FMU\'s (its model description declares '
+        "logStatusError, logStatusDiscard)",
+    )
     assert fmu.logged() == both  # unchanged: logStatusDiscard alone is still on
     assert fmu.set(False, ["logStatusDiscard"]) == errors  # off: those listed
     assert fmu.set(True, []) == both

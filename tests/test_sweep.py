@@ -1,6 +1,7 @@
 """conical_pendulum.analysis.sweep: Dask runs equal to fmpy's one by one, failures kept with their
 messages, one Parquet file, the FMU loaded once per worker, and a command that refuses
 what it cannot run."""
+
 import math
 import subprocess
 import sys
@@ -31,8 +32,11 @@ def by_run(results):
 
 
 def test_runs_equal_fmpy_one_by_one(seed_fmu):
-    runs = random_samples({"l0": (5, 15), "m1": (1, 10), "alpha0": (-1, 1), "beta2": (-0.5, 0.5),
-                           "delta1": (-2, 2)}, 100, seed=7)
+    runs = random_samples(
+        {"l0": (5, 15), "m1": (1, 10), "alpha0": (-1, 1), "beta2": (-0.5, 0.5), "delta1": (-2, 2)},
+        100,
+        seed=7,
+    )
     results = sweep(seed_fmu, runs, n_workers=2, progress=False)
     assert (results["status"] == "ok").all() and (results["message"] == "").all()
     inputs = by_run(results)[["l0", "m1", "alpha0_start", "beta2_start", "delta1_start"]]
@@ -46,8 +50,14 @@ def test_runs_equal_fmpy_one_by_one(seed_fmu):
 
 def test_a_refused_value_fails_only_its_run(seed_fmu, cluster):
     runs = grid({"l0": [5.0, 10.0], "alpha0": [0.2, 0.4]}) + [{"l0": -1.0}]
-    results = sweep(seed_fmu, runs, stop_time=2.0, output_interval=0.5,
-                    scheduler=cluster.scheduler_address, progress=False)
+    results = sweep(
+        seed_fmu,
+        runs,
+        stop_time=2.0,
+        output_interval=0.5,
+        scheduler=cluster.scheduler_address,
+        progress=False,
+    )
     inputs = by_run(results)
     assert list(inputs["status"]) == ["ok"] * 4 + ["failed"]
     assert inputs.loc[4, "alpha0_start"] == math.radians(10)  # left alone: the FMU's start value
@@ -60,8 +70,7 @@ def test_a_refused_value_fails_only_its_run(seed_fmu, cluster):
 
 def test_a_discarded_step_fails_the_run_with_the_rows_before(seed_fmu, cluster):
     runs = [{"alpha0": 1.2, "delta2": 3.0}, DISCARDED_AT_1_5]
-    results = sweep(seed_fmu, runs, output_interval=0.5, scheduler=cluster.scheduler_address,
-                    progress=False)
+    results = sweep(seed_fmu, runs, output_interval=0.5, scheduler=cluster.scheduler_address, progress=False)
     assert list(by_run(results)["status"]) == ["ok", "failed"]
     failed = results[results["run"] == 1]
     assert list(failed["time"]) == [0.0, 0.5, 1.0, 1.5]  # fmpy's repeat of the last good point dropped
@@ -92,18 +101,41 @@ def test_non_finite_outputs_fail_the_run(seed_fmu, monkeypatch):
 def test_the_file_round_trips(seed_fmu, cluster, tmp_path):
     out = tmp_path / "sweep.parquet"
     runs = grid({"l0": [5.0, -1.0], "solver": [1, 2], "beta1": [0.0, 0.3]})
-    results = sweep(seed_fmu, runs, stop_time=1.0, output_interval=0.25, outputs=["energy", "bob2_x"],
-                    scheduler=cluster.scheduler_address, out=out, progress=False)
+    results = sweep(
+        seed_fmu,
+        runs,
+        stop_time=1.0,
+        output_interval=0.25,
+        outputs=["energy", "bob2_x"],
+        scheduler=cluster.scheduler_address,
+        out=out,
+        progress=False,
+    )
     read = pd.read_parquet(out)
     pd.testing.assert_frame_equal(read, results)
-    assert list(read.columns) == ["run", "l0", "solver", "beta1_start", "status", "message", "time",
-                                  "energy", "bob2_x"]
-    assert read.attrs == {"fmu": "ConicalPendulum", "fmu_guid": read.attrs["fmu_guid"], "stop_time": 1.0,
-                          "output_interval": 0.25, "outputs": ["energy", "bob2_x"],
-                          "inputs": ["l0", "solver", "beta1_start"]}
+    assert list(read.columns) == [
+        "run",
+        "l0",
+        "solver",
+        "beta1_start",
+        "status",
+        "message",
+        "time",
+        "energy",
+        "bob2_x",
+    ]
+    assert read.attrs == {
+        "fmu": "ConicalPendulum",
+        "fmu_guid": read.attrs["fmu_guid"],
+        "stop_time": 1.0,
+        "output_interval": 0.25,
+        "outputs": ["energy", "bob2_x"],
+        "inputs": ["l0", "solver", "beta1_start"],
+    }
     inputs = by_run(read)
     assert inputs[["l0", "solver", "beta1_start"]].to_dict("records") == [
-        {"l0": run["l0"], "solver": run["solver"], "beta1_start": run["beta1"]} for run in runs]
+        {"l0": run["l0"], "solver": run["solver"], "beta1_start": run["beta1"]} for run in runs
+    ]
     assert list(inputs["status"]) == ["ok"] * 4 + ["failed"] * 4
     assert read.groupby("run").size().tolist() == [5] * 4 + [1] * 4
 
@@ -111,8 +143,14 @@ def test_the_file_round_trips(seed_fmu, cluster, tmp_path):
 def test_each_worker_loads_the_fmu_once(seed_fmu, cluster):
     with Client(cluster) as client:
         before = client.run(lambda: LoadedFmu.loads)
-        results = sweep(seed_fmu, [{"l0": 5.0 + k} for k in range(40)], stop_time=1.0, batch=2,
-                        scheduler=cluster.scheduler_address, progress=False)
+        results = sweep(
+            seed_fmu,
+            [{"l0": 5.0 + k} for k in range(40)],
+            stop_time=1.0,
+            batch=2,
+            scheduler=cluster.scheduler_address,
+            progress=False,
+        )
         after = client.run(lambda: LoadedFmu.loads)
         left = client.run(lambda dask_worker: [name for name in dask_worker.plugins if "sweep" in name])
     assert (results["status"] == "ok").all() and results["run"].nunique() == 40  # in 20 tasks
@@ -121,14 +159,20 @@ def test_each_worker_loads_the_fmu_once(seed_fmu, cluster):
 
 
 def test_a_scheduler_without_workers_is_refused(seed_fmu):
-    with (LocalCluster(n_workers=0, dashboard_address="127.0.0.1:0") as empty,
-          pytest.raises(ConnectionError, match="no workers after 1 s")):
+    with (
+        LocalCluster(n_workers=0, dashboard_address="127.0.0.1:0") as empty,
+        pytest.raises(ConnectionError, match="no workers after 1 s"),
+    ):
         sweep(seed_fmu, [{"l0": 5.0}], scheduler=empty.scheduler_address, timeout=1, progress=False)
 
 
 def test_runs_are_made_reproducibly():
     assert grid({"l0": [5, 10], "alpha0": [0.1, 0.2]}) == [
-        {"l0": 5, "alpha0": 0.1}, {"l0": 5, "alpha0": 0.2}, {"l0": 10, "alpha0": 0.1}, {"l0": 10, "alpha0": 0.2}]
+        {"l0": 5, "alpha0": 0.1},
+        {"l0": 5, "alpha0": 0.2},
+        {"l0": 10, "alpha0": 0.1},
+        {"l0": 10, "alpha0": 0.2},
+    ]
     samples = random_samples({"l0": (5, 15), "g": (9, 10)}, 50, seed=3)
     assert samples == random_samples({"l0": (5, 15), "g": (9, 10)}, 50, seed=3)
     assert samples != random_samples({"l0": (5, 15), "g": (9, 10)}, 50, seed=4)
@@ -137,43 +181,80 @@ def test_runs_are_made_reproducibly():
 
 def command(*args, cwd):
     """`conical-pendulum sweep ...`, the installed command."""
-    return subprocess.run([str(Path(sys.executable).with_name("conical-pendulum")), "sweep", *map(str, args)],
-                          cwd=cwd, check=False, capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [str(Path(sys.executable).with_name("conical-pendulum")), "sweep", *map(str, args)],
+        cwd=cwd,
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_command_writes_the_sweep(seed_fmu, tmp_path):
     out = tmp_path / "s.parquet"
-    run = command(seed_fmu, "--grid", "l0=5,-1", "--grid", "alpha0=0.1,0.2", "--stop-time", "1",
-                  "--interval", "0.1", "--outputs", "energy,bob2_x", "--workers", "1", "--out", out,
-                  cwd=tmp_path)
+    run = command(
+        seed_fmu,
+        "--grid",
+        "l0=5,-1",
+        "--grid",
+        "alpha0=0.1,0.2",
+        "--stop-time",
+        "1",
+        "--interval",
+        "0.1",
+        "--outputs",
+        "energy,bob2_x",
+        "--workers",
+        "1",
+        "--out",
+        out,
+        cwd=tmp_path,
+    )
     assert run.returncode == 1, run.stderr  # some runs failed
     assert f"wrote {out}: 4 runs (2 failed), 24 rows" in run.stdout
     assert "run 2 (l0 = -1, alpha0_start = 0.1) failed: l0 = -1.0: a length must be positive" in run.stdout
     assert "4/4 runs, 2 failed" in run.stderr
-    assert list(pd.read_parquet(out).columns) == ["run", "l0", "alpha0_start", "status", "message", "time",
-                                                  "energy", "bob2_x"]
+    assert list(pd.read_parquet(out).columns) == [
+        "run",
+        "l0",
+        "alpha0_start",
+        "status",
+        "message",
+        "time",
+        "energy",
+        "bob2_x",
+    ]
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--grid", "l0=5,x"], "argument --grid: 'x' is not a number"),
-    (["--grid", "l0"], "argument --grid: 'l0': expected NAME=V1,V2,..."),
-    (["--random", "l0=5"], "argument --random: 'l0=5': expected NAME=LOW:HIGH"),
-    (["--random", "l0=5:15"], "--random needs --samples"),
-    (["--random", "l0=15:5", "--samples", "3"], "l0 range 15.0:5.0 must be finite with low <= high"),
-    (["--grid", "l0=5", "--random", "l1=1:2"], "not allowed with argument"),
-    (["--grid", "l0=5", "--grid", "l0=6"], "a variable is given twice"),
-    (["--grid", "length=5"], "unknown variable(s) length: ConicalPendulum has no such variable"),
-    (["--grid", "energy=1"], "energy cannot be set"),
-    (["--grid", "solver=1.5"], "solver = 1.5: solver is an Integer variable"),
-    (["--grid", "l0=5", "--outputs", "energy,bob9_x"], "unknown output(s) bob9_x"),
-    (["--grid", "l0=5", "--interval", "0"], "must be positive"),
-    (["--grid", "l0=5", "--workers", "0"], "argument --workers: '0': expected a whole number"),
-    (["--grid", "l0=5", "--out", "missing/s.parquet"], "out: missing is not a directory"),
-    (["--grid", "l0=5", "--scheduler", "tcp://127.0.0.1:1", "--workers", "2"], "--workers is for the local"),
-    (["--grid", "l0=5", "--scheduler", "127.0.0.1"], "scheduler '127.0.0.1': cannot connect"),
-    (["--grid", "l0=5", "--scheduler", "tcp://127.0.0.1:1", "--connect-timeout", "1"],
-     "scheduler 'tcp://127.0.0.1:1': cannot connect (Timed out"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--grid", "l0=5,x"], "argument --grid: 'x' is not a number"),
+        (["--grid", "l0"], "argument --grid: 'l0': expected NAME=V1,V2,..."),
+        (["--random", "l0=5"], "argument --random: 'l0=5': expected NAME=LOW:HIGH"),
+        (["--random", "l0=5:15"], "--random needs --samples"),
+        (["--random", "l0=15:5", "--samples", "3"], "l0 range 15.0:5.0 must be finite with low <= high"),
+        (["--grid", "l0=5", "--random", "l1=1:2"], "not allowed with argument"),
+        (["--grid", "l0=5", "--grid", "l0=6"], "a variable is given twice"),
+        (["--grid", "length=5"], "unknown variable(s) length: ConicalPendulum has no such variable"),
+        (["--grid", "energy=1"], "energy cannot be set"),
+        (["--grid", "solver=1.5"], "solver = 1.5: solver is an Integer variable"),
+        (["--grid", "l0=5", "--outputs", "energy,bob9_x"], "unknown output(s) bob9_x"),
+        (["--grid", "l0=5", "--interval", "0"], "must be positive"),
+        (["--grid", "l0=5", "--workers", "0"], "argument --workers: '0': expected a whole number"),
+        (["--grid", "l0=5", "--out", "missing/s.parquet"], "out: missing is not a directory"),
+        (
+            ["--grid", "l0=5", "--scheduler", "tcp://127.0.0.1:1", "--workers", "2"],
+            "--workers is for the local",
+        ),
+        (["--grid", "l0=5", "--scheduler", "127.0.0.1"], "scheduler '127.0.0.1': cannot connect"),
+        (
+            ["--grid", "l0=5", "--scheduler", "tcp://127.0.0.1:1", "--connect-timeout", "1"],
+            "scheduler 'tcp://127.0.0.1:1': cannot connect (Timed out",
+        ),
+    ],
+)
 def test_command_refuses_what_it_cannot_run(seed_fmu, tmp_path, args, message):
     run = command(seed_fmu, *args, cwd=tmp_path)
     assert run.returncode == 2

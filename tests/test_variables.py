@@ -1,6 +1,7 @@
 """One description of the FMU's variables (builder/variables.py): both FMUs' model
 descriptions, model.json and fmu_config.h say what it says, and a new group of variables
 is one entry in its list."""
+
 import gc
 import json
 import re
@@ -30,10 +31,16 @@ DOCS = Path(__file__).parents[1] / "docs" / "fmu.md"
 @pytest.fixture(scope="module")
 def fmus(seed_fmu, native_seed_fmu, coupled_fmu, fmu_dir):
     """{(scene name, backend): FMU}: the session's where there is one, the others built here."""
-    built = {("seed", "pythonfmu"): (SEED, seed_fmu), ("seed", "native"): (SEED, native_seed_fmu),
-             ("coupled", "pythonfmu"): (COUPLED, coupled_fmu)}
-    for name, scene, backend in (("coupled", COUPLED, "native"), ("one link", ONE_LINK, "pythonfmu"),
-                                 ("one link", ONE_LINK, "native")):
+    built = {
+        ("seed", "pythonfmu"): (SEED, seed_fmu),
+        ("seed", "native"): (SEED, native_seed_fmu),
+        ("coupled", "pythonfmu"): (COUPLED, coupled_fmu),
+    }
+    for name, scene, backend in (
+        ("coupled", COUPLED, "native"),
+        ("one link", ONE_LINK, "pythonfmu"),
+        ("one link", ONE_LINK, "native"),
+    ):
         path = fmu_dir / f"variables_{name.replace(' ', '_')}_{backend}.fmu"
         built[name, backend] = (scene, build_fmu(scene, path, backend=backend).path)
     return built
@@ -41,8 +48,10 @@ def fmus(seed_fmu, native_seed_fmu, coupled_fmu, fmu_dir):
 
 def read(fmu):
     with zipfile.ZipFile(fmu) as archive:
-        return (ET.fromstring(archive.read("modelDescription.xml")),
-                json.loads(archive.read("resources/model.json")))
+        return (
+            ET.fromstring(archive.read("modelDescription.xml")),
+            json.loads(archive.read("resources/model.json")),
+        )
 
 
 def declared(root):
@@ -51,16 +60,22 @@ def declared(root):
     for var in root.iter("ScalarVariable"):
         value = var[0]
         start = value.get("start")
-        rows.append({"name": var.get("name"), "value_reference": int(var.get("valueReference")),
-                     "type": value.tag, "causality": var.get("causality"),
-                     "variability": var.get("variability"), "initial": var.get("initial"),
-                     "description": var.get("description"),
-                     "start": None if start is None else (float(start) if value.tag == "Real" else int(start))})
+        rows.append(
+            {
+                "name": var.get("name"),
+                "value_reference": int(var.get("valueReference")),
+                "type": value.tag,
+                "causality": var.get("causality"),
+                "variability": var.get("variability"),
+                "initial": var.get("initial"),
+                "description": var.get("description"),
+                "start": None if start is None else (float(start) if value.tag == "Real" else int(start)),
+            }
+        )
     return rows
 
 
-FIELDS = ("name", "value_reference", "type", "causality", "variability", "initial", "description",
-          "start")
+FIELDS = ("name", "value_reference", "type", "causality", "variability", "initial", "description", "start")
 
 
 @pytest.mark.parametrize("name", ["seed", "coupled", "one link"])
@@ -84,7 +99,8 @@ def test_both_model_descriptions_and_model_json_say_what_the_description_says(fm
             assert listed[index[v.name]] == " ".join(index[d] for d in names), v.name
     derivatives = root.find("ModelStructure/Derivatives")
     assert [u.get("index") for u in (derivatives if derivatives is not None else [])] == [
-        index[v.name] for v in records if v.derivative_of]
+        index[v.name] for v in records if v.derivative_of
+    ]
     # every FMU: parameters, inputs, states, outputs, statistics, settings, (native) der()
     order = [group.name for group in described.groups(backend)]
     assert [v.group for v in records] == sorted((v.group for v in records), key=order.index)
@@ -92,10 +108,11 @@ def test_both_model_descriptions_and_model_json_say_what_the_description_says(fm
 
 def test_both_backends_give_each_variable_the_same_value_reference():
     for scene in (SEED, COUPLED, ONE_LINK):
-        python, native = (described.variables(scene, SETTINGS, backend)
-                          for backend in ("pythonfmu", "native"))
-        assert native[:len(python)] == python
-        assert {v.group for v in native[len(python):]} == {"derivatives"}
+        python, native = (
+            described.variables(scene, SETTINGS, backend) for backend in ("pythonfmu", "native")
+        )
+        assert native[: len(python)] == python
+        assert {v.group for v in native[len(python) :]} == {"derivatives"}
 
 
 def test_the_statistics_slots_of_the_c_are_the_variables_order():
@@ -115,7 +132,8 @@ def test_fmu_config_h_takes_its_value_references_from_the_description():
     assert f"#define CP_NREAL {first['integer_settings']}\n" in header
     names = re.search(r"cp_names\[\] = \{\n(.*?)\n\};", header, re.DOTALL).group(1)
     assert [json.loads(line.strip().rstrip(",")) for line in names.splitlines()] == [
-        v["name"] for v in records]
+        v["name"] for v in records
+    ]
 
 
 def seed_layout(backend):
@@ -139,11 +157,27 @@ def test_docs_show_the_order_the_description_gives():
 
 # --- adding a group of variables: one entry in builder.variables.GROUPS --------------
 
-EXTRA = described.Group("extra", "Real", "output", "discrete", "calculated", "EXTRA",
-                        lambda scene, settings: [described.Member("n_extra", None, "an extra count"),
-                                                 described.Member("n_more", None, "another one")])
-EXTRA_PARAMETER = described.Group("extra_parameter", "Real", "parameter", "fixed", None, "EXTRA_PARAMETER",
-                                  lambda scene, settings: [described.Member("k_extra", 2.5, "a number")])
+EXTRA = described.Group(
+    "extra",
+    "Real",
+    "output",
+    "discrete",
+    "calculated",
+    "EXTRA",
+    lambda scene, settings: [
+        described.Member("n_extra", None, "an extra count"),
+        described.Member("n_more", None, "another one"),
+    ],
+)
+EXTRA_PARAMETER = described.Group(
+    "extra_parameter",
+    "Real",
+    "parameter",
+    "fixed",
+    None,
+    "EXTRA_PARAMETER",
+    lambda scene, settings: [described.Member("k_extra", 2.5, "a number")],
+)
 
 PLAIN = {v.name: v.value_reference for v in described.variables(SEED, SETTINGS, "native")}
 
@@ -164,40 +198,62 @@ def test_a_new_group_is_one_entry_in_the_list(extra_groups, tmp_path):
     new = ("n_extra", "n_more", "k_extra")
     assert [records[name]["value_reference"] for name in new] == [first, first + 1, later + 2]
     assert {name: v["value_reference"] for name, v in records.items() if name not in new} == {
-        name: vr + (vr >= first) * 2 + (vr >= later) for name, vr in PLAIN.items()}
+        name: vr + (vr >= first) * 2 + (vr >= later) for name, vr in PLAIN.items()
+    }
     data = {"variables": list(records.values()), "settings": SETTINGS, "description": "extra"}
     # fmu_config.h: its value references, the names and how each may be set
     header = config_header(data, "{guid}")
-    for line in (f"CP_VR_EXTRA {first}", f"CP_VR_SETTINGS {first + 2}",
-                 f"CP_VR_EXTRA_PARAMETER {later + 2}", f"CP_NREAL {later + 3}",
-                 f"CP_VR_SOLVER {later + 3}"):
+    for line in (
+        f"CP_VR_EXTRA {first}",
+        f"CP_VR_SETTINGS {first + 2}",
+        f"CP_VR_EXTRA_PARAMETER {later + 2}",
+        f"CP_NREAL {later + 3}",
+        f"CP_VR_SOLVER {later + 3}",
+    ):
         assert f"#define {line}\n" in header
     settable = re.search(r"cp_settable\[CP_NVARIABLE\] = \{(.*)\};", header).group(1).split(", ")
     assert settable[first] == "CP_SET_NEVER" and settable[later + 2] == "CP_SET_BEFORE_INIT"
     # the native model description
     root = ET.fromstring(model_description(data, "{guid}"))
     rows = {row["name"]: row for row in declared(root)}
-    assert rows["n_extra"] == {"name": "n_extra", "value_reference": first, "type": "Real",
-                               "causality": "output", "variability": "discrete",
-                               "initial": "calculated", "description": "an extra count", "start": None}
-    assert rows["k_extra"] == {"name": "k_extra", "value_reference": later + 2, "type": "Real",
-                               "causality": "parameter", "variability": "fixed", "initial": None,
-                               "description": "a number", "start": 2.5}
+    assert rows["n_extra"] == {
+        "name": "n_extra",
+        "value_reference": first,
+        "type": "Real",
+        "causality": "output",
+        "variability": "discrete",
+        "initial": "calculated",
+        "description": "an extra count",
+        "start": None,
+    }
+    assert rows["k_extra"] == {
+        "name": "k_extra",
+        "value_reference": later + 2,
+        "type": "Real",
+        "causality": "parameter",
+        "variability": "fixed",
+        "initial": None,
+        "description": "a number",
+        "start": 2.5,
+    }
     assert str(first + 1) in {u.get("index") for u in root.find("ModelStructure/Outputs")}
     # both FMUs build with them and run: the slave and the glue read the new layout
     for backend in ("pythonfmu", "native"):
         fmu = build_fmu(SEED, tmp_path / f"{backend}.fmu", backend=backend).path
         root, model = read(fmu)
         rows = {row["name"]: row for row in declared(root)}
-        assert [v["name"] for v in model["variables"]] == list(rows) == list(records)[:len(rows)]
+        assert [v["name"] for v in model["variables"]] == list(rows) == list(records)[: len(rows)]
         assert rows["n_extra"]["value_reference"] == first
         assert rows["max_steps"]["value_reference"] == PLAIN["max_steps"] + 3
-        run = run_fmu(fmu, stop_time=0.1, output_interval=0.05,
-                      start_values={"max_steps": 1000, "k_extra": 3.0})
+        run = run_fmu(
+            fmu, stop_time=0.1, output_interval=0.05, start_values={"max_steps": 1000, "k_extra": 3.0}
+        )
         assert np.all(run["n_extra"] == 0) and run["n_rhs"][-1] > 0 and np.isfinite(run["energy"]).all()
         # a calculated output is never set; a parameter is, before initialization only
-        for name, initialize, message in (("n_extra", False, "n_extra is a calculated output"),
-                                          ("k_extra", True, "k_extra cannot be set after initialization")):
+        for name, initialize, message in (
+            ("n_extra", False, "n_extra is a calculated output"),
+            ("k_extra", True, "k_extra cannot be set after initialization"),
+        ):
             instance = Instance(fmu, start_values={"k_extra": 3.0}, initialize=initialize)
             assert not initialize or instance.get("k_extra") == [3.0]
             with pytest.raises(FMICallException):

@@ -1,6 +1,7 @@
 """A trivial pythonfmu FMU: `count` constant outputs with pythonfmu's default getters, a do_step
 that does nothing. benchmarks/fmu_overhead.py builds it with as many outputs as the seed FMU
 (pythonfmu's `newargs` sets count's default) as the floor of a pythonfmu FMU through fmpy."""
+
 from pythonfmu import Fmi2Causality, Fmi2Slave, Real
 
 

@@ -1,4 +1,5 @@
 """`python -m conical_pendulum`: the `conical-pendulum` command."""
+
 import sys
 
 from conical_pendulum.cli import main

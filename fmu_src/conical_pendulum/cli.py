@@ -16,6 +16,7 @@ code raises errors.UserError (or its own ValueError, which the commands translat
 never prints them or exits: only this module turns them into a line and a status.
 `build_fmu.py` runs `build` the same way, as `build_fmu.py: ...`.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -49,38 +50,52 @@ class Parser(argparse.ArgumentParser):
 class Command:
     summary: str
     examples: tuple[str, ...]
-    module: str      # where add_arguments and run are, imported only when the command runs
+    module: str  # where add_arguments and run are, imported only when the command runs
     extra: str = ""  # the pip extra of the optional dependencies the module imports
 
 
 COMMANDS = {
     "build": Command(
         "build a scene's FMU, check it against the native reference, draw its run",
-        ("conical-pendulum build --links 5 --no-bobs --output dist/Chain5.fmu",
-         "conical-pendulum build --scene scenes/seed.toml --no-check"),
-        "conical_pendulum.commands.build"),
+        (
+            "conical-pendulum build --links 5 --no-bobs --output dist/Chain5.fmu",
+            "conical-pendulum build --scene scenes/seed.toml --no-check",
+        ),
+        "conical_pendulum.commands.build",
+    ),
     "check": Command(
         "run an FMU with fmpy against the native reference of its scene",
         ("conical-pendulum check dist/ConicalPendulum.fmu --stop-time 5",),
-        "conical_pendulum.commands.check"),
+        "conical_pendulum.commands.check",
+    ),
     "show": Command(
         "plot and animate an fmpy results CSV",
         ("conical-pendulum show dist/results.csv --plot out.png --gif out.gif --fps 30",),
-        "conical_pendulum.commands.show"),
+        "conical_pendulum.commands.show",
+    ),
     "page": Command(
         "write (and serve) the pydy.viz page of an FMU run, to play in a browser",
         ("conical-pendulum page dist/ConicalPendulum.fmu --out dist/page --serve",),
-        "conical_pendulum.commands.page"),
+        "conical_pendulum.commands.page",
+    ),
     "sweep": Command(
         "run an FMU over a grid or random sample of values on Dask, into Parquet",
-        ("conical-pendulum sweep dist/ConicalPendulum.fmu --grid l0=5,10 --grid alpha0=0.1,0.2",
-         "conical-pendulum sweep dist/ConicalPendulum.fmu --random l0=5:15 --samples 100"),
-        "conical_pendulum.commands.sweep", "sweep"),
+        (
+            "conical-pendulum sweep dist/ConicalPendulum.fmu --grid l0=5,10 --grid alpha0=0.1,0.2",
+            "conical-pendulum sweep dist/ConicalPendulum.fmu --random l0=5:15 --samples 100",
+        ),
+        "conical_pendulum.commands.sweep",
+        "sweep",
+    ),
     "demo": Command(
         "co-simulate the pendulum on a cart in ecospy by two schemes, against one monolithic model",
-        ("conical-pendulum demo --out dist/coupled --steps 0.1,0.05,0.025",
-         "conical-pendulum demo --scheme apparent-mass --cart-mass 0.5 --steps 0.2,0.01"),
-        "conical_pendulum.commands.demo", "cosim"),
+        (
+            "conical-pendulum demo --out dist/coupled --steps 0.1,0.05,0.025",
+            "conical-pendulum demo --scheme apparent-mass --cart-mass 0.5 --steps 0.2,0.01",
+        ),
+        "conical_pendulum.commands.demo",
+        "cosim",
+    ),
 }
 
 
@@ -141,22 +156,26 @@ class _CommandsFormatter(argparse.RawDescriptionHelpFormatter):
 
 def _parser(prog: str, chosen: str | None) -> Parser:
     parser = Parser(
-        prog=prog, formatter_class=_CommandsFormatter,
+        prog=prog,
+        formatter_class=_CommandsFormatter,
         description="An n-link conical pendulum as an FMI 2.0 co-simulation FMU: build it, check it\n"
-                    "against the native reference, look at its runs, sweep it, co-simulate it.",
+        "against the native reference, look at its runs, sweep it, co-simulate it.",
         epilog="Start with 'conical-pendulum build': it writes dist/ConicalPendulum.fmu (the seed scene),\n"
-               "checks it and draws its run in dist/pendulum.png and dist/pendulum.gif.\n"
-               f"'{prog} COMMAND --help' explains a command's options.\n"
-               "Exit status: 0 on success, 1 when a check, some runs or a co-simulation failed, 2 for\n"
-               "bad options, a bad file or a missing package (one line on stderr), 130 on Ctrl-C.")
+        "checks it and draws its run in dist/pendulum.png and dist/pendulum.gif.\n"
+        f"'{prog} COMMAND --help' explains a command's options.\n"
+        "Exit status: 0 on success, 1 when a check, some runs or a co-simulation failed, 2 for\n"
+        "bad options, a bad file or a missing package (one line on stderr), 130 on Ctrl-C.",
+    )
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
-    commands = parser.add_subparsers(title="commands", metavar="COMMAND", dest="command", required=True,
-                                     parser_class=Parser)
+    commands = parser.add_subparsers(
+        title="commands", metavar="COMMAND", dest="command", required=True, parser_class=Parser
+    )
     for name, command in COMMANDS.items():
         examples = "\n".join(f"  $ {example}" for example in command.examples)
         # listed verbatim (_CommandsFormatter): the summary, then the examples below it
-        sub = commands.add_parser(name, help=f"{command.summary}\n{examples}",
-                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+        sub = commands.add_parser(
+            name, help=f"{command.summary}\n{examples}", formatter_class=argparse.RawDescriptionHelpFormatter
+        )
         if name == chosen:
             _load(name, sub)
     return parser
@@ -172,7 +191,7 @@ def _load(name: str, parser: Parser) -> None:
     except ModuleNotFoundError as exc:
         if not command.extra:
             raise
-        raise UsageError(f"needs {exc.name}: pip install -e \".[{command.extra}]\"", parser.prog) from None
+        raise UsageError(f'needs {exc.name}: pip install -e ".[{command.extra}]"', parser.prog) from None
     module.add_arguments(parser)
     parser.set_defaults(run=module.run, parser=parser)
 

@@ -5,6 +5,7 @@ Library code (builder/, analysis/, viz/, demos/) raises UserError and never exit
 program that imports it keeps control. `conical-pendulum` prints it as
 `<command>: <message>` and exits with its `status`.
 """
+
 from __future__ import annotations
 
 

@@ -6,6 +6,7 @@ its numbers (lengths, masses, radii) are only start values of FMU parameters.
 This module imports no sympy: the FMU and the native simulation use it too. Its value
 rules are runtime.rules', the same the FMU applies.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -76,8 +77,7 @@ class Scene:
         self.validate()
 
     @classmethod
-    def uniform(cls, n_links: int = 3, *, massless_links: bool = False, bobs: bool = True,
-                **kwargs) -> Scene:
+    def uniform(cls, n_links: int = 3, *, massless_links: bool = False, bobs: bool = True, **kwargs) -> Scene:
         """The seed's chain generalized to n identical links."""
         if isinstance(n_links, bool) or not isinstance(n_links, int):
             raise SceneError(f"links: expected a whole number of links, got {n_links!r}")
@@ -98,32 +98,44 @@ class Scene:
         if self.formulation not in FORMULATIONS:
             raise SceneError(f"formulation: {self.formulation!r} is not one of {FORMULATIONS}")
         if self.formulation == "recursive" and self.kinematics != "consistent":
-            raise SceneError("formulation: 'recursive' needs kinematics 'consistent'; the published "
-                             "equations exist only expanded")
+            raise SceneError(
+                "formulation: 'recursive' needs kinematics 'consistent'; the published "
+                "equations exist only expanded"
+            )
         if self.resolved_formulation() == "expanded" and self.n > MAX_EXPANDED_LINKS:
-            raise SceneError(f"links: {self.n} with formulation 'expanded'; its equations are offered "
-                             f"up to {MAX_EXPANDED_LINKS} links (their C grows like n^3): use "
-                             "'recursive' or 'auto'")
+            raise SceneError(
+                f"links: {self.n} with formulation 'expanded'; its equations are offered "
+                f"up to {MAX_EXPANDED_LINKS} links (their C grows like n^3): use "
+                "'recursive' or 'auto'"
+            )
         if self.kinematics == "pydy-example" and self.n > MAX_PUBLISHED_LINKS:
             raise SceneError(
                 f"links: {self.n} with kinematics 'pydy-example'; the published derivation is "
-                f"only reproduced up to {MAX_PUBLISHED_LINKS} links (its size grows exponentially)")
+                f"only reproduced up to {MAX_PUBLISHED_LINKS} links (its size grows exponentially)"
+            )
         for i, link in enumerate(self.links):
             for name, rule in LINK_RULES.items():
                 value = getattr(link, name)
                 if not satisfies(rule, value):
-                    raise SceneError(f"link[{i}].{FILE_NAMES.get(name, name)}: must be "
-                                     f"{RULES[rule].wanted}{MASSLESS_HINT if name == 'mass' else ''}, "
-                                     f"got {value!r}")
+                    raise SceneError(
+                        f"link[{i}].{FILE_NAMES.get(name, name)}: must be "
+                        f"{RULES[rule].wanted}{MASSLESS_HINT if name == 'mass' else ''}, "
+                        f"got {value!r}"
+                    )
             if link.moments is not None and not (
-                    len(link.moments) == 3 and all(satisfies("non-negative", m) for m in link.moments)):
-                raise SceneError(f"link[{i}].inertia: must be three finite numbers >= 0 "
-                                 f"(Ixx, Iyy, Izz), got {link.moments!r}")
+                len(link.moments) == 3 and all(satisfies("non-negative", m) for m in link.moments)
+            ):
+                raise SceneError(
+                    f"link[{i}].inertia: must be three finite numbers >= 0 "
+                    f"(Ixx, Iyy, Izz), got {link.moments!r}"
+                )
         if not isinstance(self.coupling, bool):
             raise SceneError(f"coupling: expected true or false, got {self.coupling!r}")
         if self.coupling and self.kinematics != "consistent":
-            raise SceneError("coupling: the pivot's inputs and force need kinematics 'consistent'; "
-                             f"the published {self.kinematics!r} equations have no moving support")
+            raise SceneError(
+                "coupling: the pivot's inputs and force need kinematics 'consistent'; "
+                f"the published {self.kinematics!r} equations have no moving support"
+            )
         if not math.isfinite(self.gravity):
             raise SceneError(f"gravity: must be finite, got {self.gravity!r}")
         # A joint whose angles move no mass has an undetermined acceleration.
@@ -133,7 +145,8 @@ class Scene:
                     raise SceneError("scene has no mass: give at least one link mass or a bob")
                 raise SceneError(
                     f"links {i}..{self.n - 1} carry no mass (no link mass, no bob): their angles "
-                    "would be undetermined; give one of them mass or a bob, or drop them")
+                    "would be undetermined; give one of them mass or a bob, or drop them"
+                )
 
     def resolved_formulation(self) -> str:
         """The formulation the core is generated in: as chosen, or for "auto" the faster one
@@ -146,9 +159,13 @@ class Scene:
 
     def structure(self) -> dict:
         """What the generated code depends on, and nothing else."""
-        return {"links": [[link.has_mass, link.has_bob] for link in self.links],
-                "outputs": list(self.outputs), "kinematics": self.kinematics,
-                "coupling": self.coupling, "formulation": self.resolved_formulation()}
+        return {
+            "links": [[link.has_mass, link.has_bob] for link in self.links],
+            "outputs": list(self.outputs),
+            "kinematics": self.kinematics,
+            "coupling": self.coupling,
+            "formulation": self.resolved_formulation(),
+        }
 
     def key(self, salt: str = "") -> str:
         text = json.dumps(self.structure(), sort_keys=True) + salt
@@ -161,8 +178,13 @@ class Scene:
         n = range(self.n)
         massive = [i for i in n if self.links[i].has_mass]
         bobs = [i for i in n if self.links[i].has_bob]
-        return ([f"l{i}" for i in n] + [f"m{i}" for i in bobs] + [f"M{i}" for i in massive]
-                + [f"{axis}{i}" for axis in ("Ixx", "Iyy", "Izz") for i in massive] + ["g"])
+        return (
+            [f"l{i}" for i in n]
+            + [f"m{i}" for i in bobs]
+            + [f"M{i}" for i in massive]
+            + [f"{axis}{i}" for axis in ("Ixx", "Iyy", "Izz") for i in massive]
+            + ["g"]
+        )
 
     def parameter_defaults(self) -> list[float]:
         values = {}
@@ -193,11 +215,9 @@ class Scene:
         """Calculated outputs besides the state, in the compiled core's order."""
         names = []
         if "bobs" in self.outputs:
-            names += [f"bob{i}_{c}" for i, link in enumerate(self.links) if link.has_bob
-                      for c in "xyz"]
+            names += [f"bob{i}_{c}" for i, link in enumerate(self.links) if link.has_bob for c in "xyz"]
         if "poses" in self.outputs:
-            names += [f"link{i}_{c}" for i in range(self.n)
-                      for c in ("x", "y", "z", "qw", "qx", "qy", "qz")]
+            names += [f"link{i}_{c}" for i in range(self.n) for c in ("x", "y", "z", "qw", "qx", "qy", "qz")]
         if "energy" in self.outputs:
             names.append("energy")
         if self.coupling:
@@ -221,8 +241,9 @@ class Scene:
     @classmethod
     def from_dict(cls, data: dict) -> Scene:
         """The scene to_dict described."""
-        links = tuple(Link(**{**link, "moments": link["moments"] and tuple(link["moments"])})
-                      for link in data["links"])
+        links = tuple(
+            Link(**{**link, "moments": link["moments"] and tuple(link["moments"])}) for link in data["links"]
+        )
         return cls(**{**data, "links": links, "outputs": tuple(data["outputs"])})
 
 
@@ -275,12 +296,17 @@ def scene_from_dict(data: dict) -> Scene:
         if bob is not None and not isinstance(bob, dict):
             raise SceneError(f"{where}.bob: expected a table {{ mass = ..., radius = ... }}, got {bob!r}")
         _known(bob or {}, BOB_FIELDS, f"{where}.bob")
-        fields = {"has_mass": mass != 0, "has_bob": bob is not None,
-                  "mass": mass if mass != 0 else DEFAULT_LINK.mass}
+        fields = {
+            "has_mass": mass != 0,
+            "has_bob": bob is not None,
+            "mass": mass if mass != 0 else DEFAULT_LINK.mass,
+        }
         fields.update({name: entry[name] for name in ("length", "radius") if name in entry})
         fields.update({f"bob_{name}": value for name, value in (bob or {}).items()})
         if "inertia" in entry:
-            fields["moments"] = tuple(entry["inertia"]) if isinstance(entry["inertia"], list) else entry["inertia"]
+            fields["moments"] = (
+                tuple(entry["inertia"]) if isinstance(entry["inertia"], list) else entry["inertia"]
+            )
         try:
             made.append(Link(**fields))
         except TypeError as exc:

@@ -1,4 +1,5 @@
 """fmpy runs the FMU; the native reference runs the same scene; compare every output."""
+
 from __future__ import annotations
 
 import time
@@ -31,8 +32,16 @@ class Comparison:
         return "\n".join(rows)
 
 
-def compare(fmu_path, scene: Scene, *, stop_time=10.0, output_interval=1.0 / 60.0,
-            start_values=None, rtol=1e-12, atol=1e-12) -> Comparison:
+def compare(
+    fmu_path,
+    scene: Scene,
+    *,
+    stop_time=10.0,
+    output_interval=1.0 / 60.0,
+    start_values=None,
+    rtol=1e-12,
+    atol=1e-12,
+) -> Comparison:
     """Run the FMU at the given tolerances and the native DOP853 reference on the same grid."""
     start_values = dict(start_values or {})
     settings = {"solver": 2, "rtol": rtol, "atol": atol}
@@ -41,8 +50,15 @@ def compare(fmu_path, scene: Scene, *, stop_time=10.0, output_interval=1.0 / 60.
     seconds = time.perf_counter() - begin
     params = {k: v for k, v in start_values.items() if k in scene.core_parameter_names()}
     state = {k: v for k, v in start_values.items() if k in scene.state_names()}
-    native = simulate(scene, result["time"], parameters=params, state=state, method="DOP853",
-                      rtol=min(rtol, 1e-12), atol=min(atol, 1e-12))
+    native = simulate(
+        scene,
+        result["time"],
+        parameters=params,
+        state=state,
+        method="DOP853",
+        rtol=min(rtol, 1e-12),
+        atol=min(atol, 1e-12),
+    )
     names = scene.state_names() + scene.output_names()
     diffs = np.array([np.abs(result[name] - native[name]).max() for name in names])
     return Comparison(names, diffs, seconds, result)

@@ -1,4 +1,5 @@
 """fmpy glue: runs with the output interval always given, and a logger that collects messages."""
+
 from __future__ import annotations
 
 
@@ -30,5 +31,10 @@ def run_fmu(fmu_path, stop_time=10.0, output_interval=1.0 / 60.0, start_values=N
     """fmpy.simulate_fmu with the output interval always given (fmpy ignores step_size for CS)."""
     import fmpy
 
-    return fmpy.simulate_fmu(str(fmu_path), stop_time=stop_time, output_interval=output_interval,
-                             start_values=start_values or {}, **kwargs)
+    return fmpy.simulate_fmu(
+        str(fmu_path),
+        stop_time=stop_time,
+        output_interval=output_interval,
+        start_values=start_values or {},
+        **kwargs,
+    )

@@ -3,6 +3,7 @@
 This is what the FMU is checked against: solve_ivp (any of its methods) or odeint on
 a time grid, with the outputs evaluated by the same compiled core.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -34,9 +35,17 @@ class Trajectory:
         raise KeyError(f"no variable {name!r}; have {self.state_names + self.output_names}")
 
 
-def simulate(scene: Scene, times, *, parameters: dict | None = None, state: dict | None = None,
-             method: str = "DOP853", rtol: float = 1e-10, atol: float = 1e-10,
-             core=None) -> Trajectory:
+def simulate(
+    scene: Scene,
+    times,
+    *,
+    parameters: dict | None = None,
+    state: dict | None = None,
+    method: str = "DOP853",
+    rtol: float = 1e-10,
+    atol: float = 1e-10,
+    core=None,
+) -> Trajectory:
     """Integrate the scene from times[0] through every time in `times`.
 
     method: a scipy.integrate.solve_ivp method name, "odeint" (LSODA via ODEPACK), or
@@ -45,22 +54,35 @@ def simulate(scene: Scene, times, *, parameters: dict | None = None, state: dict
     """
     core = core or load_core(scene)
     times = np.asarray(times, dtype=float)
-    p = np.array([check_value(name, value) for name, value in
-                  zip(scene.core_parameter_names(), scene.parameters(parameters))])
-    x0 = np.array([check_value(name, value) for name, value in
-                   zip(scene.state_names(), scene.initial_state(state))])
+    p = np.array(
+        [
+            check_value(name, value)
+            for name, value in zip(scene.core_parameter_names(), scene.parameters(parameters))
+        ]
+    )
+    x0 = np.array(
+        [check_value(name, value) for name, value in zip(scene.state_names(), scene.initial_state(state))]
+    )
     rhs = core.rhs
     if method == "core":
         states, nfev = core.integrate_grid(x0, p, times, rtol, atol)
     elif method == "odeint":
-        states, info = odeint(lambda x, t: rhs(x, p), x0, times, rtol=rtol, atol=atol,
-                              full_output=True, mxstep=10**6)
+        states, info = odeint(
+            lambda x, t: rhs(x, p), x0, times, rtol=rtol, atol=atol, full_output=True, mxstep=10**6
+        )
         if info["message"] != "Integration successful.":
             raise RuntimeError(f"odeint failed: {info['message']}")
         nfev = int(info["nfe"][-1])
     else:
-        sol = solve_ivp(lambda t, x: rhs(x, p), (times[0], times[-1]), x0, method=method,
-                        t_eval=times, rtol=rtol, atol=atol)
+        sol = solve_ivp(
+            lambda t, x: rhs(x, p),
+            (times[0], times[-1]),
+            x0,
+            method=method,
+            t_eval=times,
+            rtol=rtol,
+            atol=atol,
+        )
         if not sol.success:
             raise RuntimeError(f"solve_ivp {method} failed: {sol.message}")
         states, nfev = sol.y.T, sol.nfev

@@ -11,6 +11,7 @@ stays small next to a run's 25 ms. A run fails, keeping the rows it produced and
 FMU's message, when a value is refused (fmi2Fatal), a step is discarded (fmpy then
 stops quietly, short of the stop time) or an output is not finite.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -76,23 +77,36 @@ class LoadedFmu:
         self.md = read_model_description(self.directory)
 
         self._callbacks = logging_callbacks(
-            lambda status, text: self.messages.append(text.replace("\n", " ")))
+            lambda status, text: self.messages.append(text.replace("\n", " "))
+        )
         # fmpy's freeInstance also unloads the library; instances are freed with
         # fmi2FreeInstance instead, so the library stays loaded for the next run.
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.directory,
-                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName="sweep")
+        self.slave = FMU2Slave(
+            guid=self.md.guid,
+            unzipDirectory=self.directory,
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName="sweep",
+        )
         self._lock = threading.Lock()
         LoadedFmu.loads += 1
 
-    def run(self, start_values: dict, stop_time: float, output_interval: float,
-            outputs: list[str]) -> tuple[np.ndarray | None, bool, str]:
+    def run(
+        self, start_values: dict, stop_time: float, output_interval: float, outputs: list[str]
+    ) -> tuple[np.ndarray | None, bool, str]:
         """(rows as fmpy records them or None, ok, message): fmpy's way, on a fresh instance."""
         with self._lock:
             self.messages = problems = []  # this run's, also once the next has begun
             self.slave.instantiate(callbacks=self._callbacks, loggingOn=True)
             try:
-                rows = run_fmu(self.directory, stop_time, output_interval, start_values, output=outputs,
-                               model_description=self.md, fmu_instance=self.slave)
+                rows = run_fmu(
+                    self.directory,
+                    stop_time,
+                    output_interval,
+                    start_values,
+                    output=outputs,
+                    model_description=self.md,
+                    fmu_instance=self.slave,
+                )
             except Exception as exc:
                 return None, False, "; ".join([*problems, str(exc)])
             finally:  # fmi2FreeInstance is all FMI allows after fmi2Fatal
@@ -127,16 +141,18 @@ class _FmuPlugin(WorkerPlugin):
         self.fmu.close()
 
 
-def _run_batch(plugin: str, batch: list[tuple[int, dict]], stop_time: float, output_interval: float,
-               outputs: list[str]):
+def _run_batch(
+    plugin: str, batch: list[tuple[int, dict]], stop_time: float, output_interval: float, outputs: list[str]
+):
     """On a worker: the batch's runs, as one long frame (run, status, message, time, outputs)."""
     fmu = get_worker().plugins[plugin].fmu
     frames = []
     for index, start_values in batch:
         rows, ok, message = fmu.run(start_values, stop_time, output_interval, outputs)
         columns = ["time", *outputs]
-        frame = pd.DataFrame(rows if rows is not None else {key: [math.nan] for key in columns},
-                             columns=columns)
+        frame = pd.DataFrame(
+            rows if rows is not None else {key: [math.nan] for key in columns}, columns=columns
+        )
         frame.insert(0, "run", index)
         frame.insert(1, "status", "ok" if ok else "failed")
         frame.insert(2, "message", message)
@@ -154,10 +170,15 @@ def _check_runs(md, runs: Iterable[Mapping]) -> list[dict]:
     unknown = sorted(names - variables.keys())
     if unknown:
         raise ValueError(f"unknown variable(s) {', '.join(unknown)}: {md.modelName} has no such variable")
-    fixed = sorted(name for name in names if not (settable_in_instantiated(variables[name])
-                                                  or settable_in_initialization_mode(variables[name])))
+    fixed = sorted(
+        name
+        for name in names
+        if not (settable_in_instantiated(variables[name]) or settable_in_initialization_mode(variables[name]))
+    )
     if fixed:
-        raise ValueError(f"{', '.join(fixed)} cannot be set (calculated); a run sets parameters and start values")
+        raise ValueError(
+            f"{', '.join(fixed)} cannot be set (calculated); a run sets parameters and start values"
+        )
     for index, run in enumerate(runs):
         for name, value in run.items():
             if isinstance(value, bool) or not isinstance(value, numbers.Real):
@@ -209,8 +230,13 @@ def _client(scheduler: str | None, n_workers: int, timeout: float):
         # The workers' statistical profiler (for the dashboard) takes the GIL every 10 ms
         # and would cost these runs, Python in fmpy and the slave, about 17 %.
         with dask.config.set({"distributed.worker.profile.enabled": False}):
-            cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                                   dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR)
+            cluster = LocalCluster(
+                n_workers=n_workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address="127.0.0.1:0",
+                silence_logs=logging.ERROR,
+            )
         with cluster, Client(cluster) as client:
             yield client
         return
@@ -230,10 +256,20 @@ def _show_progress(done: int, total: int, failed: int, start: float) -> None:
     bar(done, total, "sweep", f" runs, {failed} failed, {time.perf_counter() - start:.1f} s")
 
 
-def sweep(fmu, runs: Iterable[Mapping[str, float]], *, stop_time: float = 10.0,
-          output_interval: float = 1.0 / 60.0, outputs: Sequence[str] | None = None,
-          scheduler: str | None = None, n_workers: int = 2, batch: int | None = None,
-          out=None, progress: bool = True, timeout: float = 10.0) -> pd.DataFrame:
+def sweep(
+    fmu,
+    runs: Iterable[Mapping[str, float]],
+    *,
+    stop_time: float = 10.0,
+    output_interval: float = 1.0 / 60.0,
+    outputs: Sequence[str] | None = None,
+    scheduler: str | None = None,
+    n_workers: int = 2,
+    batch: int | None = None,
+    out=None,
+    progress: bool = True,
+    timeout: float = 10.0,
+) -> pd.DataFrame:
     """Run the FMU once per run (a dict of parameters and start values) on a Dask cluster.
 
     On a LocalCluster of `n_workers` processes made for the sweep, or on the cluster whose
@@ -256,7 +292,9 @@ def sweep(fmu, runs: Iterable[Mapping[str, float]], *, stop_time: float = 10.0,
         raise ValueError(f"{path}: not an FMI 2.0 co-simulation FMU")
     runs = _check_runs(md, runs)
     outputs = _check_outputs(md, outputs)
-    if not (math.isfinite(stop_time) and stop_time > 0 and math.isfinite(output_interval) and output_interval > 0):
+    if not (
+        math.isfinite(stop_time) and stop_time > 0 and math.isfinite(output_interval) and output_interval > 0
+    ):
         raise ValueError(f"stop time {stop_time} and output interval {output_interval} must be positive")
     if batch is not None and batch < 1:
         raise ValueError(f"batch = {batch}: must be at least 1")
@@ -272,8 +310,18 @@ def sweep(fmu, runs: Iterable[Mapping[str, float]], *, stop_time: float = 10.0,
         try:
             size = batch or max(1, min(25, math.ceil(len(runs) / (4 * sum(client.nthreads().values())))))
             numbered = list(enumerate(runs))
-            futures = [client.submit(_run_batch, plugin, numbered[i:i + size], stop_time, output_interval,
-                                     outputs, pure=False) for i in range(0, len(runs), size)]
+            futures = [
+                client.submit(
+                    _run_batch,
+                    plugin,
+                    numbered[i : i + size],
+                    stop_time,
+                    output_interval,
+                    outputs,
+                    pure=False,
+                )
+                for i in range(0, len(runs), size)
+            ]
             if progress:
                 _show_progress(0, len(runs), 0, start)
             for future in as_completed(futures):
@@ -287,10 +335,18 @@ def sweep(fmu, runs: Iterable[Mapping[str, float]], *, stop_time: float = 10.0,
             client.unregister_worker_plugin(plugin)
     frames.sort(key=lambda frame: frame["run"].iat[0])
     results = pd.concat(frames, ignore_index=True)
-    results = pd.concat([results[["run"]], inputs.loc[results["run"]].reset_index(drop=True),
-                         results.drop(columns="run")], axis=1)
-    results.attrs = {"fmu": md.modelName, "fmu_guid": md.guid, "stop_time": stop_time,
-                     "output_interval": output_interval, "outputs": outputs, "inputs": list(inputs.columns)}
+    results = pd.concat(
+        [results[["run"]], inputs.loc[results["run"]].reset_index(drop=True), results.drop(columns="run")],
+        axis=1,
+    )
+    results.attrs = {
+        "fmu": md.modelName,
+        "fmu_guid": md.guid,
+        "stop_time": stop_time,
+        "output_interval": output_interval,
+        "outputs": outputs,
+        "inputs": list(inputs.columns),
+    }
     if out is not None:
         results.to_parquet(out, index=False)
     return results

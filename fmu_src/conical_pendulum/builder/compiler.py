@@ -3,6 +3,7 @@
 The cache key covers the scene's structure and the generator's own sources, so a
 rebuild of the same scene only loads the cached extension.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -23,9 +24,11 @@ from ..scene import Scene
 
 HERE = Path(__file__).parent
 CSRC = HERE.parent / "runtime" / "csrc"
-GENERATOR_SOURCES = [*(HERE / name for name in ("kane.py", "model.py", "codegen.py", "compiler.py")),
-                     HERE.parent / "runtime" / "rules.py",  # the statistics' slots (model.h)
-                     *sorted(CSRC.glob("*.[chp]*"))]
+GENERATOR_SOURCES = [
+    *(HERE / name for name in ("kane.py", "model.py", "codegen.py", "compiler.py")),
+    HERE.parent / "runtime" / "rules.py",  # the statistics' slots (model.h)
+    *sorted(CSRC.glob("*.[chp]*")),
+]
 LIMITED_API = "0x030B0000"  # CPython 3.11: one compiled file serves 3.11 and newer
 
 
@@ -106,8 +109,7 @@ def build_core(scene: Scene, cache: Path | None = None) -> CoreBuild:
         shutil.copy2(CSRC / "core.pyx", work / f"{name}.pyx")
         _compile(name, work)
         seconds["compile"] = time.perf_counter() - start
-        (work / "build.json").write_text(json.dumps(
-            {"scene": scene.to_dict(), "seconds": seconds}, indent=1))
+        (work / "build.json").write_text(json.dumps({"scene": scene.to_dict(), "seconds": seconds}, indent=1))
         try:
             work.rename(directory)
         except OSError:
@@ -122,15 +124,21 @@ def _compile(name: str, work: Path) -> None:
 
     compiler = (os.environ.get("CC") or sysconfig.get_config_var("CC") or "cc").split()[0]
     if shutil.which(compiler) is None:
-        raise UserError(f"the compiled core needs the C compiler {compiler}, which is not on "
-                        "PATH (Debian: apt-get install gcc; or set CC)")
+        raise UserError(
+            f"the compiled core needs the C compiler {compiler}, which is not on "
+            "PATH (Debian: apt-get install gcc; or set CC)"
+        )
 
-    sources = [f"{name}.pyx", "model.c", "dynamics.c", "solvers.c", "diagnosis.c", "cosim.c",
-               "chain.c"]
+    sources = [f"{name}.pyx", "model.c", "dynamics.c", "solvers.c", "diagnosis.c", "cosim.c", "chain.c"]
     extension = Extension(
-        name, [str(work / s) for s in sources], include_dirs=[str(work)],
+        name,
+        [str(work / s) for s in sources],
+        include_dirs=[str(work)],
         define_macros=[("Py_LIMITED_API", LIMITED_API), ("CYTHON_LIMITED_API", "1")],
-        py_limited_api=True, extra_compile_args=["-O2", "-g0"], extra_link_args=["-s"])
+        py_limited_api=True,
+        extra_compile_args=["-O2", "-g0"],
+        extra_link_args=["-s"],
+    )
     cwd = os.getcwd()
     os.chdir(work)
     try:

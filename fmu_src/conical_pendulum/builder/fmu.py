@@ -5,6 +5,7 @@ to a scene (its variables, start values, descriptions, the core's file) goes int
 resources/model.json. pythonfmu writes the archive; model_description.complete then
 mends its modelDescription, and the FMU moves into place only when everything succeeded.
 """
+
 from __future__ import annotations
 
 import ast
@@ -56,15 +57,22 @@ def model_data(scene: Scene, core: CoreBuild, settings: dict, backend: str = "py
 BACKENDS = ("pythonfmu", "native")
 
 
-def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.fmu",
-              settings: dict | None = None, cache: Path | None = None,
-              backend: str = "pythonfmu", platforms: tuple[str, ...] = ("linux64",)) -> FmuBuild:
+def build_fmu(
+    scene: Scene,
+    output: Path | str = Path("dist") / f"{MODEL_NAME}.fmu",
+    settings: dict | None = None,
+    cache: Path | None = None,
+    backend: str = "pythonfmu",
+    platforms: tuple[str, ...] = ("linux64",),
+) -> FmuBuild:
     """The scene's FMU at `output`: the pythonfmu slave (the default), or with
     backend="native" the same C with FMI glue in C (builder.native), with a binary for each
     of `platforms` ("linux64", and "win64" cross-compiled; the pythonfmu FMU is linux64 only)."""
     if backend != "native" and tuple(platforms) != ("linux64",):
-        raise ValueError(f"platforms: the pythonfmu FMU runs on linux64 only, not {platforms}; "
-                         "a native FMU (backend='native') can carry win64 too")
+        raise ValueError(
+            f"platforms: the pythonfmu FMU runs on linux64 only, not {platforms}; "
+            "a native FMU (backend='native') can carry win64 too"
+        )
     if backend not in BACKENDS:
         raise ValueError(f"backend: {backend!r} is not one of {BACKENDS}")
     start = time.perf_counter()
@@ -79,9 +87,15 @@ def build_fmu(scene: Scene, output: Path | str = Path("dist") / f"{MODEL_NAME}.f
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_model_") as tmp:
         model_file = Path(tmp) / MODEL_FILE
         model_file.write_text(json.dumps(data, indent=1))
-        module_name = package("slave", [model_file, core.library], output, {},
-                              described=data["variables"],
-                              canGetAndSetFMUstate=True, canSerializeFMUstate=True)
+        module_name = package(
+            "slave",
+            [model_file, core.library],
+            output,
+            {},
+            described=data["variables"],
+            canGetAndSetFMUstate=True,
+            canSerializeFMUstate=True,
+        )
     return FmuBuild(output, core, module_name, time.perf_counter() - start)
 
 
@@ -102,8 +116,9 @@ def checked_settings(settings: dict | None) -> dict:
     unknown = set(settings or {}) - set(SETTINGS)
     if unknown:
         raise ValueError(f"unknown setting(s) {sorted(unknown)}; known: {sorted(SETTINGS)}")
-    return {name: check_setting(name, value)
-            for name, value in {**DEFAULT_SETTINGS, **(settings or {})}.items()}
+    return {
+        name: check_setting(name, value) for name, value in {**DEFAULT_SETTINGS, **(settings or {})}.items()
+    }
 
 
 def runtime_digest() -> str:
@@ -130,8 +145,15 @@ def runtime_modules(slave_module: str) -> list[str]:
     return sorted(needed)
 
 
-def package(slave_module: str, data_files: list[Path], output: Path, starts: dict,
-            feedthrough=(), described: list[dict] | None = None, **capabilities) -> str:
+def package(
+    slave_module: str,
+    data_files: list[Path],
+    output: Path,
+    starts: dict,
+    feedthrough=(),
+    described: list[dict] | None = None,
+    **capabilities,
+) -> str:
     """Build the FMU of runtime/<slave_module>.py (its SLAVE class) at `output`.
 
     The FMU's resources hold the runtime's modules the slave runs with (runtime_modules,
@@ -157,8 +179,13 @@ def package(slave_module: str, data_files: list[Path], output: Path, starts: dic
         staged = Path(tmp) / f"{slave_module}.fmu"
         saved_path, saved_modules = list(sys.path), set(sys.modules)
         try:
-            FmuBuilder.build_FMU(script, dest=staged, project_files=[runtime, *data_files],
-                                 canHandleVariableCommunicationStepSize=True, **capabilities)
+            FmuBuilder.build_FMU(
+                script,
+                dest=staged,
+                project_files=[runtime, *data_files],
+                canHandleVariableCommunicationStepSize=True,
+                **capabilities,
+            )
         finally:  # pythonfmu leaves its import of the slave behind
             sys.path[:] = saved_path
             for name in set(sys.modules) - saved_modules:

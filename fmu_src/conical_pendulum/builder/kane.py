@@ -7,6 +7,7 @@ reproduction is to run the same derivation. Its expressions grow exponentially w
 With kinematics="consistent" it is the reference the fast derivation is tested against,
 with a moving pivot too; the coupled demo's monolithic model builds on `chain`.
 """
+
 import sympy as sm
 import sympy.physics.mechanics as me
 

@@ -19,6 +19,7 @@ The published model (kinematics="pydy-example") cannot be formed this way: its
 equations are whatever sympy derives from contradictory kinematics, so they come from
 running the seed's own KanesMethod derivation (see builder.kane).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -57,9 +58,11 @@ class Equations:
         expressions (for checks)."""
         cse = lambda exprs: (self.definitions, exprs)  # noqa: E731 - lambdify's hook
         args = [self.states, self.params]
-        return (sm.lambdify(args, self.mass_matrix, cse=cse),
-                sm.lambdify(args, self.forcing, cse=cse),
-                sm.lambdify(args + [self.rates], self.outputs, cse=cse))
+        return (
+            sm.lambdify(args, self.mass_matrix, cse=cse),
+            sm.lambdify(args, self.forcing, cse=cse),
+            sm.lambdify(args + [self.rates], self.outputs, cse=cse),
+        )
 
 
 def joint_kinematics():
@@ -91,8 +94,9 @@ class _Builder:
         if isinstance(value, sm.MatrixBase):
             return Vec([self.name(f"{label}_{k}", v) for k, v in enumerate(value)]).reshape(*value.shape)
         value = sm.sympify(value)
-        if value.is_Atom or (value.is_Mul and len(value.args) == 2 and value.args[0].is_Number
-                             and value.args[1].is_Atom):
+        if value.is_Atom or (
+            value.is_Mul and len(value.args) == 2 and value.args[0].is_Number and value.args[1].is_Atom
+        ):
             return value
         symbol = sm.Symbol(label)
         self.definitions.append((symbol, value))
@@ -127,10 +131,15 @@ def _symbols(scene: Scene) -> _Symbols:
     n = scene.n
     params = {name: sm.Symbol(name) for name in scene.core_parameter_names()}
     return _Symbols(
-        n=n, alpha=sm.symbols(f"alpha0:{n}"), beta=sm.symbols(f"beta0:{n}"),
-        omega=sm.symbols(f"omega0:{n}"), delta=sm.symbols(f"delta0:{n}"),
-        rates=sm.symbols(f"domega0:{n}") + sm.symbols(f"ddelta0:{n}"), params=params,
-        pivot_acc=Vec([params[name] for name in scene.input_names()]) if scene.coupling else None)
+        n=n,
+        alpha=sm.symbols(f"alpha0:{n}"),
+        beta=sm.symbols(f"beta0:{n}"),
+        omega=sm.symbols(f"omega0:{n}"),
+        delta=sm.symbols(f"delta0:{n}"),
+        rates=sm.symbols(f"domega0:{n}") + sm.symbols(f"ddelta0:{n}"),
+        params=params,
+        pivot_acc=Vec([params[name] for name in scene.input_names()]) if scene.coupling else None,
+    )
 
 
 @dataclass
@@ -169,8 +178,9 @@ class _Parent:
     def pivot(cls, dim: int) -> _Parent:
         """The inertial frame and a fixed pivot at the origin (a moving pivot's
         acceleration is added at the bodies, _add_particle)."""
-        return cls(_Frame(sm.eye(3), ZERO, [ZERO] * dim, ZERO),
-                   _Point(ZERO, [ZERO] * dim, ZERO, ZERO), (1, 0, 0, 0))
+        return cls(
+            _Frame(sm.eye(3), ZERO, [ZERO] * dim, ZERO), _Point(ZERO, [ZERO] * dim, ZERO, ZERO), (1, 0, 0, 0)
+        )
 
 
 @dataclass
@@ -210,8 +220,9 @@ def _link_frame(b: _Builder, scene: Scene, sym: _Symbols, joint, i: int, parent:
         w_rel = axes[:, 0] * omega + axes[:, 1] * delta
         w = b.name(f"w{i}", parent.w + w_rel)
         jac_rate = (joint_jac_rate[0] * omega + joint_jac_rate[1] * delta).xreplace(sub)
-        wb = b.name(f"wb{i}", parent.wb + parent.w.cross(w_rel)
-                    + parent.rotation * jac_rate * Vec([omega, delta]))
+        wb = b.name(
+            f"wb{i}", parent.wb + parent.w.cross(w_rel) + parent.rotation * jac_rate * Vec([omega, delta])
+        )
     else:  # "pydy-example": the published set_ang_vel(I, omega*I.z + delta*I.x)
         partial_w = [ZERO] * sym.dim
         partial_w[i], partial_w[sym.n + i] = UNIT_Z, UNIT_X
@@ -230,17 +241,30 @@ def _link_points(b: _Builder, sym: _Symbols, i: int, parent: _Parent, frame: _Fr
     r = b.name(f"r{i}", -sym.params[f"l{i}"] * frame.rotation[:, 1])
     w_cross_r = w.cross(r)
     acc_rel = b.name(f"ar{i}", frame.wb.cross(r) + w.cross(w_cross_r))
-    partial_rel = [b.name(f"vr{i}_{s}", frame.partial_w[s].cross(r))
-                   if frame.partial_w[s] != ZERO else ZERO for s in range(dim)]
-    centre = _Point(joint.position + r / 2, [joint.partials[s] + partial_rel[s] / 2 for s in range(dim)],
-                    joint.velocity + w_cross_r / 2, joint.acc_bias + acc_rel / 2)
+    partial_rel = [
+        b.name(f"vr{i}_{s}", frame.partial_w[s].cross(r)) if frame.partial_w[s] != ZERO else ZERO
+        for s in range(dim)
+    ]
+    centre = _Point(
+        joint.position + r / 2,
+        [joint.partials[s] + partial_rel[s] / 2 for s in range(dim)],
+        joint.velocity + w_cross_r / 2,
+        joint.acc_bias + acc_rel / 2,
+    )
     quaternion = _quaternion_times(b, i, parent.quaternion, sym.alpha[i], sym.beta[i])
     end = b.name(f"p{i}", joint.position + r)
-    partial_end = [b.name(f"vp{i}_{s}", joint.partials[s] + partial_rel[s])
-                   if joint.partials[s] != ZERO or partial_rel[s] != ZERO else ZERO
-                   for s in range(dim)]
-    lower = _Point(end, partial_end, b.name(f"v{i}", joint.velocity + w_cross_r),
-                   b.name(f"a{i}", joint.acc_bias + acc_rel))
+    partial_end = [
+        b.name(f"vp{i}_{s}", joint.partials[s] + partial_rel[s])
+        if joint.partials[s] != ZERO or partial_rel[s] != ZERO
+        else ZERO
+        for s in range(dim)
+    ]
+    lower = _Point(
+        end,
+        partial_end,
+        b.name(f"v{i}", joint.velocity + w_cross_r),
+        b.name(f"a{i}", joint.acc_bias + acc_rel),
+    )
     return centre, lower, quaternion
 
 
@@ -277,18 +301,22 @@ def _add_link_rotation(b: _Builder, sums: _Sums, sym: _Symbols, i: int, frame: _
     to_body = frame.rotation.T
     body_w = b.name(f"bw{i}", to_body * frame.w)
     body_h = Vec([inertia[k] * body_w[k] for k in range(3)])
-    body_torque = b.name(f"bt{i}", Vec([inertia[k] * v for k, v in enumerate(to_body * frame.wb)])
-                         + body_w.cross(body_h))
-    body_partial = [b.name(f"bpw{i}_{s}", to_body * frame.partial_w[s]) if frame.partial_w[s] != ZERO
-                    else ZERO for s in range(sym.dim)]
+    body_torque = b.name(
+        f"bt{i}", Vec([inertia[k] * v for k, v in enumerate(to_body * frame.wb)]) + body_w.cross(body_h)
+    )
+    body_partial = [
+        b.name(f"bpw{i}_{s}", to_body * frame.partial_w[s]) if frame.partial_w[s] != ZERO else ZERO
+        for s in range(sym.dim)
+    ]
     for s in range(sym.dim):
         if body_partial[s] == ZERO:
             continue
         sums.force_terms[s] += -body_partial[s].dot(body_torque)
         for t in range(s, sym.dim):
             if body_partial[t] != ZERO:
-                sums.mass_terms[s][t] += sum(inertia[k] * body_partial[s][k] * body_partial[t][k]
-                                             for k in range(3))
+                sums.mass_terms[s][t] += sum(
+                    inertia[k] * body_partial[s][k] * body_partial[t][k] for k in range(3)
+                )
     sums.kinetic += body_w.dot(body_h) / 2
 
 
@@ -297,8 +325,10 @@ def _mass_matrix_and_forcing(scene: Scene, sums: _Sums, dim: int) -> tuple[sm.Ma
     the seed's own KanesMethod derivation instead (module docstring)."""
     if scene.kinematics == "pydy-example":
         return kanes_method(scene)
-    return (sm.Matrix(dim, dim, lambda s, t: sums.mass_terms[min(s, t)][max(s, t)]),
-            sm.Matrix(sums.force_terms))
+    return (
+        sm.Matrix(dim, dim, lambda s, t: sums.mass_terms[min(s, t)][max(s, t)]),
+        sm.Matrix(sums.force_terms),
+    )
 
 
 def _outputs(scene: Scene, sums: _Sums, bobs: list, poses: list) -> list[sm.Expr]:
@@ -361,8 +391,10 @@ def _quaternion_times(b, i, parent, a, c):
     rel = (cb * ca, sb * ca, -sb * sa, cb * sa)
     w1, x1, y1, z1 = parent
     w2, x2, y2, z2 = rel
-    product = (w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-               w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-               w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-               w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2)
+    product = (
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+    )
     return tuple(b.name(f"q{i}_{k}", v) for k, v in enumerate(product))

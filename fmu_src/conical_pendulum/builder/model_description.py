@@ -1,4 +1,5 @@
 """The FMU's model description: what pythonfmu leaves out or gets wrong, and the variables' descriptions."""
+
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
@@ -8,8 +9,7 @@ from pathlib import Path
 from ..scene import Scene
 
 
-def complete(fmu: Path, starts: dict, feedthrough: set[str],
-             described: list[dict] | None = None) -> None:
+def complete(fmu: Path, starts: dict, feedthrough: set[str], described: list[dict] | None = None) -> None:
     """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only;
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
@@ -28,8 +28,11 @@ def complete(fmu: Path, starts: dict, feedthrough: set[str],
 
     platform = f"binaries/{get_platform()}/"
     with zipfile.ZipFile(fmu) as archive:
-        entries = {info.filename: archive.read(info) for info in archive.infolist()
-                   if not info.filename.startswith("binaries/") or info.filename.startswith(platform)}
+        entries = {
+            info.filename: archive.read(info)
+            for info in archive.infolist()
+            if not info.filename.startswith("binaries/") or info.filename.startswith(platform)
+        }
     root = ET.fromstring(entries["modelDescription.xml"])
     variables = root.find("ModelVariables").findall("ScalarVariable")
     structure = root.find("ModelStructure")
@@ -37,28 +40,34 @@ def complete(fmu: Path, starts: dict, feedthrough: set[str],
         structure.remove(child)
     outputs = ET.SubElement(structure, "Outputs")
     initial = ET.SubElement(structure, "InitialUnknowns")
-    inputs = " ".join(str(index) for index, var in enumerate(variables, start=1)
-                      if var.get("causality") == "input")
+    inputs = " ".join(
+        str(index) for index, var in enumerate(variables, start=1) if var.get("causality") == "input"
+    )
     if described is not None:
         _check_described(variables, described)
         starts = {v["name"]: v["start"] for v in described if v["start"] is not None}
         index_of = {v["name"]: str(index) for index, v in enumerate(described, start=1)}
         inputs_of = {v["name"]: v["causality"] == "input" for v in described}
         # Co-Simulation only: an output depends on the inputs it names (the state is not a known)
-        depends = {v["name"]: " ".join(index_of[name] for name in v["depends_on"] if inputs_of[name])
-                   for v in described}
+        depends = {
+            v["name"]: " ".join(index_of[name] for name in v["depends_on"] if inputs_of[name])
+            for v in described
+        }
     else:
-        depends = {var.get("name"): inputs if var.get("name") in feedthrough else ""
-                   for var in variables}
+        depends = {var.get("name"): inputs if var.get("name") in feedthrough else "" for var in variables}
     for index, var in enumerate(variables, start=1):
         real = var.find("Real")
         if real is not None and real.get("start") is not None:
             real.set("start", repr(float(starts[var.get("name")])))
         if var.get("causality") == "output":
             direct = depends[var.get("name")]
-            ET.SubElement(outputs, "Unknown", index=str(index), dependencies=direct,
-                          **({"dependenciesKind": " ".join(["dependent"] * len(direct.split()))}
-                             if direct else {}))
+            ET.SubElement(
+                outputs,
+                "Unknown",
+                index=str(index),
+                dependencies=direct,
+                **({"dependenciesKind": " ".join(["dependent"] * len(direct.split()))} if direct else {}),
+            )
             if var.get("initial") in ("calculated", "approx"):
                 ET.SubElement(initial, "Unknown", index=str(index))
     if not len(initial):
@@ -73,44 +82,64 @@ def complete(fmu: Path, starts: dict, feedthrough: set[str],
 
 def _check_described(variables, described: list[dict]) -> None:
     """pythonfmu wrote the variables the description gives, in its order (else ValueError)."""
+
     def attributes(var):
         kind = next(child.tag for child in var)
-        return (var.get("name"), int(var.get("valueReference")), kind, var.get("causality"),
-                var.get("variability"), var.get("initial"))
+        return (
+            var.get("name"),
+            int(var.get("valueReference")),
+            kind,
+            var.get("causality"),
+            var.get("variability"),
+            var.get("initial"),
+        )
 
     written = [attributes(var) for var in variables]
-    wanted = [(v["name"], v["value_reference"], v["type"], v["causality"], v["variability"],
-               v["initial"]) for v in described]
+    wanted = [
+        (v["name"], v["value_reference"], v["type"], v["causality"], v["variability"], v["initial"])
+        for v in described
+    ]
     if written != wanted:
         padded = max(len(written), len(wanted))
-        wrong = next((w, d) for w, d in zip(written + [None] * padded, wanted + [None] * padded)
-                     if w != d)
-        raise ValueError(f"pythonfmu's model description disagrees with the variables' "
-                         f"description: {wrong[0]} where {wrong[1]} was described")
+        wrong = next((w, d) for w, d in zip(written + [None] * padded, wanted + [None] * padded) if w != d)
+        raise ValueError(
+            f"pythonfmu's model description disagrees with the variables' "
+            f"description: {wrong[0]} where {wrong[1]} was described"
+        )
 
 
 def model_description_text(scene: Scene) -> str:
     """The FMU's one-line description of its scene."""
     links = ", ".join(
         ("cylinder" if link.has_mass else "massless") + ("+bob" if link.has_bob else "")
-        for link in scene.links)
-    kinematics = ("" if scene.kinematics == "consistent"
-                  else "; PUBLISHED pydy-example kinematics (does not conserve energy)")
-    coupling = ("; hangs from a moving support: inputs a_pivot_x/y/z (held constant over each "
-                "communication step), outputs F_pivot_x/y/z = F_free_x/y/z - M_app a_pivot "
-                "with the apparent mass M_pivot_xx..zz"
-                if scene.coupling else "")
+        for link in scene.links
+    )
+    kinematics = (
+        ""
+        if scene.kinematics == "consistent"
+        else "; PUBLISHED pydy-example kinematics (does not conserve energy)"
+    )
+    coupling = (
+        "; hangs from a moving support: inputs a_pivot_x/y/z (held constant over each "
+        "communication step), outputs F_pivot_x/y/z = F_free_x/y/z - M_app a_pivot "
+        "with the apparent mass M_pivot_xx..zz"
+        if scene.coupling
+        else ""
+    )
     return f"{scene.n}-link conical pendulum ({links}){kinematics}{coupling}"
 
 
 _INDEXED = {
-    "l": "length of link {i} [m]", "m": "mass of bob {i} [kg]", "M": "mass of link {i} [kg]",
+    "l": "length of link {i} [m]",
+    "m": "mass of bob {i} [kg]",
+    "M": "mass of link {i} [kg]",
     "Ixx": "central inertia of link {i} about its x axis [kg m2]",
     "Iyy": "central inertia of link {i} about its own (y) axis [kg m2]",
     "Izz": "central inertia of link {i} about its z axis [kg m2]",
     "alpha": "angle of joint {i} about the parent's z axis [rad]",
     "beta": "angle of joint {i} about the parent's x axis [rad]",
-    "omega": "alpha{i}' [rad/s]", "delta": "beta{i}' [rad/s]",
+    "omega": "alpha{i}' [rad/s]",
+    "delta": "beta{i}' [rad/s]",
 }
 _NAMED = {
     "g": "gravitational acceleration along -Y [m/s2]",
@@ -124,17 +153,25 @@ def describe(name: str) -> str:
     if name in _NAMED:
         return _NAMED[name]
     if name.startswith("a_pivot_"):
-        return (f"acceleration of the pivot (the support), inertial {name[-1]} (Y up) [m/s2]; "
-                "held constant over each communication step")
+        return (
+            f"acceleration of the pivot (the support), inertial {name[-1]} (Y up) [m/s2]; "
+            "held constant over each communication step"
+        )
     if name.startswith("M_pivot_"):
-        return (f"apparent mass of the chain at the pivot, entry {name[-2:]} of the symmetric "
-                "M_app in F_pivot = F_free - M_app a_pivot [kg]; depends on the state only")
+        return (
+            f"apparent mass of the chain at the pivot, entry {name[-2:]} of the symmetric "
+            "M_app in F_pivot = F_free - M_app a_pivot [kg]; depends on the state only"
+        )
     if name.startswith("F_free_"):
-        return (f"force the pendulum would exert on a support at rest (a_pivot = 0), inertial "
-                f"{name[-1]} (Y up) [N]: F_pivot = F_free - M_app a_pivot; depends on the state only")
+        return (
+            f"force the pendulum would exert on a support at rest (a_pivot = 0), inertial "
+            f"{name[-1]} (Y up) [N]: F_pivot = F_free - M_app a_pivot; depends on the state only"
+        )
     if name.startswith("F_pivot_"):
-        return (f"force the pendulum exerts on its support, inertial {name[-1]} (Y up) [N]; "
-                "depends at once on the a_pivot inputs")
+        return (
+            f"force the pendulum exerts on its support, inertial {name[-1]} (Y up) [N]; "
+            "depends at once on the a_pivot inputs"
+        )
     if name.startswith("bob"):
         return f"bob {name[3:].split('_')[0]} position relative to the pivot, inertial {name[-1]} (Y up) [m]"
     if name.startswith("link"):
@@ -143,4 +180,4 @@ def describe(name: str) -> str:
             return f"link {index} orientation quaternion, {part[1]} component"
         return f"link {index} mass-centre position relative to the pivot, inertial {part} [m]"
     kind = name.rstrip("0123456789")
-    return _INDEXED[kind].format(i=name[len(kind):])
+    return _INDEXED[kind].format(i=name[len(kind) :])

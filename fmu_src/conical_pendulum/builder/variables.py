@@ -12,6 +12,7 @@ entry in GROUPS (and the code that computes its values).
 The statistics' order is runtime.rules.STATISTICS's, which the C indexes by name
 (CP_STAT_*, generated into model.h by codegen).
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -29,16 +30,16 @@ class Variable:
     """One variable of an FMU, as its model description, model.json and fmu_config.h say."""
 
     name: str
-    type: str                 # "Real" or "Integer"
-    causality: str            # FMI 2.0's: parameter, input, output, local
-    variability: str          # fixed, continuous, discrete
-    initial: str | None       # exact, calculated, or None (FMI's default for the causality)
+    type: str  # "Real" or "Integer"
+    causality: str  # FMI 2.0's: parameter, input, output, local
+    variability: str  # fixed, continuous, discrete
+    initial: str | None  # exact, calculated, or None (FMI's default for the causality)
     value_reference: int
     start: float | int | None
-    rule: str                 # runtime.rules.RULES's key: the values it takes
+    rule: str  # runtime.rules.RULES's key: the values it takes
     description: str
     depends_on: tuple[str, ...] = ()  # an unknown's dependencies on knowns (ModelStructure)
-    group: str = ""           # the GROUPS entry it belongs to
+    group: str = ""  # the GROUPS entry it belongs to
     derivative_of: str | None = None  # der(x): the state x
 
     def to_dict(self) -> dict:
@@ -65,7 +66,7 @@ class Group:
     causality: str
     variability: str
     initial: str | None
-    c_name: str   # fmu_config.h: CP_VR_<c_name> is the group's first value reference
+    c_name: str  # fmu_config.h: CP_VR_<c_name> is the group's first value reference
     members: Callable[[Scene, dict], list[Member]]
     backends: tuple[str, ...] = BACKENDS
     named: bool = False  # fmu_config.h also defines CP_VR_<NAME> for each of its variables
@@ -85,14 +86,18 @@ def _inputs(scene, settings):  # at rest; held over each communication step
 
 
 def _states(scene, settings):  # a state is an output of its own value
-    return [Member(name, start, describe(name), (name,))
-            for name, start in zip(scene.state_names(), scene.state_defaults())]
+    return [
+        Member(name, start, describe(name), (name,))
+        for name, start in zip(scene.state_names(), scene.state_defaults())
+    ]
 
 
 def _outputs(scene, settings):  # functions of the state; the pivot force of the inputs too
     states, inputs = tuple(scene.state_names()), tuple(scene.input_names())
-    return [Member(name, None, describe(name), states + (inputs if name in PIVOT_OUTPUTS else ()))
-            for name in scene.output_names()]
+    return [
+        Member(name, None, describe(name), states + (inputs if name in PIVOT_OUTPUTS else ()))
+        for name in scene.output_names()
+    ]
 
 
 def _statistics(scene, settings):  # counts of what the solver did, not functions of the knowns
@@ -101,17 +106,28 @@ def _statistics(scene, settings):  # counts of what the solver did, not function
 
 def _settings(integer):
     def members(scene, settings):
-        return [Member(name, settings[name], setting.description)
-                for name, setting in SETTINGS.items() if setting.integer == integer]
+        return [
+            Member(name, settings[name], setting.description)
+            for name, setting in SETTINGS.items()
+            if setting.integer == integer
+        ]
+
     return members
 
 
 def _derivatives(scene, settings):  # x = (angles, rates): an angle's derivative is its rate
     states, inputs = scene.state_names(), tuple(scene.input_names())
     n_dof = len(states) // 2
-    return [Member(f"der({name})", None, f"time derivative of {name}",
-                   (states[n_dof + k],) if k < n_dof else tuple(states) + inputs, name)
-            for k, name in enumerate(states)]
+    return [
+        Member(
+            f"der({name})",
+            None,
+            f"time derivative of {name}",
+            (states[n_dof + k],) if k < n_dof else tuple(states) + inputs,
+            name,
+        )
+        for k, name in enumerate(states)
+    ]
 
 
 # The value-reference order of every FMU: Reals, then Integers, then (native FMU, Model
@@ -123,12 +139,27 @@ GROUPS = [
     Group("states", "Real", "output", "continuous", "exact", "STATE", _states),
     Group("outputs", "Real", "output", "continuous", "calculated", "OUTPUT", _outputs),
     Group("statistics", "Real", "output", "discrete", "calculated", "STATISTICS", _statistics),
-    Group("real_settings", "Real", "parameter", "fixed", None, "SETTINGS", _settings(False),
-          named=True),
-    Group("integer_settings", "Integer", "parameter", "fixed", None, "INTEGER_SETTINGS",
-          _settings(True), named=True),
-    Group("derivatives", "Real", "local", "continuous", "calculated", "DERIVATIVE", _derivatives,
-          backends=("native",)),
+    Group("real_settings", "Real", "parameter", "fixed", None, "SETTINGS", _settings(False), named=True),
+    Group(
+        "integer_settings",
+        "Integer",
+        "parameter",
+        "fixed",
+        None,
+        "INTEGER_SETTINGS",
+        _settings(True),
+        named=True,
+    ),
+    Group(
+        "derivatives",
+        "Real",
+        "local",
+        "continuous",
+        "calculated",
+        "DERIVATIVE",
+        _derivatives,
+        backends=("native",),
+    ),
 ]
 
 
@@ -146,13 +177,22 @@ def variables(scene: Scene, settings: dict, backend: str = "pythonfmu") -> list[
     records = []
     for group in groups(backend):
         for member in group.members(scene, settings):
-            records.append(Variable(
-                name=member.name, type=group.type, causality=group.causality,
-                variability=group.variability, initial=group.initial,
-                value_reference=len(records), start=member.start,
-                rule=rule_of(member.name)[0],
-                description=member.description, depends_on=member.depends_on, group=group.name,
-                derivative_of=member.derivative_of))
+            records.append(
+                Variable(
+                    name=member.name,
+                    type=group.type,
+                    causality=group.causality,
+                    variability=group.variability,
+                    initial=group.initial,
+                    value_reference=len(records),
+                    start=member.start,
+                    rule=rule_of(member.name)[0],
+                    description=member.description,
+                    depends_on=member.depends_on,
+                    group=group.name,
+                    derivative_of=member.derivative_of,
+                )
+            )
     return records
 
 

@@ -1,5 +1,6 @@
 """`conical-pendulum build` (and `build_fmu.py`): a scene's FMU, checked against the native
 reference, its run drawn."""
+
 from __future__ import annotations
 
 import argparse
@@ -20,44 +21,77 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "After the build, unless --no-check, the FMU runs with fmpy (10 s, an output every 1/60 s,\n"
         "DOP853 at 1e-12) against the native scipy integration of the same scene; the run goes to\n"
         "results.csv, pendulum.png and pendulum.gif next to the FMU. Exit status 1 when the\n"
-        "angles disagree by more than 1e-8 rad.")
+        "angles disagree by more than 1e-8 rad."
+    )
     scene = parser.add_argument_group("the scene")
-    scene.add_argument("--scene", type=Path, metavar="FILE",
-                       help="a scene file (TOML or JSON, see scenes/seed.toml), instead of the options below")
+    scene.add_argument(
+        "--scene",
+        type=Path,
+        metavar="FILE",
+        help="a scene file (TOML or JSON, see scenes/seed.toml), instead of the options below",
+    )
     scene.add_argument("--links", type=int, metavar="N", help=f"number of links, 1 to {MAX_LINKS} (3)")
     scene.add_argument("--massless-links", action="store_true", help="links without mass or inertia")
     scene.add_argument("--no-bobs", action="store_true", help="no bobs at the joints")
-    scene.add_argument("--kinematics", choices=KINEMATICS,
-                       help="'pydy-example' reproduces the published (energy-violating) equations "
-                            "(default: consistent)")
-    scene.add_argument("--coupling", action="store_true",
-                       help="inputs a_pivot_x/y/z (the support's acceleration) and outputs "
-                            "F_pivot_x/y/z (the force on it), with its split F_free_x/y/z, M_pivot_xx..zz")
-    parser.add_argument("--output", type=Path, default=Path("dist/ConicalPendulum.fmu"), metavar="PATH",
-                        help="the FMU to write, ending in .fmu (dist/ConicalPendulum.fmu)")
-    parser.add_argument("--native", action="store_true",
-                        help="the native FMU: FMI glue in C, no Python at run time (docs/native.md)")
-    parser.add_argument("--win64", action="store_true",
-                        help="with --native: also a Windows binary, cross-compiled (needs mingw-w64)")
-    parser.add_argument("--no-check", action="store_true",
-                        help="only build; skip the fmpy run against the native integrator, "
-                             "its plot and its animation")
+    scene.add_argument(
+        "--kinematics",
+        choices=KINEMATICS,
+        help="'pydy-example' reproduces the published (energy-violating) equations (default: consistent)",
+    )
+    scene.add_argument(
+        "--coupling",
+        action="store_true",
+        help="inputs a_pivot_x/y/z (the support's acceleration) and outputs "
+        "F_pivot_x/y/z (the force on it), with its split F_free_x/y/z, M_pivot_xx..zz",
+    )
+    parser.add_argument(
+        "--output",
+        type=Path,
+        default=Path("dist/ConicalPendulum.fmu"),
+        metavar="PATH",
+        help="the FMU to write, ending in .fmu (dist/ConicalPendulum.fmu)",
+    )
+    parser.add_argument(
+        "--native",
+        action="store_true",
+        help="the native FMU: FMI glue in C, no Python at run time (docs/native.md)",
+    )
+    parser.add_argument(
+        "--win64",
+        action="store_true",
+        help="with --native: also a Windows binary, cross-compiled (needs mingw-w64)",
+    )
+    parser.add_argument(
+        "--no-check",
+        action="store_true",
+        help="only build; skip the fmpy run against the native integrator, its plot and its animation",
+    )
 
 
 def choose_scene(args) -> Scene:
     """The scene of --scene, or of the options describing a uniform chain (not both)."""
-    options = [name for name, given in [("--links", args.links is not None),
-                                        ("--massless-links", args.massless_links),
-                                        ("--no-bobs", args.no_bobs),
-                                        ("--kinematics", args.kinematics is not None),
-                                        ("--coupling", args.coupling)] if given]
+    options = [
+        name
+        for name, given in [
+            ("--links", args.links is not None),
+            ("--massless-links", args.massless_links),
+            ("--no-bobs", args.no_bobs),
+            ("--kinematics", args.kinematics is not None),
+            ("--coupling", args.coupling),
+        ]
+        if given
+    ]
     if args.scene:
         if options:
             raise UserError(f"--scene describes the whole scene; drop {', '.join(options)}")
         return load_scene(args.scene)
-    return Scene.uniform(3 if args.links is None else args.links,
-                         massless_links=args.massless_links, bobs=not args.no_bobs,
-                         kinematics=args.kinematics or "consistent", coupling=args.coupling)
+    return Scene.uniform(
+        3 if args.links is None else args.links,
+        massless_links=args.massless_links,
+        bobs=not args.no_bobs,
+        kinematics=args.kinematics or "consistent",
+        coupling=args.coupling,
+    )
 
 
 def run(args) -> int:
@@ -68,15 +102,24 @@ def run(args) -> int:
     if args.win64 and not args.native:
         raise UserError("--win64: only the native FMU carries a Windows binary; add --native")
     try:
-        build = fmus.build_fmu(scene, args.output, backend="native" if args.native else "pythonfmu",
-                               platforms=("linux64", "win64") if args.win64 else ("linux64",))
+        build = fmus.build_fmu(
+            scene,
+            args.output,
+            backend="native" if args.native else "pythonfmu",
+            platforms=("linux64", "win64") if args.win64 else ("linux64",),
+        )
     except ValueError as exc:
         raise UserError(str(exc)) from None
-    how = "from cache" if build.core.cached else "compiled " + ", ".join(
-        f"{k} {v:.1f} s" for k, v in build.core.seconds.items())
-    print(f"built {build.path} ({build.path.stat().st_size / 1024:.0f} KiB) in {build.seconds:.1f} s: "
-          f"{scene.n} links, {len(scene.parameter_names())} parameters, {len(scene.input_names())} inputs, "
-          f"{len(scene.output_names())} calculated outputs; {'native, ' if args.native else ''}core {how}")
+    how = (
+        "from cache"
+        if build.core.cached
+        else "compiled " + ", ".join(f"{k} {v:.1f} s" for k, v in build.core.seconds.items())
+    )
+    print(
+        f"built {build.path} ({build.path.stat().st_size / 1024:.0f} KiB) in {build.seconds:.1f} s: "
+        f"{scene.n} links, {len(scene.parameter_names())} parameters, {len(scene.input_names())} inputs, "
+        f"{len(scene.output_names())} calculated outputs; {'native, ' if args.native else ''}core {how}"
+    )
     if args.no_check:
         return 0
     comparison, ok = compare(build.path, scene)

@@ -1,4 +1,5 @@
 """`conical-pendulum check`: an FMU run with fmpy against the native reference of its scene."""
+
 from __future__ import annotations
 
 import argparse
@@ -12,14 +13,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "\n\nThe scene comes from the FMU (the one it was built from, in its resources). The FMU\n"
         "runs with fmpy, its DOP853 at --rtol; the native reference is scipy's DOP853 at 1e-12 (or\n"
         "--rtol if tighter) on the same output grid. Prints every output's largest difference.\n"
-        "Exit status 1 when the angles disagree by more than 1e-8 rad.")
+        "Exit status 1 when the angles disagree by more than 1e-8 rad."
+    )
     parser.add_argument("fmu", type=Path, metavar="FMU", help="an FMU built by conical-pendulum build")
-    parser.add_argument("--stop-time", type=float, default=10.0, metavar="SECONDS",
-                        help="simulated seconds (10)")
-    parser.add_argument("--interval", type=float, default=1.0 / 60.0, metavar="SECONDS",
-                        help="output interval, where the runs are compared (1/60)")
-    parser.add_argument("--rtol", type=float, default=1e-12,
-                        help="the FMU's relative (and absolute) tolerance (1e-12)")
+    parser.add_argument(
+        "--stop-time", type=float, default=10.0, metavar="SECONDS", help="simulated seconds (10)"
+    )
+    parser.add_argument(
+        "--interval",
+        type=float,
+        default=1.0 / 60.0,
+        metavar="SECONDS",
+        help="output interval, where the runs are compared (1/60)",
+    )
+    parser.add_argument(
+        "--rtol", type=float, default=1e-12, help="the FMU's relative (and absolute) tolerance (1e-12)"
+    )
 
 
 def run(args) -> int:

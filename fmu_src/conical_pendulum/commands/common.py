@@ -1,5 +1,6 @@
 """What more than one command needs: positive numbers, the scene an FMU was built from,
 and the report of an FMU run against the native reference (build and check)."""
+
 from __future__ import annotations
 
 import time
@@ -29,9 +30,13 @@ def fmu_scene(path: Path):
 def compare(fmu: Path, scene, stop_time: float = 10.0, interval: float = 1.0 / 60.0, rtol: float = 1e-12):
     """Run the FMU against the native reference and print the report: (comparison, angles agree)."""
     start = time.perf_counter()
-    result = comparison.compare(fmu, scene, stop_time=stop_time, output_interval=interval, rtol=rtol, atol=rtol)
-    print(f"fmpy.simulate_fmu, {stop_time:g} s at {1 / interval:g} outputs/s, DOP853 rtol = atol = {rtol:g}, "
-          f"against native scipy DOP853 ({time.perf_counter() - start:.1f} s):")
+    result = comparison.compare(
+        fmu, scene, stop_time=stop_time, output_interval=interval, rtol=rtol, atol=rtol
+    )
+    print(
+        f"fmpy.simulate_fmu, {stop_time:g} s at {1 / interval:g} outputs/s, DOP853 rtol = atol = {rtol:g}, "
+        f"against native scipy DOP853 ({time.perf_counter() - start:.1f} s):"
+    )
     print(result.report())
     error = result.angle_error()
     ok = error <= ANGLE_TOLERANCE

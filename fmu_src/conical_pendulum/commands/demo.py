@@ -1,5 +1,6 @@
 """`conical-pendulum demo`: the pendulum on a cart, co-simulated in ecospy by two schemes
 against one monolithic model (demos/coupled.py; the cosim extra)."""
+
 from __future__ import annotations
 
 import argparse
@@ -21,30 +22,54 @@ def schemes(text: str) -> list[str]:
     chosen = list(dict.fromkeys(text.split(",")))
     unknown = [name for name in chosen if name not in coupled.SCHEMES]
     if unknown:
-        raise argparse.ArgumentTypeError(f"unknown scheme(s) {', '.join(map(repr, unknown))}; "
-                                         f"choose from {', '.join(coupled.SCHEMES)}")
+        raise argparse.ArgumentTypeError(
+            f"unknown scheme(s) {', '.join(map(repr, unknown))}; choose from {', '.join(coupled.SCHEMES)}"
+        )
     return chosen
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     steps, masses, names = coupled.STEPS, coupled.CART_MASSES, list(coupled.SCHEMES)
     parser.description = coupled.__doc__
-    parser.add_argument("--out", type=Path, default=Path("dist") / "coupled",
-                        help="folder for the FMUs, coupling_error.csv and coupling.png (dist/coupled)")
-    parser.add_argument("--steps", type=numbers, default=sorted(steps), metavar="DT,DT,...",
-                        help="communication steps [s], comma-separated; each must divide the stop "
-                             f"time and be a multiple of the smallest ({','.join(map(str, steps))})")
-    parser.add_argument("--stop-time", type=float, default=coupled.STOP_TIME, metavar="SECONDS",
-                        help=f"simulated seconds ({coupled.STOP_TIME:g})")
-    parser.add_argument("--cart-mass", type=numbers, default=sorted(masses, reverse=True),
-                        metavar="KG,KG,...",
-                        help="m_cart [kg], comma-separated; lighter than the chain's apparent mass "
-                             "(3 to 5 kg) the explicit exchange diverges at any step "
-                             f"({','.join(f'{m:g}' for m in masses)})")
-    parser.add_argument("--scheme", type=schemes, default=names, metavar="NAME,NAME,...",
-                        help="how the FMUs exchange the pivot force: explicit (F_pivot_x) or "
-                             "apparent-mass (F_free_x and M_pivot_xx, the cart moving the "
-                             f"chain's apparent mass in its own step) ({','.join(names)})")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("dist") / "coupled",
+        help="folder for the FMUs, coupling_error.csv and coupling.png (dist/coupled)",
+    )
+    parser.add_argument(
+        "--steps",
+        type=numbers,
+        default=sorted(steps),
+        metavar="DT,DT,...",
+        help="communication steps [s], comma-separated; each must divide the stop "
+        f"time and be a multiple of the smallest ({','.join(map(str, steps))})",
+    )
+    parser.add_argument(
+        "--stop-time",
+        type=float,
+        default=coupled.STOP_TIME,
+        metavar="SECONDS",
+        help=f"simulated seconds ({coupled.STOP_TIME:g})",
+    )
+    parser.add_argument(
+        "--cart-mass",
+        type=numbers,
+        default=sorted(masses, reverse=True),
+        metavar="KG,KG,...",
+        help="m_cart [kg], comma-separated; lighter than the chain's apparent mass "
+        "(3 to 5 kg) the explicit exchange diverges at any step "
+        f"({','.join(f'{m:g}' for m in masses)})",
+    )
+    parser.add_argument(
+        "--scheme",
+        type=schemes,
+        default=names,
+        metavar="NAME,NAME,...",
+        help="how the FMUs exchange the pivot force: explicit (F_pivot_x) or "
+        "apparent-mass (F_free_x and M_pivot_xx, the cart moving the "
+        f"chain's apparent mass in its own step) ({','.join(names)})",
+    )
 
 
 def run(args) -> int:
@@ -53,16 +78,21 @@ def run(args) -> int:
     when ecospy failed, of status 2 for bad options or without the cosim extra."""
     steps = args.steps
     for dt in steps:
-        if not (dt > 0 and abs(args.stop_time / dt - round(args.stop_time / dt)) < 1e-9
-                and abs(dt / steps[0] - round(dt / steps[0])) < 1e-9):
-            raise UserError(f"--steps: {dt:g} must be positive, divide --stop-time {args.stop_time:g} "
-                            f"and be a multiple of the smallest step {steps[0]:g}")
+        if not (
+            dt > 0
+            and abs(args.stop_time / dt - round(args.stop_time / dt)) < 1e-9
+            and abs(dt / steps[0] - round(dt / steps[0])) < 1e-9
+        ):
+            raise UserError(
+                f"--steps: {dt:g} must be positive, divide --stop-time {args.stop_time:g} "
+                f"and be a multiple of the smallest step {steps[0]:g}"
+            )
     for mass in args.cart_mass:
         if not (mass > 0 and math.isfinite(mass)):
             raise UserError(f"--cart-mass: must be a positive number of kg, got {mass!r}")
     lacking = ecospy_run.missing()
     if lacking:  # before the builds and the reference, which take a while
-        raise UserError(f"needs {lacking}: pip install -e \".[cosim]\"")
+        raise UserError(f'needs {lacking}: pip install -e ".[cosim]"')
     if args.out.exists() and not args.out.is_dir():
         raise UserError(f"--out {args.out}: not a directory")
     try:
@@ -77,8 +107,14 @@ def run(args) -> int:
     for e in errors:
         if e.diverged:
             why = e.ended or f"cart error {e.cart_error:.2g} m"
-            print(f"{e.scheme}, cart {e.cart_mass:g} kg, step {e.step:g} s: the exchange diverged ({why})"
-                  + ("; the cart is too light against the chain's apparent mass for an explicit "
-                     "exchange (added-mass effect): --scheme apparent-mass" if e.scheme == "explicit" else ""))
+            print(
+                f"{e.scheme}, cart {e.cart_mass:g} kg, step {e.step:g} s: the exchange diverged ({why})"
+                + (
+                    "; the cart is too light against the chain's apparent mass for an explicit "
+                    "exchange (added-mass effect): --scheme apparent-mass"
+                    if e.scheme == "explicit"
+                    else ""
+                )
+            )
     print(f"wrote {args.out / 'coupling_error.csv'} and {args.out / 'coupling.png'}")
     return 0

@@ -1,5 +1,6 @@
 """`conical-pendulum page`: pydy.viz's page of an FMU run (viz/pydy_page.py), written and
 served."""
+
 from __future__ import annotations
 
 import argparse
@@ -31,18 +32,31 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "\n\nRuns the FMU with fmpy (an output every 1/60 s) and writes pydy.viz's page of the\n"
         "scene it was built from (a cylinder per link, a sphere per bob) and of that run into\n"
         "DIR/pydy-resources. The page fetches its data from the web root: serve that folder,\n"
-        "with --serve or `python -m http.server`, and open the address printed. Needs pydy.")
+        "with --serve or `python -m http.server`, and open the address printed. Needs pydy."
+    )
     parser.add_argument("fmu", type=Path, metavar="FMU", help="an FMU built by conical-pendulum build")
-    parser.add_argument("--out", type=Path, required=True, metavar="DIR",
-                        help="folder for the page (its pydy-resources folder)")
-    parser.add_argument("--stop-time", type=float, default=10.0, metavar="SECONDS",
-                        help="simulated seconds (10)")
-    parser.add_argument("--start", type=start_value, action="append", default=[], metavar="NAME=VALUE",
-                        help="a parameter or state start value, e.g. alpha0=0.5 or l0=8; repeat for more")
-    parser.add_argument("--serve", action="store_true",
-                        help="serve the page on 127.0.0.1 until Ctrl-C")
-    parser.add_argument("--port", type=int, default=8000,
-                        help="with --serve: the port (8000; 0 picks a free one)")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        metavar="DIR",
+        help="folder for the page (its pydy-resources folder)",
+    )
+    parser.add_argument(
+        "--stop-time", type=float, default=10.0, metavar="SECONDS", help="simulated seconds (10)"
+    )
+    parser.add_argument(
+        "--start",
+        type=start_value,
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a parameter or state start value, e.g. alpha0=0.5 or l0=8; repeat for more",
+    )
+    parser.add_argument("--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C")
+    parser.add_argument(
+        "--port", type=int, default=8000, help="with --serve: the port (8000; 0 picks a free one)"
+    )
 
 
 def start_values(fmu: Path, given: list[tuple[str, float]]) -> dict:
@@ -70,41 +84,50 @@ def run(args) -> int:
     try:
         import pydy  # noqa: F401 - before any work; write_pydy_page imports it when it runs
     except ModuleNotFoundError as exc:
-        raise UserError(f"needs {exc.name}: pip install pydy (or -e \".[test]\")") from None
+        raise UserError(f'needs {exc.name}: pip install pydy (or -e ".[test]")') from None
     if args.out.exists() and not args.out.is_dir():
         raise UserError(f"--out {args.out}: not a directory")
     scene = fmu_scene(args.fmu)
     values = start_values(args.fmu, args.start)
     results = fmpy_runs.run_fmu(args.fmu, args.stop_time, 1.0 / 60.0, values)
     try:
-        folder, address = write_pydy_page(scene, {name: results[name] for name in results.dtype.names}, args.out)
+        folder, address = write_pydy_page(
+            scene, {name: results[name] for name in results.dtype.names}, args.out
+        )
     except OSError as exc:
         raise UserError(f"--out {args.out}: {exc.strerror or exc}") from None
     print(f"wrote the pydy.viz page of {args.fmu} ({args.stop_time:g} s) into {folder}")
     if args.serve:
         return serve(folder, address, args.port)
-    print(f"serve that folder and open the page:\n"
-          f"    python -m http.server --bind 127.0.0.1 --directory {folder} {args.port or 8000}\n"
-          f"    http://127.0.0.1:{args.port or 8000}/{address}\n"
-          f"(or add --serve)")
+    print(
+        f"serve that folder and open the page:\n"
+        f"    python -m http.server --bind 127.0.0.1 --directory {folder} {args.port or 8000}\n"
+        f"    http://127.0.0.1:{args.port or 8000}/{address}\n"
+        f"(or add --serve)"
+    )
     return 0
 
 
 def serve(folder: Path, address: str, port: int) -> int:
     """Serve `folder` on 127.0.0.1 until Ctrl-C; 0."""
+
     class Handler(http.server.SimpleHTTPRequestHandler):
         def log_message(self, format, *args):  # format: http.server's name
             pass  # quiet: a page load is some hundred requests
 
     try:
         server = http.server.ThreadingHTTPServer(
-            ("127.0.0.1", port), functools.partial(Handler, directory=str(folder)))
+            ("127.0.0.1", port), functools.partial(Handler, directory=str(folder))
+        )
     except OSError as exc:
         raise UserError(f"--port {port}: cannot serve there ({exc.strerror or exc})") from None
     with server:
-        print(f"serving {folder} at http://127.0.0.1:{server.server_address[1]}/ ; open\n"
-              f"    http://127.0.0.1:{server.server_address[1]}/{address}\n"
-              f"Ctrl-C stops.", flush=True)
+        print(
+            f"serving {folder} at http://127.0.0.1:{server.server_address[1]}/ ; open\n"
+            f"    http://127.0.0.1:{server.server_address[1]}/{address}\n"
+            f"Ctrl-C stops.",
+            flush=True,
+        )
         try:
             server.serve_forever()
         except KeyboardInterrupt:

@@ -1,4 +1,5 @@
 """`conical-pendulum show`: the plot and the animation of an fmpy results CSV (viz/plots.py)."""
+
 from __future__ import annotations
 
 import argparse
@@ -9,8 +10,12 @@ from ..viz import plots
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("results", type=Path, metavar="RESULTS.csv",
-                        help="fmpy results CSV (fmpy.util.write_csv), e.g. build's dist/results.csv")
+    parser.add_argument(
+        "results",
+        type=Path,
+        metavar="RESULTS.csv",
+        help="fmpy results CSV (fmpy.util.write_csv), e.g. build's dist/results.csv",
+    )
     parser.add_argument("--plot", type=Path, metavar="PNG", help="PNG of angles, paths from above and energy")
     parser.add_argument("--gif", type=Path, metavar="GIF", help="animated GIF of the chain in 3D")
     parser.add_argument("--fps", type=float, default=30.0, help="frames per simulated second (30)")

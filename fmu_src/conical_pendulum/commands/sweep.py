@@ -1,5 +1,6 @@
 """`conical-pendulum sweep`: many runs of an FMU as Dask tasks, into one Parquet file
 (analysis/sweep.py; the sweep extra)."""
+
 from __future__ import annotations
 
 import argparse
@@ -60,24 +61,47 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = EPILOG
     parser.add_argument("fmu", type=Path, help="the FMU (FMI 2.0 co-simulation)")
     runs = parser.add_mutually_exclusive_group(required=True)
-    runs.add_argument("--grid", type=grid_axis, action="append", metavar="NAME=V1,V2,...",
-                      help="values of one variable; repeat for more: every combination is run")
-    runs.add_argument("--random", type=value_range, action="append", metavar="NAME=LOW:HIGH",
-                      help="a range of one variable, sampled uniformly; repeat for more")
+    runs.add_argument(
+        "--grid",
+        type=grid_axis,
+        action="append",
+        metavar="NAME=V1,V2,...",
+        help="values of one variable; repeat for more: every combination is run",
+    )
+    runs.add_argument(
+        "--random",
+        type=value_range,
+        action="append",
+        metavar="NAME=LOW:HIGH",
+        help="a range of one variable, sampled uniformly; repeat for more",
+    )
     parser.add_argument("--samples", type=positive_int, help="with --random: how many runs")
     parser.add_argument("--seed", type=int, help="with --random: seed for reproducible samples")
     parser.add_argument("--stop-time", type=float, default=10.0, help="simulated seconds per run (10)")
     parser.add_argument("--interval", type=float, default=1.0 / 60.0, help="output interval [s] (1/60)")
-    parser.add_argument("--outputs", type=lambda text: text.split(","), metavar="NAME,NAME,...",
-                        help="variables to record (default: every output)")
-    parser.add_argument("--workers", type=positive_int,
-                        help="worker processes of the local cluster made for the sweep (2)")
-    parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="run on an existing cluster instead, e.g. tcp://host:8786")
-    parser.add_argument("--connect-timeout", type=float, default=10.0, metavar="SECONDS",
-                        help="with --scheduler: how long to try to connect (10)")
+    parser.add_argument(
+        "--outputs",
+        type=lambda text: text.split(","),
+        metavar="NAME,NAME,...",
+        help="variables to record (default: every output)",
+    )
+    parser.add_argument(
+        "--workers", type=positive_int, help="worker processes of the local cluster made for the sweep (2)"
+    )
+    parser.add_argument(
+        "--scheduler", metavar="ADDRESS", help="run on an existing cluster instead, e.g. tcp://host:8786"
+    )
+    parser.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=10.0,
+        metavar="SECONDS",
+        help="with --scheduler: how long to try to connect (10)",
+    )
     parser.add_argument("--batch", type=positive_int, help="runs per task (default: automatic)")
-    parser.add_argument("--out", type=Path, default=Path("sweep.parquet"), help="Parquet file (sweep.parquet)")
+    parser.add_argument(
+        "--out", type=Path, default=Path("sweep.parquet"), help="Parquet file (sweep.parquet)"
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
 
 
@@ -99,20 +123,34 @@ def run(args) -> int:
     when the sweep could not run."""
     check_options(args)
     try:
-        runs = (sweeps.grid(dict(args.grid)) if args.grid
-                else sweeps.random_samples(dict(args.random), args.samples, args.seed))
+        runs = (
+            sweeps.grid(dict(args.grid))
+            if args.grid
+            else sweeps.random_samples(dict(args.random), args.samples, args.seed)
+        )
         start = time.perf_counter()
-        results = sweeps.sweep(args.fmu, runs, stop_time=args.stop_time, output_interval=args.interval,
-                               outputs=args.outputs, scheduler=args.scheduler, n_workers=args.workers or 2,
-                               batch=args.batch, out=args.out, progress=not args.no_progress,
-                               timeout=args.connect_timeout)
+        results = sweeps.sweep(
+            args.fmu,
+            runs,
+            stop_time=args.stop_time,
+            output_interval=args.interval,
+            outputs=args.outputs,
+            scheduler=args.scheduler,
+            n_workers=args.workers or 2,
+            batch=args.batch,
+            out=args.out,
+            progress=not args.no_progress,
+            timeout=args.connect_timeout,
+        )
     except (ValueError, ConnectionError) as exc:
         raise UserError(str(exc)) from None
     seconds = time.perf_counter() - start
     by_run = results.drop_duplicates("run").set_index("run")
     failed = by_run[by_run["status"] == "failed"]
-    print(f"wrote {args.out}: {len(by_run)} runs ({len(failed)} failed), {len(results)} rows, "
-          f"in {seconds:.1f} s ({len(by_run) / seconds:.1f} runs/s)")
+    print(
+        f"wrote {args.out}: {len(by_run)} runs ({len(failed)} failed), {len(results)} rows, "
+        f"in {seconds:.1f} s ({len(by_run) / seconds:.1f} runs/s)"
+    )
     for number, row in failed.head(5).iterrows():
         values = ", ".join(f"{name} = {row[name]:g}" for name in results.attrs["inputs"])
         print(f"  run {number} ({values}) failed: {row['message']}")

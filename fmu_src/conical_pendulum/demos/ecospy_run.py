@@ -25,6 +25,7 @@ It must be a process of its own: ecospy's library needs libtbb loaded first, glo
 that still has an FMU's library mapped, so the process leaves with os._exit once the
 results are printed. `cosimulate(job)` runs it and returns the runs.
 """
+
 from __future__ import annotations
 
 import json
@@ -62,15 +63,21 @@ def check_job(job) -> dict:
     if not (isinstance(job["models"], dict) and job["models"]):
         raise ValueError("job: models must name at least one FMU, as {instance: path}")
     steps = job["steps"]
-    if not (isinstance(steps, list) and steps and all(
-            isinstance(dt, (int, float)) and not isinstance(dt, bool) and dt > 0 for dt in steps)):
+    if not (
+        isinstance(steps, list)
+        and steps
+        and all(isinstance(dt, (int, float)) and not isinstance(dt, bool) and dt > 0 for dt in steps)
+    ):
         raise ValueError(f"job: steps must be a list of positive numbers, got {steps!r}")
     stop_time = job["stop_time"]
     if isinstance(stop_time, bool) or not isinstance(stop_time, (int, float)) or not stop_time > 0:
         raise ValueError(f"job: stop_time must be a positive number, got {stop_time!r}")
     limits = job.get("limits", {})
-    if not (isinstance(limits, dict) and set(limits) <= set(job["record"]) and all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 for v in limits.values())):
+    if not (
+        isinstance(limits, dict)
+        and set(limits) <= set(job["record"])
+        and all(isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 for v in limits.values())
+    ):
         raise ValueError(f"job: limits must map recorded variables to positive numbers, got {limits!r}")
     return {"connections": [], "parameters": {}, "limits": {}, "warm_up": False, **job}
 
@@ -88,13 +95,18 @@ def cosimulate(job: dict, timeout: float = 1800.0) -> list[dict]:
     """Run the job in a fresh interpreter; its runs, as printed. RuntimeError when ecospy fails."""
     job = check_job(job)
     try:
-        run = subprocess.run([sys.executable, "-m", MODULE, json.dumps(job)],
-                             check=False, capture_output=True, text=True, timeout=timeout)
+        run = subprocess.run(
+            [sys.executable, "-m", MODULE, json.dumps(job)],
+            check=False,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+        )
     except subprocess.TimeoutExpired:
         raise RuntimeError(f"ecospy did not finish the co-simulations within {timeout:g} s") from None
     if run.returncode != 0:
         if "No module named 'ecospy'" in run.stderr or "libtbb" in run.stderr:
-            raise RuntimeError("ecospy co-simulation needs ecospy and tbb: pip install -e \".[cosim]\"")
+            raise RuntimeError('ecospy co-simulation needs ecospy and tbb: pip install -e ".[cosim]"')
         raise RuntimeError(f"ecospy failed (exit {run.returncode}):\n{run.stderr[-3000:]}")
     return json.loads(run.stdout.strip().splitlines()[-1])["runs"]
 

@@ -3,6 +3,7 @@
 The cart (mass m_cart) moves along X, held by a spring k_cart and a damper c_cart to the
 ground; the chain hangs from it. Build-time sympy, used here on the host side only.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -36,7 +37,7 @@ def cart_and_pendulum(scene):
     loads.append((O, (-p["k_cart"] * x - p["c_cart"] * v) * I.x))
     kane = me.KanesMethod(I, q_ind=[x] + q, u_ind=[v] + u, kd_eqs=[v - x.diff()] + kd)
     kane.kanes_equations(bodies, loads)
-    names = ["x_cart"] + scene.state_names()[:2 * scene.n] + ["v_cart"] + scene.state_names()[2 * scene.n:]
+    names = ["x_cart"] + scene.state_names()[: 2 * scene.n] + ["v_cart"] + scene.state_names()[2 * scene.n :]
     states = [sm.Symbol(name) for name in names]
     plain = dict(zip([x] + q + [v] + u, states))
     params = [p[name] for name in scene.parameter_names() + list(CART_PARAMETERS)]
@@ -48,8 +49,9 @@ def cart_parameters(**overrides: float) -> dict[str, float]:
     return {name: float(overrides.get(name, CART_DEFAULTS[name][1])) for name in CART_PARAMETERS}
 
 
-def monolithic(times, scene: Scene, cart: dict | None = None, rtol: float = 1e-12,
-               atol: float = 1e-12) -> dict:
+def monolithic(
+    times, scene: Scene, cart: dict | None = None, rtol: float = 1e-12, atol: float = 1e-12
+) -> dict:
     """Cart and pendulum as one sympy model (KanesMethod), integrated by scipy's DOP853.
 
     Returns {name: array on `times`} for x_cart, v_cart, the pendulum's state, and the
@@ -69,12 +71,11 @@ def monolithic(times, scene: Scene, cart: dict | None = None, rtol: float = 1e-1
     def rhs(_, y):
         return np.concatenate([y[n:], np.linalg.solve(mass(y, p), np.ravel(forcing(y, p)))])
 
-    solution = solve_ivp(rhs, (times[0], times[-1]), y0, method="DOP853", t_eval=times,
-                         rtol=rtol, atol=atol)
+    solution = solve_ivp(rhs, (times[0], times[-1]), y0, method="DOP853", t_eval=times, rtol=rtol, atol=atol)
     if not solution.success:
         raise RuntimeError(f"monolithic reference failed: {solution.message}")
     result = {str(s): row for s, row in zip(states, solution.y)}
     rates = np.array([rhs(0.0, y)[n:] for y in solution.y.T]).T
     result["a_cart"] = rates[0]
-    result.update({f"d{s}": row for s, row in zip(states[n + 1:], rates[1:])})
+    result.update({f"d{s}": row for s, row in zip(states[n + 1 :], rates[1:])})
     return result

@@ -16,6 +16,7 @@ Over a step the force is held (F_x_order = 0) or extrapolated linearly through t
 two communication points (1); either way the step is solved exactly, with the matrix
 exponential: all the error of the coupled demo is the coupling's. Needs numpy only.
 """
+
 import math
 
 import numpy as np
@@ -25,9 +26,11 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variabil
 
 from .rules import BadValue, check_value
 
-PARAMETERS = {"m_cart": ("mass of the cart [kg]", 100.0),
-              "k_cart": ("stiffness of the spring from the ground to the cart [N/m]", 150.0),
-              "c_cart": ("damping from the ground to the cart [N s/m]", 20.0)}
+PARAMETERS = {
+    "m_cart": ("mass of the cart [kg]", 100.0),
+    "k_cart": ("stiffness of the spring from the ground to the cart [N/m]", 150.0),
+    "c_cart": ("damping from the ground to the cart [N s/m]", 20.0),
+}
 START = {"x": 1.0, "v": 0.0}  # the cart's state at t = 0 [m, m/s]
 
 
@@ -48,9 +51,11 @@ def expm(A: np.ndarray) -> np.ndarray:
 
 class Cart(Fmi2Slave):
     author = "conical-pendulum-fmu"
-    description = ("cart on a spring and damper along X carrying an apparent mass M_x; inputs "
-                   "F_x (held or extrapolated) and M_x (held) over each communication step, "
-                   "solved exactly")
+    description = (
+        "cart on a spring and damper along X carrying an apparent mass M_x; inputs "
+        "F_x (held or extrapolated) and M_x (held) over each communication step, "
+        "solved exactly"
+    )
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=0.01)
 
     def __init__(self, **kwargs):
@@ -64,30 +69,65 @@ class Cart(Fmi2Slave):
         self._last_input = None  # (time, F_x) at the last step, for the extrapolation
         fixed, continuous = Fmi2Variability.fixed, Fmi2Variability.continuous
         for name, (text, _) in PARAMETERS.items():
-            self.register_variable(Real(name, causality=Fmi2Causality.parameter, variability=fixed,
-                                        description=text))
-        self.register_variable(Integer("F_x_order", causality=Fmi2Causality.parameter, variability=fixed,
-                                       description="the force over a step: 0 held at its value, 1 "
-                                                   "extrapolated linearly through the last two "
-                                                   "communication points (for F_free_x only: F_pivot_x "
-                                                   "answers the acceleration and diverges so)"))
-        self.register_variable(Real("F_x", causality=Fmi2Causality.input, variability=continuous,
-                                    getter=lambda: self._input, setter=self._set_force,
-                                    description="force on the cart along X [N]: the pendulum's "
-                                                "F_pivot_x, or F_free_x with M_x"))
-        self.register_variable(Real("M_x", causality=Fmi2Causality.input, variability=continuous,
-                                    description="apparent mass along X of what the cart carries [kg] "
-                                                "(the pendulum's M_pivot_xx), moved with the cart: "
-                                                "(m_cart + M_x) a = F_x - k_cart x - c_cart v; 0 for "
-                                                "an explicit exchange; held over each step"))
-        for name, text in (("x", "position of the cart along X [m]"),
-                           ("v", "velocity of the cart along X [m/s]")):
-            self.register_variable(Real(name, causality=Fmi2Causality.output, variability=continuous,
-                                        initial=Fmi2Initial.exact, description=text))
-        self.register_variable(Real("a", causality=Fmi2Causality.output, variability=continuous,
-                                    initial=Fmi2Initial.calculated, getter=self._acceleration,
-                                    description="acceleration of the cart along X [m/s2] (the "
-                                                "pendulum's a_pivot_x); depends at once on F_x and M_x"))
+            self.register_variable(
+                Real(name, causality=Fmi2Causality.parameter, variability=fixed, description=text)
+            )
+        self.register_variable(
+            Integer(
+                "F_x_order",
+                causality=Fmi2Causality.parameter,
+                variability=fixed,
+                description="the force over a step: 0 held at its value, 1 "
+                "extrapolated linearly through the last two "
+                "communication points (for F_free_x only: F_pivot_x "
+                "answers the acceleration and diverges so)",
+            )
+        )
+        self.register_variable(
+            Real(
+                "F_x",
+                causality=Fmi2Causality.input,
+                variability=continuous,
+                getter=lambda: self._input,
+                setter=self._set_force,
+                description="force on the cart along X [N]: the pendulum's F_pivot_x, or F_free_x with M_x",
+            )
+        )
+        self.register_variable(
+            Real(
+                "M_x",
+                causality=Fmi2Causality.input,
+                variability=continuous,
+                description="apparent mass along X of what the cart carries [kg] "
+                "(the pendulum's M_pivot_xx), moved with the cart: "
+                "(m_cart + M_x) a = F_x - k_cart x - c_cart v; 0 for "
+                "an explicit exchange; held over each step",
+            )
+        )
+        for name, text in (
+            ("x", "position of the cart along X [m]"),
+            ("v", "velocity of the cart along X [m/s]"),
+        ):
+            self.register_variable(
+                Real(
+                    name,
+                    causality=Fmi2Causality.output,
+                    variability=continuous,
+                    initial=Fmi2Initial.exact,
+                    description=text,
+                )
+            )
+        self.register_variable(
+            Real(
+                "a",
+                causality=Fmi2Causality.output,
+                variability=continuous,
+                initial=Fmi2Initial.calculated,
+                getter=self._acceleration,
+                description="acceleration of the cart along X [m/s2] (the "
+                "pendulum's a_pivot_x); depends at once on F_x and M_x",
+            )
+        )
 
     def _set_force(self, value):
         self._input = self._force = value
@@ -110,8 +150,7 @@ class Cart(Fmi2Slave):
         if problem is None and not (step_size >= 0 and math.isfinite(step_size)):
             problem = f"communication step {step_size!r}: must be a non-negative finite number"
         if problem:
-            self.log(f"do_step at t = {current_time:.9g} s: {problem}; the state is kept",
-                     Fmi2Status.error)
+            self.log(f"do_step at t = {current_time:.9g} s: {problem}; the state is kept", Fmi2Status.error)
             return False
         slope = 0.0
         if self.F_x_order == 1 and self._last_input and current_time > self._last_input[0]:

@@ -11,6 +11,7 @@ module's dict once without having taken a reference. So the module stays tiny
 (compiled per instance), imports the class only once, and afterwards only names it
 and gives the dict its reference back.
 """
+
 if "SLAVE" in globals():  # executed again by pythonfmu, at each instantiation
     locals()[SLAVE.__name__] = SLAVE  # noqa: F821 - defined by the import below
     __import__("ctypes").pythonapi.Py_IncRef(__import__("ctypes").py_object(globals()))

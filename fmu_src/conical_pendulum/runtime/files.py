@@ -4,5 +4,7 @@ No imports, so that the build (builder/fmu.py, builder/native.py) reads them wit
 loading a slave, which needs pythonfmu and numpy.
 """
 
-MODEL_NAME = "ConicalPendulum"  # modelName and modelIdentifier: the pythonfmu slave's class, the native binary
+MODEL_NAME = (
+    "ConicalPendulum"  # modelName and modelIdentifier: the pythonfmu slave's class, the native binary
+)
 MODEL_FILE = "model.json"  # in the FMU's resources: the scene's variables, settings and core (builder/fmu.py)

@@ -5,6 +5,7 @@ values, and each FMU every value a host sets; the messages name the variable, it
 and the rule, so a user reads the same sentence wherever a value is refused. Shipped
 inside every FMU: standard library only.
 """
+
 from __future__ import annotations
 
 import math
@@ -19,24 +20,30 @@ SOLVERS = ("rk4", "rk45", "dop853", "radau")  # the FMU's `solver`: its index; R
 class Rule:
     """A finite value's allowed range, as numbers, so that C glue can apply it too."""
 
-    refusal: str   # what a message says when the value breaks the rule
-    wanted: str    # what a scene file's field must be
+    refusal: str  # what a message says when the value breaks the rule
+    wanted: str  # what a scene file's field must be
     low: float = -math.inf
     low_open: bool = False  # the value must exceed low, not only reach it
     high: float = math.inf  # the value must stay below high
-    whole: bool = False     # the value must be a whole number (a count carried as a Real)
+    whole: bool = False  # the value must be a whole number (a count carried as a Real)
 
     def holds(self, value: float) -> bool:
-        return ((value > self.low if self.low_open else value >= self.low) and value < self.high
-                and (not self.whole or float(value).is_integer()))
+        return (
+            (value > self.low if self.low_open else value >= self.low)
+            and value < self.high
+            and (not self.whole or float(value).is_integer())
+        )
 
 
 NATIVE_SOLVERS = SOLVERS[:3]  # the C solvers; Radau runs on scipy, in the pythonfmu FMU only
 
 
 def _choose(solvers):
-    return (f"choose 0 to {len(solvers) - 1} ("
-            + ", ".join(f"{k} = {name}" for k, name in enumerate(solvers)) + ")")
+    return (
+        f"choose 0 to {len(solvers) - 1} ("
+        + ", ".join(f"{k} = {name}" for k, name in enumerate(solvers))
+        + ")"
+    )
 
 
 RULES = {
@@ -45,19 +52,31 @@ RULES = {
     "non-negative": Rule("cannot be negative", "a finite number >= 0", low=0.0),
     "count": Rule("must be at least 1", "a whole number >= 1", low=1.0),
     # scipy's floor for rtol (100 machine epsilons), where it warns and raises the value
-    "relative-tolerance": Rule(f"must be at least {100 * sys.float_info.epsilon:.3g} (100 "
-                               "machine epsilons): no solver resolves less",
-                               f"a finite number >= {100 * sys.float_info.epsilon:.3g}",
-                               low=100 * sys.float_info.epsilon),
-    "solver": Rule(_choose(SOLVERS), f"a whole number from 0 to {len(SOLVERS) - 1}",
-                   low=0.0, high=len(SOLVERS)),
-    "native-solver": Rule(_choose(NATIVE_SOLVERS) + "; Radau needs the pythonfmu FMU",
-                          f"a whole number from 0 to {len(NATIVE_SOLVERS) - 1}",
-                          low=0.0, high=len(NATIVE_SOLVERS)),
-    "hold-order": Rule("choose 0 (held over the step) or 1 (extrapolated linearly)", "0 or 1",
-                       low=0.0, high=2.0),
-    "statistic": Rule("must be a whole number >= 0 and < 2**53", "a whole number >= 0 and < 2**53",
-                      low=0.0, high=2.0 ** 53, whole=True),
+    "relative-tolerance": Rule(
+        f"must be at least {100 * sys.float_info.epsilon:.3g} (100 "
+        "machine epsilons): no solver resolves less",
+        f"a finite number >= {100 * sys.float_info.epsilon:.3g}",
+        low=100 * sys.float_info.epsilon,
+    ),
+    "solver": Rule(
+        _choose(SOLVERS), f"a whole number from 0 to {len(SOLVERS) - 1}", low=0.0, high=len(SOLVERS)
+    ),
+    "native-solver": Rule(
+        _choose(NATIVE_SOLVERS) + "; Radau needs the pythonfmu FMU",
+        f"a whole number from 0 to {len(NATIVE_SOLVERS) - 1}",
+        low=0.0,
+        high=len(NATIVE_SOLVERS),
+    ),
+    "hold-order": Rule(
+        "choose 0 (held over the step) or 1 (extrapolated linearly)", "0 or 1", low=0.0, high=2.0
+    ),
+    "statistic": Rule(
+        "must be a whole number >= 0 and < 2**53",
+        "a whole number >= 0 and < 2**53",
+        low=0.0,
+        high=2.0**53,
+        whole=True,
+    ),
 }
 
 # The rule of a variable by its name without the link index: (rule, what it is).
@@ -82,8 +101,13 @@ QUANTITIES = {
 }
 
 # The scene's link fields and their rules: those that are parameters follow the parameter's.
-LINK_RULES = {"length": QUANTITIES["l"][0], "mass": QUANTITIES["M"][0],
-               "bob_mass": QUANTITIES["m"][0], "radius": "positive", "bob_radius": "positive"}
+LINK_RULES = {
+    "length": QUANTITIES["l"][0],
+    "mass": QUANTITIES["M"][0],
+    "bob_mass": QUANTITIES["m"][0],
+    "radius": "positive",
+    "bob_radius": "positive",
+}
 
 
 @dataclass(frozen=True)
@@ -94,27 +118,38 @@ class Setting:
 
 
 SETTINGS = {
-    "rtol": Setting(1e-8, False, "relative tolerance of the adaptive solvers (replaced by "
-                                 "setupExperiment's tolerance when given)"),
+    "rtol": Setting(
+        1e-8,
+        False,
+        "relative tolerance of the adaptive solvers (replaced by setupExperiment's tolerance when given)",
+    ),
     "atol": Setting(1e-8, False, "absolute tolerance of the adaptive solvers"),
-    "max_step": Setting(0.0, False, "largest internal step [s]; RK4 splits each communication "
-                                    "step into steps of at most this (0: no limit)"),
-    "solver": Setting(1, True, "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), "
-                               "2 = DOP853, 3 = Radau (scipy, stiff)"),
-    "max_steps": Setting(100_000, True, "most internal steps per do_step: a step needing more "
-                                        "is discarded"),
+    "max_step": Setting(
+        0.0,
+        False,
+        "largest internal step [s]; RK4 splits each communication "
+        "step into steps of at most this (0: no limit)",
+    ),
+    "solver": Setting(
+        1, True, "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), 2 = DOP853, 3 = Radau (scipy, stiff)"
+    ),
+    "max_steps": Setting(100_000, True, "most internal steps per do_step: a step needing more is discarded"),
 }
 
-STATISTICS = {"n_rhs": "right-hand side evaluations so far",
-              "n_steps": "accepted internal steps so far",
-              "n_rejected": "rejected internal steps so far"}
+STATISTICS = {
+    "n_rhs": "right-hand side evaluations so far",
+    "n_steps": "accepted internal steps so far",
+    "n_rejected": "rejected internal steps so far",
+}
 QUANTITIES.update(dict.fromkeys(STATISTICS, ("statistic", "a count")))  # restored states
 
 
 # Why a variable cannot be set: the same words in the pythonfmu slave and the native FMU.
 CALCULATED = "{name} is a calculated output: it cannot be set"
-FIXED = ("{name} cannot be set after initialization (variability fixed); set it before "
-         "exitInitializationMode, or instantiate again")
+FIXED = (
+    "{name} cannot be set after initialization (variability fixed); set it before "
+    "exitInitializationMode, or instantiate again"
+)
 
 
 class BadValue(ValueError):
@@ -128,8 +163,12 @@ def rule_of(name: str) -> tuple[str, str]:
 
 def satisfies(rule: str, value) -> bool:
     """Whether value is a finite real number that keeps the rule."""
-    return (not isinstance(value, bool) and isinstance(value, numbers.Real)
-            and math.isfinite(value) and RULES[rule].holds(value))
+    return (
+        not isinstance(value, bool)
+        and isinstance(value, numbers.Real)
+        and math.isfinite(value)
+        and RULES[rule].holds(value)
+    )
 
 
 def check_value(name: str, value, quantity: str | None = None) -> float:

@@ -8,6 +8,7 @@ unique to the runtime's sources, and imported once per process through the FMU's
 entry module (runtime/entry.py). At run time it needs numpy and the compiled core,
 nothing else.
 """
+
 import ctypes
 import functools
 import importlib.machinery
@@ -71,6 +72,7 @@ def _fmi_call(method):
     to each before the exception leaves keeps the host's memory intact when it frees
     the instance, as FMI asks it to.
     """
+
     @functools.wraps(method)
     def call(self, *args):
         try:
@@ -81,6 +83,7 @@ def _fmi_call(method):
             for obj in (self, type(self), self.log_queue):
                 ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
             raise
+
     return call
 
 
@@ -122,15 +125,15 @@ class ConicalPendulum(Fmi2Slave):
             self.log(self._broken, Fmi2Status.fatal)
             return
         self.description = model["description"]  # the scene's: no class attribute, or it would win
-        self._reals = np.array([0.0 if v["start"] is None else v["start"] for v in variables[:n_real]],
-                               dtype=float)
+        self._reals = np.array(
+            [0.0 if v["start"] is None else v["start"] for v in variables[:n_real]], dtype=float
+        )
         self._ints = [v["start"] for v in variables[n_real:]]
         self._int_names = [v["name"] for v in variables[n_real:]]
         self._vr = {v["name"]: v["value_reference"] for v in variables}
         n_state = sum(v["group"] == "states" for v in variables)
-        self._state = self._reals[state_values.start:state_values.start + n_state]
-        self._stepper = self._core.Stepper(self._reals[reals], self._reals[state_values],
-                                           self._reals[stats])
+        self._state = self._reals[state_values.start : state_values.start + n_state]
+        self._stepper = self._core.Stepper(self._reals[reals], self._reals[state_values], self._reals[stats])
         self._stepper.update_outputs()
         self._mode = "instantiated"
         self._tolerance = None
@@ -139,10 +142,15 @@ class ConicalPendulum(Fmi2Slave):
     def _register(self, variables):
         """Declare the variables as described, in value-reference order (pythonfmu numbers them)."""
         for v in variables:
-            self.register_variable(KINDS[v["type"]](
-                v["name"], causality=Fmi2Causality[v["causality"]],
-                variability=Fmi2Variability[v["variability"]],
-                initial=v["initial"] and Fmi2Initial[v["initial"]], description=v["description"]))
+            self.register_variable(
+                KINDS[v["type"]](
+                    v["name"],
+                    causality=Fmi2Causality[v["causality"]],
+                    variability=Fmi2Variability[v["variability"]],
+                    initial=v["initial"] and Fmi2Initial[v["initial"]],
+                    description=v["description"],
+                )
+            )
 
     def _setting(self, name):
         """A solver setting's current value, by name."""
@@ -161,8 +169,9 @@ class ConicalPendulum(Fmi2Slave):
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._check_alive()
         if tolerance is not None:
-            self._tolerance = self._fail_unless_valid("tolerance (from setupExperiment)", tolerance,
-                                                      quantity="rtol")
+            self._tolerance = self._fail_unless_valid(
+                "tolerance (from setupExperiment)", tolerance, quantity="rtol"
+            )
 
     @_fmi_call
     def enter_initialization_mode(self):
@@ -180,8 +189,9 @@ class ConicalPendulum(Fmi2Slave):
 
     def _configure(self):
         """Settings are fixed from here on: hand them to the stepper once."""
-        self._stepper.configure(*(self._setting(name) for name in
-                                  ("solver", "rtol", "atol", "max_step", "max_steps")))
+        self._stepper.configure(
+            *(self._setting(name) for name in ("solver", "rtol", "atol", "max_step", "max_steps"))
+        )
 
     @_fmi_call
     def do_step(self, current_time, step_size):
@@ -242,8 +252,9 @@ class ConicalPendulum(Fmi2Slave):
 
         if not (dt >= 0 and math.isfinite(dt)):
             return self._step_failure(self._core.BAD_STEP, t, dt)
-        rtol, atol, max_step, max_steps = (self._setting(name) for name in
-                                           ("rtol", "atol", "max_step", "max_steps"))
+        rtol, atol, max_step, max_steps = (
+            self._setting(name) for name in ("rtol", "atol", "max_step", "max_steps")
+        )
         core, stepper = self._core, self._stepper
         unworkable = core.unworkable(RADAU, t, dt, max_step, max_steps)
         if unworkable:
@@ -255,8 +266,16 @@ class ConicalPendulum(Fmi2Slave):
         steps, solver = 0, None
         try:  # scipy's overflows and non-finite matrices end in a diagnosis, not on stderr
             with np.errstate(all="ignore"):
-                solver = Radau(lambda _, x: core.rhs(x, params), t, state.copy(), t + dt,
-                               rtol=rtol, atol=atol, max_step=max_step or np.inf, **options)
+                solver = Radau(
+                    lambda _, x: core.rhs(x, params),
+                    t,
+                    state.copy(),
+                    t + dt,
+                    rtol=rtol,
+                    atol=atol,
+                    max_step=max_step or np.inf,
+                    **options,
+                )
                 while solver.status == "running" and steps < max_steps:
                     solver.step()  # "failed" only where the step size underflows
                     steps += 1
@@ -291,9 +310,13 @@ class ConicalPendulum(Fmi2Slave):
 
     @_fmi_call
     def _get_fmu_state(self):
-        return {"reals": self._reals.tolist(), "ints": list(self._ints),
-                "solver": self._stepper.memory(), "mode": self._mode,
-                "tolerance": self._tolerance}
+        return {
+            "reals": self._reals.tolist(),
+            "ints": list(self._ints),
+            "solver": self._stepper.memory(),
+            "mode": self._mode,
+            "tolerance": self._tolerance,
+        }
 
     @_fmi_call
     def _set_fmu_state(self, state):
@@ -326,12 +349,15 @@ class ConicalPendulum(Fmi2Slave):
         the carried derivative finite where fsal says it is valid; the mode is one of MODES.
         Returns (reals, ints, solver memory, mode, tolerance), or refuses naming what is wrong.
         """
+
         def refuse(what):
             self._fail(f"fmi2SetFMUstate: the state's {what}")
 
         if isinstance(state, Unreadable):
-            self._fail(f"fmi2SetFMUstate: the bytes given to fmi2DeSerializeFMUstate are not a "
-                       f"state of this FMU ({state['unreadable']})")
+            self._fail(
+                f"fmi2SetFMUstate: the bytes given to fmi2DeSerializeFMUstate are not a "
+                f"state of this FMU ({state['unreadable']})"
+            )
 
         def numbers_list(name, value, size):
             if not (isinstance(value, list) and len(value) == size):
@@ -355,7 +381,7 @@ class ConicalPendulum(Fmi2Slave):
             reals = [check_value(self.vars[vr].name, value) for vr, value in enumerate(reals)]
             ints = [check_setting(name, value) for name, value in zip(self._int_names, ints)]
             for name, value in zip(self._int_names, ints):
-                if not -2**31 <= value < 2**31:
+                if not -(2**31) <= value < 2**31:
                     raise BadValue(f"{name} = {value}: not a 32-bit fmi2Integer")
             tolerance = state["tolerance"]
             if tolerance is not None:
@@ -405,9 +431,14 @@ class ConicalPendulum(Fmi2Slave):
 
     def _step_failure(self, status, t, dt, bad_dof=-1, pivot_ratio=1.0):
         """The diagnosis of a failed Radau step (the core's, as in every FMU of this package)."""
-        return self._core.diagnose(status, t, dt, bad_dof, pivot_ratio,
-                                   *(self._setting(name) for name in
-                                     ("rtol", "atol", "max_step", "max_steps")))
+        return self._core.diagnose(
+            status,
+            t,
+            dt,
+            bad_dof,
+            pivot_ratio,
+            *(self._setting(name) for name in ("rtol", "atol", "max_step", "max_steps")),
+        )
 
 
 SLAVE = ConicalPendulum  # what the FMU's entry module exports (runtime/entry.py)

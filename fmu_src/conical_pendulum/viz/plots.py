@@ -7,6 +7,7 @@ are drawn from their mass-centre positions (`link<i>_x/y/z`, the midpoint of eac
 or from the bob positions when the scene has a bob on every link. Results with neither
 still give the angles and the energy: `missing` says what they cannot give, and why.
 """
+
 from __future__ import annotations
 
 import time
@@ -17,8 +18,10 @@ import numpy as np
 from ..errors import UserError
 from ..progress import WIDTH, bar
 
-NO_CHAIN = ("the results have neither link poses (link<i>_x/y/z, the scene's output 'poses') "
-            "nor a bob on every link (bob<i>_x/y/z)")
+NO_CHAIN = (
+    "the results have neither link poses (link<i>_x/y/z, the scene's output 'poses') "
+    "nor a bob on every link (bob<i>_x/y/z)"
+)
 NO_ENERGY = "the results have no energy output"
 
 
@@ -138,20 +141,26 @@ def animate(results: dict, path, fps: float = 30.0, size: float = 5.0) -> float:
     reach = np.abs(points).max() * 1.05 or 1.0
     fig = plt.figure(figsize=(size, size))
     ax = fig.add_subplot(projection="3d")
-    ax.set(xlim=(-reach, reach), ylim=(-reach, reach), zlim=(-reach, 0.25 * reach),
-           xlabel="x [m]", ylabel="z [m]", zlabel="y (up) [m]")
+    ax.set(
+        xlim=(-reach, reach),
+        ylim=(-reach, reach),
+        zlim=(-reach, 0.25 * reach),
+        xlabel="x [m]",
+        ylabel="z [m]",
+        zlabel="y (up) [m]",
+    )
     ax.view_init(elev=10, azim=-60)
     ax.plot([0], [0], [0], "ks", markersize=6)
-    line, = ax.plot([], [], [], "-", color="tab:red", linewidth=3)
-    bobs, = ax.plot([], [], [], "o", color="tab:blue", markersize=8)
-    trail, = ax.plot([], [], [], "-", color="tab:blue", linewidth=0.8, alpha=0.5)
+    (line,) = ax.plot([], [], [], "-", color="tab:red", linewidth=3)
+    (bobs,) = ax.plot([], [], [], "o", color="tab:blue", markersize=8)
+    (trail,) = ax.plot([], [], [], "-", color="tab:blue", linewidth=0.8, alpha=0.5)
     label = ax.text2D(0.02, 0.95, "", transform=ax.transAxes)
 
     def draw(k):
         p = points[k]
         line.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
         bobs.set_data_3d(p[1:, 0], p[1:, 1], p[1:, 2])
-        tail = points[max(0, k - int(len(t) * 2 / max(duration, 1e-9))):k + 1, -1]
+        tail = points[max(0, k - int(len(t) * 2 / max(duration, 1e-9))) : k + 1, -1]
         trail.set_data_3d(tail[:, 0], tail[:, 1], tail[:, 2])
         label.set_text(f"t = {t[k]:6.2f} s")
         return line, bobs, trail, label

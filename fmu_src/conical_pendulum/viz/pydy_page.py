@@ -5,6 +5,7 @@ run time), gives each link a cylinder and each bob a sphere as the seed does, an
 pydy.viz write its scene description and simulation data (a 4x4 matrix per object per
 step) next to its HTML. Needs pydy (`pip install -e .[test]`).
 """
+
 from __future__ import annotations
 
 import os
@@ -48,11 +49,20 @@ def write_pydy_page(scene: Scene, results: dict, directory) -> tuple[Path, str]:
         frame.orient(parent, "Space", [q[i], q[n + i], 0], "ZXY")
         centre = joint.locatenew(f"G{i}", -link.length / 2 * frame.y)
         end = joint.locatenew(f"P{i}", -link.length * frame.y)
-        shown.append(VisualizationFrame(f"link{i}", frame, centre, Cylinder(
-            name=f"cylinder{i}", radius=link.radius, length=link.length, color="red")))
+        shown.append(
+            VisualizationFrame(
+                f"link{i}",
+                frame,
+                centre,
+                Cylinder(name=f"cylinder{i}", radius=link.radius, length=link.length, color="red"),
+            )
+        )
         if link.has_bob:
-            shown.append(VisualizationFrame(f"bob{i}", frame, end, Sphere(
-                name=f"sphere{i}", radius=link.bob_radius, color="blue")))
+            shown.append(
+                VisualizationFrame(
+                    f"bob{i}", frame, end, Sphere(name=f"sphere{i}", radius=link.bob_radius, color="blue")
+                )
+            )
         parent, joint = frame, end
     viz = PydyScene(inertial, pivot, *shown, cameras=[_camera(scene, inertial, pivot)])
     viz.times = times
@@ -89,7 +99,8 @@ def _camera(scene: Scene, inertial, pivot):
     from pydy.viz.camera import PerspectiveCamera
 
     reach = sum(link.length for link in scene.links) + max(
-        link.bob_radius if link.has_bob else link.radius for link in scene.links)
+        link.bob_radius if link.has_bob else link.radius for link in scene.links
+    )
     distance = 1.1 * reach / np.sin(np.radians(FOV / 2))
     tilt = np.radians(ELEVATION)
     frame = inertial.orientnew("C", "Axis", [-tilt, inertial.x])  # its z points at the camera
