@@ -268,8 +268,12 @@ def test_a_missing_optional_package_is_one_line_saying_what_to_install(
 ):
     hide(monkeypatch, hidden)
     # a module an earlier test imported would not import its package again: drop them
+    # (and from their packages: `from ..analysis import sweep` takes the package's attribute)
     for module in ("conical_pendulum.analysis.sweep", "conical_pendulum.commands.sweep"):
         monkeypatch.delitem(sys.modules, module, raising=False)
+        package, _, attribute = module.rpartition(".")
+        if package in sys.modules:
+            monkeypatch.delattr(sys.modules[package], attribute, raising=False)
     status, out, err = run_main(
         capsys, name, *[{"FMU": seed_fmu}.get(a, a.replace("OUT", str(tmp_path / "out"))) for a in args]
     )
