@@ -64,10 +64,16 @@ def build_fmu(
     cache: Path | None = None,
     backend: str = "pythonfmu",
     platforms: tuple[str, ...] = ("linux64",),
+    fmi_version: int = 2,
 ) -> FmuBuild:
     """The scene's FMU at `output`: the pythonfmu slave (the default), or with
     backend="native" the same C with FMI glue in C (builder.native), with a binary for each
-    of `platforms` ("linux64", and "win64" cross-compiled; the pythonfmu FMU is linux64 only)."""
+    of `platforms` ("linux64", and "win64" cross-compiled; the pythonfmu FMU is linux64 only).
+    fmi_version=3 (native only): an FMI 3.0 FMU (builder.fmi3) instead of FMI 2.0."""
+    if fmi_version not in (2, 3):
+        raise ValueError(f"fmi_version: {fmi_version!r} is not 2 or 3")
+    if fmi_version == 3 and backend != "native":
+        raise ValueError("fmi_version: the pythonfmu FMU is FMI 2.0 only; FMI 3.0 needs backend='native'")
     if backend != "native" and tuple(platforms) != ("linux64",):
         raise ValueError(
             f"platforms: the pythonfmu FMU runs on linux64 only, not {platforms}; "
@@ -82,7 +88,7 @@ def build_fmu(
     core = build_core(scene, cache)
     data = model_data(scene, core, settings, backend)
     if backend == "native":
-        native.write_native_fmu(scene, core, data, output, platforms)
+        native.write_native_fmu(scene, core, data, output, platforms, fmi_version)
         return FmuBuild(output, core, MODEL_NAME, time.perf_counter() - start)
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_model_") as tmp:
         model_file = Path(tmp) / MODEL_FILE

@@ -66,8 +66,15 @@ LOG_CATEGORIES = {
 }
 
 
+def glue_sources(fmi_version: int = 2) -> list[str]:
+    """The C sources of the native FMU of an FMI version: the model's, then its FMI glue."""
+    if fmi_version not in (2, 3):
+        raise ValueError(f"fmi_version: {fmi_version!r} is not 2 or 3")
+    return GLUE_SOURCES if fmi_version == 2 else [*GLUE_SOURCES[:-1], "fmi3_glue.c"]
+
+
 def fmi_headers() -> Path:
-    """The FMI 2.0 headers, from the installed fmpy (its c-code folder)."""
+    """The FMI 2.0 and 3.0 headers, from the installed fmpy (its c-code folder)."""
     import fmpy
 
     return Path(fmpy.__file__).parent / "c-code"
@@ -310,7 +317,7 @@ COMPILERS = {
 }
 
 
-def compile_binary(sources: Path, folder: Path, platform: str = "linux64") -> Path:
+def compile_binary(sources: Path, folder: Path, platform: str = "linux64", fmi_version: int = 2) -> Path:
     """The platform's shared library from the FMU's own sources, exporting only the FMI
     functions: on Linux it needs libc and libm only, on Windows kernel32 and msvcrt."""
     if platform not in COMPILERS:
@@ -327,7 +334,7 @@ def compile_binary(sources: Path, folder: Path, platform: str = "linux64") -> Pa
         "-Werror",
         f"-I{sources}",
         f"-I{fmi_headers()}",
-        *(str(sources / name) for name in GLUE_SOURCES),
+        *(str(sources / name) for name in glue_sources(fmi_version)),
         "-o",
         str(library),
         *libraries,
@@ -344,12 +351,14 @@ def compile_binary(sources: Path, folder: Path, platform: str = "linux64") -> Pa
     return library
 
 
-def guid_of(data: dict) -> str:
+def guid_of(data: dict, fmi_version: int = 2) -> str:
     """A GUID that changes with anything the model description or binary says: the scene's
     variables and start values, the core's build (scene structure and generator), the
     settings, and every C file it ships from runtime/csrc."""
-    shipped = [CSRC / name for name in GLUE_SOURCES + GLUE_HEADERS if (CSRC / name).exists()]
+    shipped = [CSRC / name for name in glue_sources(fmi_version) + GLUE_HEADERS if (CSRC / name).exists()]
     glue = b"".join(path.read_bytes() for path in shipped) + Path(__file__).read_bytes()
+    if fmi_version == 3:
+        glue += (Path(__file__).parent / "fmi3.py").read_bytes()
     text = json.dumps(data, sort_keys=True) + glue.hex()
     return "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, text)) + "}"
 
@@ -361,18 +370,27 @@ def check_settings(settings: dict) -> None:
 
 
 def write_native_fmu(
-    scene: Scene, core: CoreBuild, data: dict, output: Path, platforms: tuple[str, ...] = ("linux64",)
+    scene: Scene,
+    core: CoreBuild,
+    data: dict,
+    output: Path,
+    platforms: tuple[str, ...] = ("linux64",),
+    fmi_version: int = 2,
 ) -> None:
     """The native FMU of a scene at `output` (moved into place only when complete), with a
     binary for each of `platforms` ("linux64", "win64"), from its compiled core and the
     data its model.json holds; builder.fmu.build_fmu(backend="native") checks the output
-    and the settings (check_settings) and makes both."""
-    guid = guid_of(data)
+    and the settings (check_settings) and makes both. fmi_version=3: the FMI 3.0 FMU
+    (fmi3_glue.c, builder.fmi3's model description and buildDescription.xml)."""
+    from . import fmi3
+
+    guid = guid_of(data, fmi_version)
+    shipped = glue_sources(fmi_version)
     output.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_native_") as tmp:
         sources = Path(tmp) / "sources"
         sources.mkdir()
-        for name in GLUE_SOURCES + GLUE_HEADERS:
+        for name in shipped + GLUE_HEADERS:
             origin = core.directory / name if name.startswith("model.") else CSRC / name
             if name != "fmu_config.h":
                 shutil.copy2(origin, sources / name)
@@ -380,14 +398,20 @@ def write_native_fmu(
         libraries = {}
         for platform in dict.fromkeys(platforms):
             (Path(tmp) / platform).mkdir()
-            libraries[platform] = compile_binary(sources, Path(tmp) / platform, platform)
+            libraries[platform] = compile_binary(sources, Path(tmp) / platform, platform, fmi_version)
+        if fmi_version == 3:
+            (sources / "buildDescription.xml").write_bytes(fmi3.build_description(shipped))
         staged = Path(tmp) / "staged.fmu"
         with zipfile.ZipFile(staged, "w", zipfile.ZIP_DEFLATED) as archive:
-            archive.writestr("modelDescription.xml", model_description(data, guid))
+            description = (
+                model_description(data, guid)
+                if fmi_version == 2
+                else fmi3.model_description(data, guid, LOG_CATEGORIES)
+            )
+            archive.writestr("modelDescription.xml", description)
             for platform, library in libraries.items():  # stored: hosts extract them at every run
-                archive.write(
-                    library, f"binaries/{platform}/{library.name}", compress_type=zipfile.ZIP_STORED
-                )
+                folder = platform if fmi_version == 2 else fmi3.PLATFORM_FOLDERS[platform]
+                archive.write(library, f"binaries/{folder}/{library.name}", compress_type=zipfile.ZIP_STORED)
             for path in sorted(sources.iterdir()):
                 archive.write(path, f"sources/{path.name}")
             archive.writestr(f"resources/{MODEL_FILE}", json.dumps(data, indent=1))

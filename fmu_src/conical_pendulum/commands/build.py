@@ -57,6 +57,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the native FMU: FMI glue in C, no Python at run time (docs/native.md)",
     )
     parser.add_argument(
+        "--fmi",
+        type=int,
+        choices=(2, 3),
+        default=2,
+        help="with --native: the FMI version, 2 (2.0) or 3 (3.0; Co-Simulation and Model Exchange) (2)",
+    )
+    parser.add_argument(
         "--win64",
         action="store_true",
         help="with --native: also a Windows binary, cross-compiled (needs mingw-w64)",
@@ -101,12 +108,15 @@ def run(args) -> int:
         raise UserError(str(exc)) from None
     if args.win64 and not args.native:
         raise UserError("--win64: only the native FMU carries a Windows binary; add --native")
+    if args.fmi == 3 and not args.native:
+        raise UserError("--fmi 3: only the native FMU is FMI 3.0; add --native")
     try:
         build = fmus.build_fmu(
             scene,
             args.output,
             backend="native" if args.native else "pythonfmu",
             platforms=("linux64", "win64") if args.win64 else ("linux64",),
+            fmi_version=args.fmi,
         )
     except ValueError as exc:
         raise UserError(str(exc)) from None
@@ -118,7 +128,7 @@ def run(args) -> int:
     print(
         f"built {build.path} ({build.path.stat().st_size / 1024:.0f} KiB) in {build.seconds:.1f} s: "
         f"{scene.n} links, {len(scene.parameter_names())} parameters, {len(scene.input_names())} inputs, "
-        f"{len(scene.output_names())} calculated outputs; {'native, ' if args.native else ''}core {how}"
+        f"{len(scene.output_names())} calculated outputs; {'native, ' if args.native else ''}{'FMI 3.0, ' if args.fmi == 3 else ''}core {how}"
     )
     if args.no_check:
         return 0

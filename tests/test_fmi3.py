@@ -1,0 +1,441 @@
+"""The native FMI 3.0 FMU (builder.fmi3, runtime/csrc/fmi3_glue.c): the FMI 2.0 native FMU's
+behaviour through FMI 3.0's API, run by fmpy against the FMI 2.0 native FMU of the same scene."""
+
+import struct
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+import zipfile
+from ctypes import c_double
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi3 import FMU3Model, FMU3Slave
+from fmpy.validation import validate_fmu
+
+from conical_pendulum import Link, Scene
+from conical_pendulum.builder.fmu import build_fmu
+from conical_pendulum.builder.native import LOG_CATEGORIES
+from fmu_helpers import BAD_VALUES
+
+ROOT = Path(__file__).resolve().parent.parent
+OK, DISCARD, ERROR = 0, 2, 3
+SCENE = Scene.uniform(3, coupling=True)
+START = {"l0": 8.0, "alpha0": 0.5, "delta2": 0.3}
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    """(FMI 3.0 native FMU, FMI 2.0 native FMU) of the coupled 3-link chain."""
+    folder = tmp_path_factory.mktemp("fmi3")
+    fmi3 = build_fmu(SCENE, folder / "Pendulum3.fmu", backend="native", fmi_version=3).path
+    fmi2 = build_fmu(SCENE, folder / "Pendulum2.fmu", backend="native").path
+    return fmi3, fmi2
+
+
+class Instance3:
+    """One FMI 3.0 instance through fmpy's low-level API; `messages` collects (status, text)."""
+
+    def __init__(self, path, interface="CoSimulation", start_values=None, initialize=True, **options):
+        self.md = read_model_description(str(path))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.types = {v.name: v.type for v in self.md.modelVariables}
+        self.unzipdir = extract(str(path))
+        self.messages = []
+
+        def log(environment, status, category, message):
+            self.messages.append((status, message.decode(errors="replace")))
+
+        self._log = log
+        cls = FMU3Slave if interface == "CoSimulation" else FMU3Model
+        self.fmu = cls(
+            guid=self.md.guid,
+            unzipDirectory=self.unzipdir,
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName="instance",
+        )
+        self.fmu.instantiate(loggingOn=True, logMessage=log, **options)
+        self.time = 0.0
+        self.set(start_values or {})
+        if initialize:
+            self.fmu.enterInitializationMode(startTime=0.0)
+            self.fmu.exitInitializationMode()
+
+    def set(self, values):
+        for name, value in values.items():
+            if self.types[name] == "Int32":
+                self.fmu.setInt32([self.vr[name]], [int(value)])
+            else:
+                self.fmu.setFloat64([self.vr[name]], [float(value)])
+
+    def get(self, *names):
+        return self.fmu.getFloat64([self.vr[n] for n in names])
+
+    def step(self, dt):
+        result = self.fmu.doStep(currentCommunicationPoint=self.time, communicationStepSize=dt)
+        self.time += dt
+        return result
+
+    def texts(self, status=None):
+        return " ".join(t for s, t in self.messages if status is None or s == status)
+
+    def close(self):
+        self.fmu.freeInstance()
+
+
+def test_fmpy_validates_it_and_it_ships_what_fmi_3_asks(fmus):
+    fmi3, _ = fmus
+    assert validate_fmu(str(fmi3)) == []
+    archive = zipfile.ZipFile(fmi3)
+    names = archive.namelist()
+    assert "binaries/x86_64-linux/ConicalPendulum.so" in names
+    assert {"sources/buildDescription.xml", "sources/fmi3_glue.c", "sources/fmu_config.h"} <= set(names)
+    assert "sources/fmi2_glue.c" not in names
+    build = ET.fromstring(archive.read("sources/buildDescription.xml"))
+    listed = [f.get("name") for f in build.iter("SourceFile")]
+    assert "fmi3_glue.c" in listed and all(f"sources/{name}" in names for name in listed)
+    root = ET.fromstring(archive.read("modelDescription.xml"))
+    assert root.get("fmiVersion") == "3.0" and root.get("instantiationToken")
+    for interface in ("ModelExchange", "CoSimulation"):
+        element = root.find(interface)
+        assert element.get("providesEvaluateDiscreteStates") == "false"
+        assert element.get("canGetAndSetFMUState") == element.get("canSerializeFMUState") == "true"
+    assert root.find("CoSimulation").get("hasEventMode") == "false"
+    assert [c.get("name") for c in root.find("LogCategories")] == list(LOG_CATEGORIES)
+
+
+def test_exports_only_fmi3_functions(fmus, tmp_path):
+    fmi3, _ = fmus
+    zipfile.ZipFile(fmi3).extractall(tmp_path)
+    so = tmp_path / "binaries" / "x86_64-linux" / "ConicalPendulum.so"
+    symbols = subprocess.run(
+        ["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True
+    ).stdout.split()[2::3]
+    assert symbols and all(name.startswith("fmi3") for name in symbols)
+    assert {"fmi3InstantiateCoSimulation", "fmi3InstantiateModelExchange", "fmi3DoStep"} <= set(symbols)
+
+
+def test_same_variables_and_value_references_as_the_fmi2_fmu(fmus):
+    ours, theirs = (read_model_description(str(path)) for path in fmus)
+    by_name = {v.name: v for v in ours.modelVariables}
+    types = {"Real": "Float64", "Integer": "Int32"}
+    for v in theirs.modelVariables:
+        mine = by_name[v.name]
+        assert (mine.valueReference, mine.type, mine.causality, mine.variability, mine.start) == (
+            v.valueReference,
+            types[v.type],
+            v.causality,
+            v.variability,
+            v.start,
+        )
+    assert by_name["time"].causality == "independent"
+    assert len(ours.derivatives) == len(SCENE.state_names())
+    assert {u.variable.name for u in ours.outputs} == {u.variable.name for u in theirs.outputs}
+
+
+def test_co_simulation_is_the_fmi2_fmus_bit_for_bit(fmus):
+    fmi3, fmi2 = fmus
+    runs = [
+        simulate_fmu(
+            str(path), fmi_type="CoSimulation", stop_time=3.0, output_interval=0.05, start_values=START
+        )
+        for path in (fmi3, fmi2)
+    ]
+    assert len(runs[0]) == len(runs[1]) == 61
+    for name in runs[1].dtype.names:
+        assert np.array_equal(runs[0][name], runs[1][name]), name
+
+
+def test_model_exchange_with_cvode_agrees_with_the_fmi2_fmu(fmus):
+    fmi3, fmi2 = fmus
+    runs = [
+        simulate_fmu(
+            str(path),
+            fmi_type="ModelExchange",
+            solver="CVode",
+            relative_tolerance=1e-8,
+            stop_time=3.0,
+            output_interval=0.05,
+            start_values=START,
+        )
+        for path in (fmi3, fmi2)
+    ]
+    for name in SCENE.state_names():
+        assert np.allclose(runs[0][name], runs[1][name], rtol=1e-6, atol=1e-6), name
+
+
+@pytest.mark.parametrize(("name", "value", "message"), BAD_VALUES)
+def test_a_bad_value_is_refused_naming_it_and_the_instance_goes_on(fmus, name, value, message):
+    fmu = Instance3(fmus[0], initialize=False)
+    with pytest.raises(FMICallException) as refusal:
+        fmu.set({name: value})
+    assert refusal.value.status == ERROR
+    assert message in fmu.texts(ERROR)
+    fmu.fmu.enterInitializationMode(startTime=0.0)
+    fmu.fmu.exitInitializationMode()
+    fmu.step(0.1)
+    assert np.isfinite(fmu.get("alpha0", "energy")).all()
+    fmu.close()
+
+
+def test_wrong_calls_are_refused_naming_what(fmus):
+    fmu = Instance3(fmus[0])
+    with pytest.raises(FMICallException):
+        fmu.fmu.getFloat64([10000])
+    with pytest.raises(FMICallException):
+        fmu.fmu.getBoolean([0])
+    with pytest.raises(FMICallException):
+        fmu.fmu.setFloat64([fmu.vr["time"]], [1.0])
+    with pytest.raises(FMICallException):  # every variable is a scalar here
+        fmu.fmu.getFloat64([fmu.vr["alpha0"]], nValues=3)
+    texts = fmu.texts(ERROR)
+    assert "value reference 10000 is not a Float64 variable" in texts
+    assert "this FMU has no Boolean variables" in texts
+    assert "time is the independent variable" in texts
+    assert "nValues = 3, but the 1 value references have 1 values" in texts
+    assert fmu.get("time") == [0.0]
+    fmu.step(0.25)
+    assert fmu.get("time") == [0.25]
+    fmu.close()
+
+
+def test_early_return_and_event_mode_are_what_the_model_description_says(fmus):
+    with pytest.raises(Exception, match="Failed to instantiate"):
+        Instance3(fmus[0], eventModeUsed=True)
+    fmu = Instance3(fmus[0], earlyReturnAllowed=True)
+    event, terminate, early, last = fmu.step(0.5)
+    assert (event, terminate, early, last) == (False, False, False, 0.5)
+    fmu.close()
+
+
+def test_a_failed_step_is_discarded_with_the_diagnosis_and_the_instance_stays_at_its_start(tmp_path):
+    """The singular two-angle joint of the envelope: a massless link along its parent's x axis."""
+    scene = Scene(links=(Link(), Link(has_mass=False)))
+    path = build_fmu(scene, tmp_path / "Singular.fmu", backend="native", fmi_version=3).path
+    start = {"alpha1": np.pi / 2, "beta1": 0.0, "solver": 0}
+    fmu = Instance3(path, start_values=start)
+    before = fmu.get("alpha0", "alpha1", "omega0")
+    with pytest.raises(FMICallException) as failure:
+        fmu.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=0.1)
+    assert failure.value.status == DISCARD
+    text = fmu.texts(DISCARD)
+    assert "singular mass matrix" in text and "link 1" in text
+    assert fmu.get("alpha0", "alpha1", "omega0") == before and fmu.get("time") == [0.0]
+    fmu.fmu.reset()
+    fmu.fmu.enterInitializationMode(startTime=0.0)
+    fmu.fmu.exitInitializationMode()
+    fmu.step(0.1)
+    assert np.isfinite(fmu.get("alpha0")).all()
+    fmu.close()
+
+
+def test_fmu_state_round_trip_is_bit_for_bit_and_corrupt_bytes_are_refused(fmus):
+    fmu = Instance3(fmus[0], start_values=START)
+    fmu.step(0.5)
+    state = fmu.fmu.getFMUState()
+    serialized = fmu.fmu.serializeFMUState(state)
+    fmu.step(0.5)
+    reference = fmu.get(*SCENE.state_names(), "energy")
+    restored = fmu.fmu.deserializeFMUState(serialized)
+    fmu.fmu.setFMUState(restored)
+    fmu.time = 0.5
+    assert fmu.get("time") == [0.5]
+    fmu.step(0.5)
+    assert fmu.get(*SCENE.state_names(), "energy") == reference
+    # the state's time (the first 0.5 after the header) made NaN: refused, naming it
+    at = serialized.index(struct.pack("<d", 0.5))
+    corrupt = serialized[:at] + struct.pack("<d", float("nan")) + serialized[at + 8 :]
+    with pytest.raises(FMICallException) as refusal:
+        fmu.fmu.deserializeFMUState(corrupt)
+    assert refusal.value.status == ERROR
+    assert "the state's time = nan: must be finite" in fmu.texts(ERROR)
+    with pytest.raises(FMICallException):
+        fmu.fmu.deserializeFMUState(b"\0" + serialized[1:])
+    assert "the bytes are not a state of this FMU" in fmu.texts(ERROR)
+    assert fmu.get(*SCENE.state_names(), "energy") == reference  # nothing taken
+    fmu.fmu.freeFMUState(state)
+    fmu.fmu.freeFMUState(restored)
+    fmu.close()
+
+
+def test_reset_gives_a_fresh_instance(fmus):
+    fmu = Instance3(fmus[0], start_values=START)
+    for _ in range(4):
+        fmu.step(0.25)
+    first = fmu.get(*SCENE.state_names())
+    fmu.fmu.reset()
+    assert fmu.fmu.getFMUState  # still usable
+    fmu.set(START)
+    fmu.fmu.enterInitializationMode(startTime=0.0)
+    fmu.fmu.exitInitializationMode()
+    fmu.time = 0.0
+    for _ in range(4):
+        fmu.step(0.25)
+    assert fmu.get(*SCENE.state_names()) == first
+    fmu.close()
+
+
+def test_log_categories_as_the_model_description_declares_them(fmus):
+    fmu = Instance3(fmus[0])
+    fmu.fmu.setDebugLogging(True, list(LOG_CATEGORIES))
+    with pytest.raises(FMICallException):
+        fmu.fmu.setDebugLogging(True, ["logEverything"])
+    assert 'log category "logEverything" is not this FMU\'s' in fmu.texts(ERROR)
+    fmu.close()
+
+
+# FMI 3.0's state machines, a few functions in each state this FMU enters: (state, function,
+# allowed). Calls that are allowed but need arguments the test does not give are left out.
+def _reach(fmu, state):
+    if state == "Instantiated":
+        return
+    fmu.fmu.enterInitializationMode(startTime=0.0)
+    if state == "Initialization Mode":
+        return
+    fmu.fmu.exitInitializationMode()
+    if state == "Continuous-Time Mode":
+        fmu.fmu.enterContinuousTimeMode()
+    if state == "Terminated":
+        fmu.fmu.terminate()
+
+
+CALLS = {
+    "doStep": lambda i: i.fmu.doStep(0.0, 0.01),
+    "getFloat64": lambda i: i.fmu.getFloat64([0]),
+    "setFloat64 input": lambda i: i.fmu.setFloat64([i.vr["a_pivot_x"]], [0.5]),
+    "enterInitializationMode": lambda i: i.fmu.enterInitializationMode(startTime=0.0),
+    "exitInitializationMode": lambda i: i.fmu.exitInitializationMode(),
+    "terminate": lambda i: i.fmu.terminate(),
+    "enterContinuousTimeMode": lambda i: i.fmu.fmi3EnterContinuousTimeMode(i.fmu.component),
+    "setTime": lambda i: i.fmu.fmi3SetTime(i.fmu.component, 0.0),
+    "updateDiscreteStates": lambda i: i.fmu.updateDiscreteStates(),
+    "enterEventMode": lambda i: i.fmu.enterEventMode(),
+    "enterConfigurationMode": lambda i: i.fmu.fmi3EnterConfigurationMode(i.fmu.component),
+    "getFMUState": lambda i: i.fmu.freeFMUState(i.fmu.getFMUState()),
+}
+CO_SIMULATION_TABLE = {
+    # state: calls allowed (the rest of CO_SIMULATION_CALLS refused)
+    "Instantiated": {"enterInitializationMode", "setFloat64 input", "getFMUState"},
+    "Initialization Mode": {"exitInitializationMode", "getFloat64", "setFloat64 input", "getFMUState"},
+    "Step Mode": {"doStep", "getFloat64", "setFloat64 input", "terminate", "getFMUState"},
+    "Terminated": {"getFloat64", "getFMUState"},
+}
+CO_SIMULATION_CALLS = [
+    "doStep",
+    "getFloat64",
+    "setFloat64 input",
+    "enterInitializationMode",
+    "exitInitializationMode",
+    "terminate",
+    "enterContinuousTimeMode",
+    "setTime",
+    "enterEventMode",
+    "enterConfigurationMode",
+    "getFMUState",
+]
+MODEL_EXCHANGE_TABLE = {
+    "Instantiated": {"enterInitializationMode", "setFloat64 input", "getFMUState"},
+    "Initialization Mode": {"exitInitializationMode", "getFloat64", "setFloat64 input", "getFMUState"},
+    "Event Mode": {
+        "getFloat64",
+        "setFloat64 input",
+        "terminate",
+        "enterContinuousTimeMode",
+        "setTime",
+        "updateDiscreteStates",
+        "getFMUState",
+    },
+    "Continuous-Time Mode": {
+        "getFloat64",
+        "setFloat64 input",
+        "terminate",
+        "setTime",
+        "enterEventMode",
+        "getFMUState",
+    },
+    "Terminated": {"getFloat64", "getFMUState"},
+}
+MODEL_EXCHANGE_CALLS = [
+    "getFloat64",
+    "setFloat64 input",
+    "enterInitializationMode",
+    "exitInitializationMode",
+    "terminate",
+    "enterContinuousTimeMode",
+    "setTime",
+    "updateDiscreteStates",
+    "enterEventMode",
+    "enterConfigurationMode",
+    "getFMUState",
+]
+
+
+@pytest.mark.parametrize(
+    ("interface", "state", "call"),
+    [("CoSimulation", s, c) for s in CO_SIMULATION_TABLE for c in CO_SIMULATION_CALLS]
+    + [("ModelExchange", s, c) for s in MODEL_EXCHANGE_TABLE for c in MODEL_EXCHANGE_CALLS],
+)
+def test_state_table(fmus, interface, state, call):
+    table = CO_SIMULATION_TABLE if interface == "CoSimulation" else MODEL_EXCHANGE_TABLE
+    fmu = Instance3(fmus[0], interface, initialize=False)
+    _reach(fmu, state)
+    fmu.messages.clear()
+    allowed = call in table[state]
+    try:
+        status = CALLS[call](fmu)
+        status = status if isinstance(status, int) else OK
+    except FMICallException as exc:
+        status = exc.status
+    except Exception:  # fmpy's wrappers that return a tuple raise on the status themselves
+        status = ERROR
+    if allowed:
+        assert status == OK, (call, state, fmu.texts())
+    else:
+        assert status == ERROR, (call, state)
+        if (call, state) == ("enterEventMode", "Step Mode"):  # hasEventMode is false
+            assert "no event mode in Co-Simulation" in fmu.texts(ERROR)
+        elif call == "enterConfigurationMode" and state in ("Instantiated", "Step Mode", "Event Mode"):
+            assert "no tunable structural parameters" in fmu.texts(ERROR)
+        else:
+            assert "is not allowed in" in fmu.texts(ERROR), fmu.texts()
+    fmu.close()
+
+
+def test_directional_derivatives_against_central_differences(fmus):
+    fmu = Instance3(fmus[0], "ModelExchange", start_values=START)
+    fmu.fmu.enterContinuousTimeMode()
+    n = len(SCENE.state_names())
+    x = np.array(fmu.get(*SCENE.state_names()))
+    derivatives = [fmu.vr[f"der({name})"] for name in SCENE.state_names()]
+    for known in ("alpha0", "beta1", "omega2", "delta0"):
+        k = SCENE.state_names().index(known)
+        exact = fmu.fmu.getDirectionalDerivative(derivatives, [fmu.vr[known]], [1.0])
+        h = 1e-6
+        columns = []
+        for sign in (1, -1):
+            shifted = x.copy()
+            shifted[k] += sign * h
+            fmu.fmu.setContinuousStates((c_double * n)(*shifted), n)
+            dx = (c_double * n)()
+            fmu.fmu.getContinuousStateDerivatives(dx, n)
+            columns.append(np.array(dx))
+        fmu.fmu.setContinuousStates((c_double * n)(*x), n)
+        central = (columns[0] - columns[1]) / (2 * h)
+        assert np.allclose(exact, central, rtol=1e-6, atol=1e-6), known
+    with pytest.raises(FMICallException):
+        fmu.fmu.getDirectionalDerivative(derivatives, [fmu.vr["alpha0"]], [float("nan")])
+    assert "seed of alpha0 = nan: must be finite" in fmu.texts(ERROR)
+    fmu.close()
+
+
+def test_build_fmu_py_builds_it_and_refuses_fmi_3_without_native(tmp_path):
+    out = tmp_path / "Two.fmu"
+    command = [sys.executable, str(ROOT / "build_fmu.py"), "--links", "2", "--output", str(out), "--no-check"]
+    run = subprocess.run([*command, "--native", "--fmi", "3"], check=False, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "FMI 3.0" in run.stdout and read_model_description(str(out)).fmiVersion == "3.0"
+    run = subprocess.run([*command, "--fmi", "3"], check=False, capture_output=True, text=True)
+    assert run.returncode != 0 and "--fmi 3: only the native FMU is FMI 3.0; add --native" in run.stderr
