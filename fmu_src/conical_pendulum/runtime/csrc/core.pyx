@@ -50,6 +50,7 @@ cdef extern from "diagnosis.h":
         double pivot_ratio
         double rtol, atol, max_step
         long long max_steps
+        double kept
     int cp_diagnose(char *buf, size_t size, int status, const cp_failure *failure)
 
 cdef extern from "cosim.h":
@@ -117,6 +118,7 @@ def diagnose(int status, double t, double dt, int bad_dof, double pivot_ratio, d
     cdef cp_failure failure
     failure.t, failure.dt, failure.bad_dof, failure.pivot_ratio = t, dt, bad_dof, pivot_ratio
     failure.rtol, failure.atol, failure.max_step, failure.max_steps = rtol, atol, max_step, max_steps
+    failure.kept = t
     return _diagnosis(status, &failure)
 
 

@@ -27,4 +27,12 @@ int cp_cosim_step(const cp_settings *settings, const double *p, double *x, doubl
                   double dt, double *h, double *work, int *fsal, double stats[CP_NSTAT],
                   cp_failure *failure);
 
+/* cp_cosim_step with early return when reached is not NULL: on failure x and y are left at
+ * the last point the solver reached where x' was computed (cp_integrate) and its outputs are
+ * finite, or as they were at t; *reached is that time (t + dt on success), and
+ * failure->kept says it too. */
+int cp_cosim_step_early(const cp_settings *settings, const double *p, double *x, double *y,
+                        double t, double dt, double *h, double *work, int *fsal,
+                        double stats[CP_NSTAT], cp_failure *failure, double *reached);
+
 #endif

@@ -58,5 +58,5 @@ int cp_diagnose(char *buf, size_t size, int status, const cp_failure *f)
     }
     const char *what = cp_status_message(status);
     return snprintf(buf, size, "do_step from t = %.9g s by %.3g s failed: %s. %s. The state is "
-                    "kept at t = %.9g s.", f->t, f->dt, what ? what : "unknown status", hint, f->t);
+                    "kept at t = %.9g s.", f->t, f->dt, what ? what : "unknown status", hint, f->kept);
 }

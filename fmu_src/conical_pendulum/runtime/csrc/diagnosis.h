@@ -15,6 +15,7 @@ typedef struct {
     double pivot_ratio;   /* cp_model.pivot_ratio over the step */
     double rtol, atol, max_step;  /* the settings the step ran with */
     long long max_steps;
+    double kept;          /* the time the state is kept at: t, or where an early return stopped */
 } cp_failure;
 
 /* Writes "do_step from t = ... failed: <status>. <diagnosis>. The state is kept ..." into

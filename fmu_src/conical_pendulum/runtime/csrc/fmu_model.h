@@ -27,9 +27,10 @@
  * fmi3SetFloat64 are model_get_real and model_check_real / model_set_real, fmi3GetInt32 and
  * fmi3SetInt32 the integer ones, fmi3EnterInitializationMode's tolerance goes through
  * model_tolerance_refusal and model_set_tolerance, fmi3ExitInitializationMode calls
- * model_initialize, fmi3DoStep calls model_do_step (no early return, no event handling),
- * fmi3GetDirectionalDerivative and fmi3GetAdjointDerivative's transposed products start from
- * model_directional_derivative, fmi3GetFMUState and fmi3SerializeFMUState copy the
+ * model_initialize, fmi3DoStep calls model_do_step_early (early return when the importer
+ * allows it; no event handling), fmi3GetDirectionalDerivative calls
+ * model_directional_derivative and fmi3GetAdjointDerivative model_adjoint_derivative,
+ * fmi3GetFMUState and fmi3SerializeFMUState copy the
  * ModelData with the layer's own machine state and header, as fmi2_glue.c does. Only the
  * API, the state machine and the FMU state's wrapping are written again.
  *
@@ -149,6 +150,16 @@ ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[]
                                          const double seed[], double sensitivity[], double time,
                                          char *message, size_t size);
 
+/* sensitivity = seed^T J (sensitivity_j = sum_i seed_i dUnknown_i/dKnown_j: n_known values,
+ * seed n_unknown values), J as for model_directional_derivative, exact to rounding as it is;
+ * nothing of m changes. The same refusals (MODEL_REFUSED, message: a value reference that is
+ * no unknown or no known, or a seed that is not finite, and nothing written) and the same
+ * MODEL_DISCARD. By complex step: one complex evaluation per known, not one reverse sweep. */
+ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], size_t n_unknown,
+                                     const unsigned knowns[], size_t n_known, const double seed[],
+                                     double sensitivity[], double time, char *message,
+                                     size_t size);
+
 /* ---- co-simulation ---- */
 
 /* One communication step from t by dt with the model's own settings and solver memory:
@@ -156,6 +167,15 @@ ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[]
  * step's diagnosis (what failed, why, what to do), the states and outputs as they were at t
  * (the statistics count the attempt). */
 ModelStatus model_do_step(ModelData *m, double t, double dt, char *message, size_t size);
+
+/* model_do_step, and with early_return_allowed (FMI 3.0's earlyReturnAllowed) a step that
+ * cannot complete keeps the state and outputs at the last point the solver reached where x'
+ * was computed (RK45 and DOP853: the last accepted internal step; RK4: the last completed
+ * substep), or at t if there is none: MODEL_DISCARD with message the diagnosis ("The state
+ * is kept at t = <there>"). *last_successful_time (when not NULL) is the time of the state on
+ * return: t + dt on MODEL_OK, t on a discard without early return. */
+ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_return_allowed,
+                                double *last_successful_time, char *message, size_t size);
 
 /* ---- FMU states ---- */
 

@@ -240,6 +240,50 @@ ModelStatus model_get_derivatives(ModelData *m, double dx[], double time, char *
 /* From directional.c: the model's own C evaluated in complex arithmetic, exact to rounding.
  * A state as unknown is an output of its own value; the statistics depend on nothing
  * (ModelStructure). */
+/* NULL if vr may be a known (a state or an input), or the message refusing it. */
+static const char *known_refusal(unsigned vr, char *message, size_t size)
+{
+    if (vr >= CP_VR_INPUT && vr < CP_VR_STATE + CP_NSTATE) return NULL;
+    snprintf(message, size, "value reference %u (%s) as a known: only states and inputs are", vr,
+             cp_variable_name(vr));
+    return message;
+}
+
+/* NULL if vr may be an unknown (a state derivative, an output, a state, a statistic), or the
+ * message refusing it. */
+static const char *unknown_refusal(unsigned vr, char *message, size_t size)
+{
+    if (is_derivative(vr) || (vr >= CP_VR_STATE && vr < CP_VR_SETTINGS)) return NULL;
+    snprintf(message, size, "value reference %u (%s) as an unknown: only outputs and state "
+             "derivatives are", vr, cp_variable_name(vr));
+    return message;
+}
+
+/* The column of the unknowns along (dx_seed, dp_seed): the derivatives and the outputs where
+ * wanted (cp_directional), or MODEL_DISCARD with the diagnosis. */
+static ModelStatus column(ModelData *m, const double *dx_seed, const double *dp_seed,
+                          double *d_derivatives, double *d_outputs, double time, char *message,
+                          size_t size)
+{
+    if (!d_derivatives && !d_outputs) return MODEL_OK;
+    double pivot_ratio;
+    int bad_dof;
+    int status = cp_directional(X(m), m->r, dx_seed, dp_seed, d_derivatives, d_outputs,
+                                &pivot_ratio, &bad_dof);
+    return status == CP_OK ? MODEL_OK
+                           : no_derivatives(time, status, bad_dof, pivot_ratio, message, size);
+}
+
+/* The unknown vr's entry of a column (a state's is its own seed; a statistic's 0). */
+static double entry(unsigned vr, const double *dx_seed, const double *d_derivatives,
+                    const double *d_outputs)
+{
+    if (is_derivative(vr)) return d_derivatives[vr - CP_VR_DERIVATIVE];
+    if (is_output(vr)) return d_outputs[vr - CP_VR_OUTPUT];
+    if (vr < CP_VR_OUTPUT) return dx_seed[vr - CP_VR_STATE];
+    return 0.0;  /* a statistic */
+}
+
 ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[], size_t n_unknown,
                                          const unsigned knowns[], size_t n_known,
                                          const double seed[], double sensitivity[], double time,
@@ -248,42 +292,59 @@ ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[]
     double dx_seed[CP_NSTATE] = {0}, dp_seed[CP_NPARAM] = {0};
     for (size_t k = 0; k < n_known; k++) {
         const unsigned vr = knowns[k];
-        if (vr < CP_VR_INPUT || vr >= CP_VR_STATE + CP_NSTATE) {
-            snprintf(message, size, "value reference %u (%s) as a known: only states and inputs "
-                     "are", vr, cp_variable_name(vr));
-            return MODEL_REFUSED;
-        }
+        if (known_refusal(vr, message, size)) return MODEL_REFUSED;
         if (vr < CP_VR_STATE) dp_seed[vr] += seed[k];  /* the inputs end p (fmu_config.h) */
         else dx_seed[vr - CP_VR_STATE] += seed[k];
     }
     int want_derivatives = 0, want_outputs = 0;
     for (size_t k = 0; k < n_unknown; k++) {
-        const unsigned vr = unknowns[k];
-        if (is_derivative(vr)) want_derivatives = 1;
-        else if (is_output(vr)) want_outputs = 1;
-        else if (vr < CP_VR_STATE || vr >= CP_VR_SETTINGS) {
-            snprintf(message, size, "value reference %u (%s) as an unknown: only outputs and "
-                     "state derivatives are", vr, cp_variable_name(vr));
-            return MODEL_REFUSED;
-        }
+        if (unknown_refusal(unknowns[k], message, size)) return MODEL_REFUSED;
+        want_derivatives |= is_derivative(unknowns[k]);
+        want_outputs |= is_output(unknowns[k]);
     }
     double d_derivatives[CP_NSTATE], d_outputs[CP_NOUTPUT + 1];
-    if (want_derivatives || want_outputs) {
-        double pivot_ratio;
-        int bad_dof;
-        int status = cp_directional(X(m), m->r, dx_seed, dp_seed,
-                                    want_derivatives ? d_derivatives : NULL,
-                                    want_outputs ? d_outputs : NULL, &pivot_ratio, &bad_dof);
-        if (status != CP_OK)
-            return no_derivatives(time, status, bad_dof, pivot_ratio, message, size);
-    }
+    ModelStatus status = column(m, dx_seed, dp_seed, want_derivatives ? d_derivatives : NULL,
+                                want_outputs ? d_outputs : NULL, time, message, size);
+    if (status != MODEL_OK) return status;
+    for (size_t k = 0; k < n_unknown; k++)
+        sensitivity[k] = entry(unknowns[k], dx_seed, d_derivatives, d_outputs);
+    return MODEL_OK;
+}
+
+/* By complex step there is no reverse sweep: each known's column is one complex evaluation
+ * (cp_directional along that known), and its sensitivity the seed's product with it. Exact to
+ * rounding as the columns are; a Jacobian-transposed product costs n_known evaluations. */
+ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], size_t n_unknown,
+                                     const unsigned knowns[], size_t n_known, const double seed[],
+                                     double sensitivity[], double time, char *message, size_t size)
+{
+    int want_derivatives = 0, want_outputs = 0;
+    for (size_t k = 0; k < n_known; k++)
+        if (known_refusal(knowns[k], message, size)) return MODEL_REFUSED;
     for (size_t k = 0; k < n_unknown; k++) {
         const unsigned vr = unknowns[k];
-        double value = 0.0;  /* a statistic */
-        if (is_derivative(vr)) value = d_derivatives[vr - CP_VR_DERIVATIVE];
-        else if (is_output(vr)) value = d_outputs[vr - CP_VR_OUTPUT];
-        else if (vr < CP_VR_OUTPUT) value = dx_seed[vr - CP_VR_STATE];
-        sensitivity[k] = value;
+        if (unknown_refusal(vr, message, size)) return MODEL_REFUSED;
+        if (!isfinite(seed[k])) {
+            snprintf(message, size, "seed of %s = %g: must be finite", cp_variable_name(vr),
+                     seed[k]);
+            return MODEL_REFUSED;
+        }
+        want_derivatives |= is_derivative(vr) && seed[k] != 0.0;
+        want_outputs |= is_output(vr) && seed[k] != 0.0;
+    }
+    double d_derivatives[CP_NSTATE], d_outputs[CP_NOUTPUT + 1];
+    for (size_t j = 0; j < n_known; j++) {
+        double dx_seed[CP_NSTATE] = {0}, dp_seed[CP_NPARAM] = {0};
+        const unsigned known = knowns[j];
+        if (known < CP_VR_STATE) dp_seed[known] = 1.0;
+        else dx_seed[known - CP_VR_STATE] = 1.0;
+        ModelStatus status = column(m, dx_seed, dp_seed, want_derivatives ? d_derivatives : NULL,
+                                    want_outputs ? d_outputs : NULL, time, message, size);
+        if (status != MODEL_OK) return status;
+        double sum = 0.0;
+        for (size_t i = 0; i < n_unknown; i++)
+            if (seed[i] != 0.0) sum += seed[i] * entry(unknowns[i], dx_seed, d_derivatives, d_outputs);
+        sensitivity[j] = sum;
     }
     return MODEL_OK;
 }
@@ -292,17 +353,27 @@ ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[]
 
 ModelStatus model_do_step(ModelData *m, double t, double dt, char *message, size_t size)
 {
+    return model_do_step_early(m, t, dt, 0, NULL, message, size);
+}
+
+ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_return_allowed,
+                                double *last_successful_time, char *message, size_t size)
+{
     const cp_settings settings = {m->solver, m->r[CP_VR_RTOL], m->r[CP_VR_ATOL],
                                   m->r[CP_VR_MAX_STEP], m->max_steps};
     cp_failure failure;
-    int status = cp_cosim_step(&settings, m->r, X(m), Y(m), t, dt, &m->h, m->work, &m->fsal,
-                               STATS(m), &failure);
-    m->outputs_valid = status == CP_OK;  /* on failure, those at t are computed again */
+    double reached = t;
+    int status = cp_cosim_step_early(&settings, m->r, X(m), Y(m), t, dt, &m->h, m->work,
+                                     &m->fsal, STATS(m), &failure,
+                                     early_return_allowed ? &reached : NULL);
+    if (last_successful_time) *last_successful_time = status == CP_OK ? t + dt : reached;
+    /* valid where the state moved (cosim.c computed them there); at t, computed again */
+    m->outputs_valid = status == CP_OK || reached > t;
+    if (status == CP_OK || reached > t) m->dx_valid = 0;
     if (status != CP_OK) {
         cp_diagnose(message, size, status, &failure);
         return MODEL_DISCARD;
     }
-    m->dx_valid = 0;
     return MODEL_OK;
 }
 

@@ -36,17 +36,24 @@ static double rms(int n, const double *v, const double *scale)
     return sqrt(s / n);
 }
 
-/* cp_integrate has checked that ceil(dt / max_step) <= max_steps. */
+/* cp_integrate has checked that ceil(dt / max_step) <= max_steps. On failure, good holds the
+ * last point where x' was computed (x itself when none was) and *done the substeps that led
+ * there. */
 static int rk4(const cp_system *sys, double *x, double dt, double max_step, double *work,
-               cp_stats *stats)
+               cp_stats *stats, long long *done)
 {
     int n = sys->dim, status;
     long long steps = (long long)cp_fewest_steps(dt, max_step);
     double h = dt / steps;
     double *y = work, *k1 = y + n, *k2 = k1 + n, *k3 = k2 + n, *k4 = k3 + n, *tmp = k4 + n;
+    double *good = tmp + n;
     memcpy(y, x, n * sizeof(double));
+    memcpy(good, x, n * sizeof(double));
+    *done = 0;
     for (long long s = 0; s < steps; s++) {
         if ((status = eval(sys, y, k1, stats))) return status;
+        memcpy(good, y, n * sizeof(double));  /* x' is defined at y */
+        *done = s;
         for (int i = 0; i < n; i++) tmp[i] = y[i] + 0.5 * h * k1[i];
         if ((status = eval(sys, tmp, k2, stats))) return status;
         for (int i = 0; i < n; i++) tmp[i] = y[i] + 0.5 * h * k2[i];
@@ -202,20 +209,29 @@ static int start(const tableau *tb, const cp_system *sys, const double *x, doubl
     return CP_OK;
 }
 
+/* On failure with reached not NULL, x is left at the last accepted step (x' was computed
+ * there), *reached its time, and *h_io the step proposed from it. */
 static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x, double dt,
                     double rtol, double atol, double max_step, long long max_steps, double *h_io,
-                    double *work, int fsal, cp_stats *stats)
+                    double *work, int fsal, cp_stats *stats, double *reached)
 {
     int n = sys->dim, status;
     rk_memory m = carve(n, work);
-    double t_end = t + dt, h_abs = *h_io, t_new, h;
+    double t_start = t, t_end = t + dt, h_abs = *h_io, t_new, h;
     long long attempts = 0;
     if (!(max_step > 0)) max_step = INFINITY;
     if ((status = start(tb, sys, x, dt, rtol, atol, max_step, fsal, &m, &h_abs, stats))) return status;
     while (t < t_end) {
         status = one_step(tb, sys, t, t_end, &m, rtol, atol, max_step, max_steps, &attempts,
                           &h_abs, &t_new, &h, stats);
-        if (status) return status;
+        if (status) {
+            if (reached && t > t_start && cp_all_finite(n, m.y)) {
+                memcpy(x, m.y, n * sizeof(double));
+                *reached = t;
+                *h_io = h_abs;
+            }
+            return status;
+        }
         advance(tb, n, &m);
         t = t_new;
     }
@@ -299,17 +315,28 @@ int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double
 
 int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
                  double rtol, double atol, double max_step, long long max_steps,
-                 double *h, double *work, int *fsal, cp_stats *stats)
+                 double *h, double *work, int *fsal, cp_stats *stats, double *reached)
 {
     int status;
+    if (reached) *reached = t;
     if (dt <= 0) return CP_OK;
     if ((status = cp_unworkable(method, t, dt, max_step, max_steps))) return status;
     if (method == CP_RK4) {
+        long long done;
         *fsal = 0;
-        return rk4(sys, x, dt, max_step, work, stats);
+        status = rk4(sys, x, dt, max_step, work, stats, &done);
+        if (status == CP_OK) {
+            if (reached) *reached = t + dt;
+        } else if (reached && done > 0) {  /* the last substep where x' was computed */
+            memcpy(x, work + 6 * sys->dim, sys->dim * sizeof(double));
+            *reached = t + done * (dt / (long long)cp_fewest_steps(dt, max_step));
+        }
+        return status;
     }
     const tableau *tb = method == CP_RK45 ? &RK45_TABLEAU : &DOP853_TABLEAU;
-    status = adaptive(tb, sys, t, x, dt, rtol, atol, max_step, max_steps, h, work, *fsal, stats);
+    status = adaptive(tb, sys, t, x, dt, rtol, atol, max_step, max_steps, h, work, *fsal, stats,
+                      reached);
     *fsal = status == CP_OK;   /* on success work starts with x' at the new x */
+    if (status == CP_OK && reached) *reached = t + dt;
     return status;
 }

@@ -65,12 +65,15 @@ static inline int cp_unworkable(int method, double t, double dt, double max_step
  * max_steps steps are attempted, by every method: a step that max_step would split into
  * more fails at once (CP_TOO_MANY_STEPS), and so does a max_step below what t can resolve
  * (CP_MAX_STEP_UNRESOLVED), before any work. A new x that is not finite fails
- * (CP_NONFINITE). On failure x is left as it was at t.
+ * (CP_NONFINITE). On failure x is left as it was at t, unless reached is not NULL (early
+ * return): then x is left at the last point the method reached where x' was computed (RK45
+ * and DOP853: the last accepted step; RK4: the last completed substep), or at t if there is
+ * none. *reached (when not NULL) is the time of x on return: t + dt on success.
  * *fsal says whether work still holds x' at x from the last call (first same as last);
  * the caller clears it whenever it changes x or the parameters. */
 int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
                  double rtol, double atol, double max_step, long long max_steps,
-                 double *h, double *work, int *fsal, cp_stats *stats);
+                 double *h, double *work, int *fsal, cp_stats *stats, double *reached);
 
 /* DOP853 from times[0] (state in out[0..dim)) through times[ntimes - 1], writing the
  * state at every time into out (row-major, ntimes x dim) from the method's 7th-order
