@@ -1,6 +1,7 @@
 """The native FMI 3.0 FMU (builder.fmi3, runtime/csrc/fmi3_glue.c): the FMI 2.0 native FMU's
 behaviour through FMI 3.0's API, run by fmpy against the FMI 2.0 native FMU of the same scene."""
 
+import json
 import struct
 import subprocess
 import sys
@@ -17,6 +18,7 @@ from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
 
 from conical_pendulum import Link, Scene
+from conical_pendulum.builder.fmi3 import element_names
 from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.builder.native import LOG_CATEGORIES
 from fmu_helpers import BAD_VALUES
@@ -36,13 +38,39 @@ def fmus(tmp_path_factory):
     return fmi3, fmi2
 
 
+def fmi3_names(path):
+    """The FMI 2.0 scalars' names -> (the FMI 3.0 array, 0-based index), and the records
+    (the variables' description) from the FMU's model.json."""
+    with zipfile.ZipFile(path) as archive:
+        data = json.loads(archive.read("resources/model.json"))
+    return element_names(data), {v["name"]: v for v in data["variables"]}
+
+
+def fmi3_start_values(path, values):
+    """start values by FMI 2.0 scalar name -> fmpy's start values of the FMI 3.0 FMU (arrays whole)."""
+    elements, records = fmi3_names(path)
+    starts = {}
+    for name, value in values.items():
+        if name in elements:
+            array, k = elements[name]
+            members = sorted((i, n) for n, (a, i) in elements.items() if a == array)
+            current = starts.setdefault(array, [records[n]["start"] for _, n in members])
+            current[k] = value
+        else:
+            starts[name] = value
+    return starts
+
+
 class Instance3:
-    """One FMI 3.0 instance through fmpy's low-level API; `messages` collects (status, text)."""
+    """One FMI 3.0 instance through fmpy's low-level API, read and set by the FMI 2.0 FMU's scalar
+    names (an element of an array through its array); `messages` collects (status, text)."""
 
     def __init__(self, path, interface="CoSimulation", start_values=None, initialize=True, **options):
         self.md = read_model_description(str(path))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.types = {v.name: v.type for v in self.md.modelVariables}
+        self.elements, self.records = fmi3_names(path)
+        self.path = path
         self.unzipdir = extract(str(path))
         self.messages = []
 
@@ -65,14 +93,24 @@ class Instance3:
             self.fmu.exitInitializationMode()
 
     def set(self, values):
-        for name, value in values.items():
+        """Before initialization (an array is set whole, from its start values)."""
+        for name, value in fmi3_start_values(self.path, values).items():
             if self.types[name] == "Int32":
                 self.fmu.setInt32([self.vr[name]], [int(value)])
             else:
-                self.fmu.setFloat64([self.vr[name]], [float(value)])
+                value = [float(x) for x in value] if isinstance(value, list) else [float(value)]
+                self.fmu.setFloat64([self.vr[name]], value)
 
     def get(self, *names):
-        return self.fmu.getFloat64([self.vr[n] for n in names])
+        values = []
+        for name in names:
+            if name in self.elements:
+                array, k = self.elements[name]
+                n = int(self.fmu.getUInt64([self.vr["n_links"]])[0])
+                values.append(self.fmu.getFloat64([self.vr[array]], nValues=n)[k])
+            else:
+                values.append(self.fmu.getFloat64([self.vr[name]])[0])
+        return values
 
     def step(self, dt):
         result = self.fmu.doStep(currentCommunicationPoint=self.time, communicationStepSize=dt)
@@ -84,6 +122,14 @@ class Instance3:
 
     def close(self):
         self.fmu.freeInstance()
+
+
+def column(result, name, elements):
+    """An FMI 2.0 scalar's column of an fmpy result of the FMI 3.0 FMU."""
+    if name in elements:
+        array, k = elements[name]
+        return result[array][:, k]
+    return result[name]
 
 
 def test_fmpy_validates_it_and_it_ships_what_fmi_3_asks(fmus):
@@ -118,40 +164,55 @@ def test_exports_only_fmi3_functions(fmus, tmp_path):
     assert {"fmi3InstantiateCoSimulation", "fmi3InstantiateModelExchange", "fmi3DoStep"} <= set(symbols)
 
 
-def test_same_variables_and_value_references_as_the_fmi2_fmu(fmus):
+def test_same_variables_and_value_references_as_the_fmi2_fmu_per_link_ones_as_arrays(fmus):
     ours, theirs = (read_model_description(str(path)) for path in fmus)
+    elements, _ = fmi3_names(fmus[0])
     by_name = {v.name: v for v in ours.modelVariables}
     types = {"Real": "Float64", "Integer": "Int32"}
+    n_links = by_name["n_links"]
+    assert (n_links.type, n_links.causality, n_links.start) == ("UInt64", "structuralParameter", "3")
     for v in theirs.modelVariables:
-        mine = by_name[v.name]
-        assert (mine.valueReference, mine.type, mine.causality, mine.variability, mine.start) == (
-            v.valueReference,
-            types[v.type],
-            v.causality,
-            v.variability,
-            v.start,
-        )
+        array, k = elements.get(v.name, (v.name, None))
+        mine = by_name[array]
+        assert (mine.type, mine.causality, mine.variability) == (types[v.type], v.causality, v.variability)
+        if k is None:
+            assert (mine.valueReference, mine.start, mine.dimensions) == (v.valueReference, v.start, [])
+            continue
+        assert [d.variable for d in mine.dimensions] == [n_links]
+        if k == 0:  # an array's value reference is its first element's
+            assert mine.valueReference == v.valueReference
+        if v.start is not None:
+            assert mine.start.split()[k] == v.start
+    for name, (array, k) in {"l0": ("l", 0), "alpha2": ("alpha", 2), "bob1_x": ("bob_x", 1)}.items():
+        assert elements[name] == (array, k)
+    assert elements["der(omega1)"] == ("der(omega)", 1)
+    assert by_name["der(alpha)"].derivative.name == "alpha"
     assert by_name["time"].causality == "independent"
-    assert len(ours.derivatives) == len(SCENE.state_names())
-    assert {u.variable.name for u in ours.outputs} == {u.variable.name for u in theirs.outputs}
+    assert len(ours.derivatives) == 4  # der(alpha), der(beta), der(omega), der(delta)
+    assert {"energy", "F_pivot_x", "alpha", "link_qw"} <= {u.variable.name for u in ours.outputs}
 
 
 def test_co_simulation_is_the_fmi2_fmus_bit_for_bit(fmus):
+    """fmpy's simulate_fmu on both: it records the FMI 3.0 FMU's arrays as (n,) columns and takes
+    an array's start values as a list."""
     fmi3, fmi2 = fmus
-    runs = [
+    elements, _ = fmi3_names(fmi3)
+    ours, theirs = (
         simulate_fmu(
-            str(path), fmi_type="CoSimulation", stop_time=3.0, output_interval=0.05, start_values=START
+            str(path), fmi_type="CoSimulation", stop_time=3.0, output_interval=0.05, start_values=starts
         )
-        for path in (fmi3, fmi2)
-    ]
-    assert len(runs[0]) == len(runs[1]) == 61
-    for name in runs[1].dtype.names:
-        assert np.array_equal(runs[0][name], runs[1][name]), name
+        for path, starts in ((fmi3, fmi3_start_values(fmi3, START)), (fmi2, START))
+    )
+    assert len(ours) == len(theirs) == 61
+    assert ours["alpha"].shape == (61, 3)
+    for name in theirs.dtype.names:
+        assert np.array_equal(column(ours, name, elements), theirs[name]), name
 
 
 def test_model_exchange_with_cvode_agrees_with_the_fmi2_fmu(fmus):
     fmi3, fmi2 = fmus
-    runs = [
+    elements, _ = fmi3_names(fmi3)
+    ours, theirs = (
         simulate_fmu(
             str(path),
             fmi_type="ModelExchange",
@@ -159,12 +220,12 @@ def test_model_exchange_with_cvode_agrees_with_the_fmi2_fmu(fmus):
             relative_tolerance=1e-8,
             stop_time=3.0,
             output_interval=0.05,
-            start_values=START,
+            start_values=starts,
         )
-        for path in (fmi3, fmi2)
-    ]
+        for path, starts in ((fmi3, fmi3_start_values(fmi3, START)), (fmi2, START))
+    )
     for name in SCENE.state_names():
-        assert np.allclose(runs[0][name], runs[1][name], rtol=1e-6, atol=1e-6), name
+        assert np.allclose(column(ours, name, elements), theirs[name], rtol=1e-6, atol=1e-6), name
 
 
 @pytest.mark.parametrize(("name", "value", "message"), BAD_VALUES)
@@ -189,13 +250,22 @@ def test_wrong_calls_are_refused_naming_what(fmus):
         fmu.fmu.getBoolean([0])
     with pytest.raises(FMICallException):
         fmu.fmu.setFloat64([fmu.vr["time"]], [1.0])
-    with pytest.raises(FMICallException):  # every variable is a scalar here
-        fmu.fmu.getFloat64([fmu.vr["alpha0"]], nValues=3)
+    with pytest.raises(FMICallException):  # alpha stands for 3 values
+        fmu.fmu.getFloat64([fmu.vr["alpha"]], nValues=2)
+    with pytest.raises(FMICallException):  # an array's element other than the first is no variable
+        fmu.fmu.getFloat64([fmu.records["alpha1"]["value_reference"]])
+    with pytest.raises(FMICallException):
+        fmu.fmu.setUInt64([fmu.vr["n_links"]], [4])
     texts = fmu.texts(ERROR)
     assert "value reference 10000 is not a Float64 variable" in texts
     assert "this FMU has no Boolean variables" in texts
     assert "time is the independent variable" in texts
-    assert "nValues = 3, but the 1 value references have 1 values" in texts
+    assert "nValues = 2, but the 1 value references have 3 values" in texts
+    assert "is not a variable (it is alpha1, an element of an array" in texts
+    assert "n_links = 4: the number of links is fixed when the FMU is built (3)" in texts
+    assert fmu.fmu.getUInt64([fmu.vr["n_links"]]) == [3]
+    both = fmu.fmu.getFloat64([fmu.vr["g"], fmu.vr["l"], fmu.vr["energy"]], nValues=5)
+    assert both[:4] == [*fmu.get("g"), *fmu.get("l0", "l1", "l2")] and both[4] == fmu.get("energy")[0]
     assert fmu.get("time") == [0.0]
     fmu.step(0.25)
     assert fmu.get("time") == [0.25]
@@ -304,7 +374,7 @@ def _reach(fmu, state):
 
 CALLS = {
     "doStep": lambda i: i.fmu.doStep(0.0, 0.01),
-    "getFloat64": lambda i: i.fmu.getFloat64([0]),
+    "getFloat64": lambda i: i.fmu.getFloat64([i.vr["g"]]),
     "setFloat64 input": lambda i: i.fmu.setFloat64([i.vr["a_pivot_x"]], [0.5]),
     "enterInitializationMode": lambda i: i.fmu.enterInitializationMode(startTime=0.0),
     "exitInitializationMode": lambda i: i.fmu.exitInitializationMode(),
@@ -405,19 +475,22 @@ def test_state_table(fmus, interface, state, call):
 
 
 def test_directional_derivatives_against_central_differences(fmus):
+    """Unknowns and knowns by array: der(alpha) .. der(delta) (12 values) against one element of
+    a state array, seeded by its unit vector (3 values)."""
     fmu = Instance3(fmus[0], "ModelExchange", start_values=START)
     fmu.fmu.enterContinuousTimeMode()
-    n = len(SCENE.state_names())
-    x = np.array(fmu.get(*SCENE.state_names()))
-    derivatives = [fmu.vr[f"der({name})"] for name in SCENE.state_names()]
+    names = SCENE.state_names()
+    n = len(names)
+    x = np.array(fmu.get(*names))
+    derivatives = [fmu.vr[f"der({array})"] for array in ("alpha", "beta", "omega", "delta")]
     for known in ("alpha0", "beta1", "omega2", "delta0"):
-        k = SCENE.state_names().index(known)
-        exact = fmu.fmu.getDirectionalDerivative(derivatives, [fmu.vr[known]], [1.0])
-        h = 1e-6
-        columns = []
+        array, index = fmu.elements[known]
+        seed = [1.0 if k == index else 0.0 for k in range(3)]
+        exact = fmu.fmu.getDirectionalDerivative(derivatives, [fmu.vr[array]], seed, nSensitivity=n)
+        h, columns = 1e-6, []
         for sign in (1, -1):
             shifted = x.copy()
-            shifted[k] += sign * h
+            shifted[names.index(known)] += sign * h
             fmu.fmu.setContinuousStates((c_double * n)(*shifted), n)
             dx = (c_double * n)()
             fmu.fmu.getContinuousStateDerivatives(dx, n)
@@ -426,8 +499,11 @@ def test_directional_derivatives_against_central_differences(fmus):
         central = (columns[0] - columns[1]) / (2 * h)
         assert np.allclose(exact, central, rtol=1e-6, atol=1e-6), known
     with pytest.raises(FMICallException):
-        fmu.fmu.getDirectionalDerivative(derivatives, [fmu.vr["alpha0"]], [float("nan")])
-    assert "seed of alpha0 = nan: must be finite" in fmu.texts(ERROR)
+        fmu.fmu.getDirectionalDerivative(derivatives, [fmu.vr["alpha"]], [0.0, float("nan"), 0.0], n)
+    assert "seed of alpha1 = nan: must be finite" in fmu.texts(ERROR)
+    with pytest.raises(FMICallException):
+        fmu.fmu.getDirectionalDerivative(derivatives, [fmu.vr["alpha"]], [1.0], n)
+    assert "nSeed = 1 and nSensitivity = 12, but the knowns have 3 values" in fmu.texts(ERROR)
     fmu.close()
 
 

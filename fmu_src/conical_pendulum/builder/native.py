@@ -395,6 +395,8 @@ def write_native_fmu(
             if name != "fmu_config.h":
                 shutil.copy2(origin, sources / name)
         (sources / "fmu_config.h").write_text(config_header(data, guid))
+        if fmi_version == 3:
+            (sources / "fmi3_arrays.h").write_text(fmi3.arrays_header(data))
         libraries = {}
         for platform in dict.fromkeys(platforms):
             (Path(tmp) / platform).mkdir()

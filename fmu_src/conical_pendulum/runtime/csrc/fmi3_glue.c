@@ -11,9 +11,11 @@
  * What this FMU does not have, as its model description says: no clocks and no events (no
  * event indicators, hasEventMode="false", providesEvaluateDiscreteStates="false"), no
  * Scheduled Execution, no configuration modes (no tunable structural parameters), variables of
- * the types Float64 and Int32 only (the others are refused), no output derivatives, no
+ * the types Float64 and Int32 only (the others are refused) and the UInt64 structural parameter
+ * n_links, the size of every per-link array (fmi3_arrays.h: an array's value reference stands
+ * for the model's per-link scalars in link order), no output derivatives, no
  * intermediate update. Early return (fmi3DoStep's earlyReturn, lastSuccessfulTime) and the
- * adjoint derivative have their place below (marked EARLY RETURN and ADJOINT).
+ * adjoint derivative are marked EARLY RETURN and ADJOINT below.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -23,6 +25,7 @@
 
 #include "fmi3Functions.h"
 
+#include "fmi3_arrays.h"
 #include "fmu_config.h"
 #include "fmu_model.h"
 
@@ -65,6 +68,7 @@ static const char *const state_names[] = {  /* by bit, as the standard names the
 #define STATES_fmi3Terminate                      STEP_MODE,                    (EVENT_MODE | CONTINUOUS_TIME)
 #define STATES_fmi3GetFloat64                     CS_VALUES,                    ME_VALUES
 #define STATES_fmi3GetInt32                       CS_VALUES,                    ME_VALUES
+#define STATES_fmi3GetN_links                     (CO_SIMULATION_STATES),       (MODEL_EXCHANGE_STATES)  /* a structural parameter: also before initialization */
 #define STATES_fmi3GetOther                       CS_VALUES,                    ME_VALUES  /* Float32, Int8, ..., Binary */
 #define STATES_fmi3SetFloat64                     (BEFORE_INIT | STEP_MODE),    (BEFORE_INIT | EVENT_MODE | CONTINUOUS_TIME)
 #define STATES_fmi3SetInt32                       (BEFORE_INIT | STEP_MODE),    (BEFORE_INIT | EVENT_MODE)
@@ -130,9 +134,11 @@ typedef struct {
     double model[];               /* the model's data, in the instance's allocation */
 } Instance;
 
-/* FMI 3.0's independent variable, time: its value reference follows every variable's
- * (builder/fmi3.py). */
-#define VR_TIME ((fmi3ValueReference)CP_NVARIABLE)
+/* FMI 3.0's independent variable, time, and the structural parameter n_links: their value
+ * references follow every variable's (fmi3_arrays.h, builder/fmi3.py). */
+#define VR_TIME ((fmi3ValueReference)CP_VR_TIME)
+#define VR_N_LINKS ((fmi3ValueReference)CP_VR_N_LINKS)
+#define MAX_ELEMENTS 4096  /* of one call's expanded value references (directional derivatives) */
 
 #define ALL_CATEGORIES ((1u << CP_NLOG) - 1)
 #define MODEL(inst) ((ModelData *)(inst)->model)
@@ -366,14 +372,41 @@ static int initialized(const Instance *inst)
     return !(inst->machine.state & BEFORE_INIT);
 }
 
-/* Every variable of this FMU is a scalar: nValues must be nValueReferences. */
-static fmi3Status check_values(Instance *inst, const char *function, const void *vr, size_t nvr,
-                               const void *values, size_t nValues)
+/* The model contract's Reals behind an FMI 3.0 value reference: an array's members in link
+ * order (fmi3_arrays.h), or the variable itself; 0 for a member other than an array's first,
+ * which is no FMI 3.0 variable. */
+static size_t elements(fmi3ValueReference vr, const unsigned **members)
+{
+    *members = NULL;
+    for (int a = 0; a < CP_NARRAY; a++)
+        if (cp_array_vr[a] == vr) {
+            *members = cp_array_members[a];
+            return CP_N_LINKS;
+        }
+    return vr < CP_VR_TIME && cp_array_hidden[vr] ? 0 : 1;
+}
+
+#define ELEMENT(vr, members, e) ((members) ? (members)[e] : (vr))
+
+/* How many values the value references stand for (an array: n_links), or refused: a value
+ * reference that is a hidden array member, or nValues that is not that count. */
+static fmi3Status check_values(Instance *inst, const char *function, const fmi3ValueReference vr[],
+                               size_t nvr, const void *values, size_t nValues)
 {
     if (nvr && (!vr || !values)) return REFUSE(inst, "%s: valueReferences or values is NULL", function);
-    if (nValues != nvr)
+    size_t total = 0;
+    for (size_t k = 0; k < nvr; k++) {
+        const unsigned *members;
+        const size_t n = elements(vr[k], &members);
+        if (!n)
+            return REFUSE(inst, "%s: value reference %u is not a variable (it is %s, an element of "
+                          "an array: use the array's value reference)", function, vr[k],
+                          cp_variable_name(vr[k]));
+        total += n;
+    }
+    if (nValues != total)
         return REFUSE(inst, "%s: nValues = %zu, but the %zu value references have %zu values",
-                      function, nValues, nvr, nvr);
+                      function, nValues, nvr, total);
     return fmi3OK;
 }
 
@@ -384,18 +417,25 @@ fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
     if (!inst) return fmi3Error;
     if (check_values(inst, "fmi3GetFloat64", vr, nvr, values, nValues)) return fmi3Error;
     char message[MESSAGE_SIZE];
+    size_t j = 0;
     for (size_t k = 0; k < nvr; k++) {
         if (vr[k] == VR_TIME) {
-            values[k] = inst->machine.time;
+            values[j++] = inst->machine.time;
             continue;
         }
-        switch (model_get_real(MODEL(inst), vr[k], &values[k], inst->machine.time, message,
-                               sizeof message)) {
-        case MODEL_OK: break;
-        case MODEL_DISCARD: return discard(inst, message);
-        case MODEL_REFUSED: return REFUSE(inst, "fmi3GetFloat64: %s", message);
-        case MODEL_NO_VARIABLE:
-            return REFUSE(inst, "fmi3GetFloat64: value reference %u is not a Float64 variable", vr[k]);
+        const unsigned *members;
+        const size_t n = elements(vr[k], &members);
+        for (size_t e = 0; e < n; e++, j++) {
+            const unsigned u = ELEMENT(vr[k], members, e);
+            switch (model_get_real(MODEL(inst), u, &values[j], inst->machine.time, message,
+                                   sizeof message)) {
+            case MODEL_OK: break;
+            case MODEL_DISCARD: return discard(inst, message);
+            case MODEL_REFUSED: return REFUSE(inst, "fmi3GetFloat64: %s", message);
+            case MODEL_NO_VARIABLE:
+                return REFUSE(inst, "fmi3GetFloat64: value reference %u is not a Float64 variable",
+                              vr[k]);
+            }
         }
     }
     return fmi3OK;
@@ -408,17 +448,38 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
     if (!inst) return fmi3Error;
     if (check_values(inst, "fmi3SetFloat64", vr, nvr, values, nValues)) return fmi3Error;
     char message[MESSAGE_SIZE];
-    for (size_t k = 0; k < nvr; k++) {  /* all checked before any is taken */
+    for (size_t k = 0, j = 0; k < nvr; k++) {  /* all checked before any is taken */
         if (vr[k] == VR_TIME)
             return REFUSE(inst, "fmi3SetFloat64: time is the independent variable; it is set "
                           "by fmi3EnterInitializationMode, fmi3SetTime and fmi3DoStep");
-        ModelStatus status = model_check_real(MODEL(inst), vr[k], values[k], initialized(inst),
-                                              message, sizeof message);
-        if (status == MODEL_NO_VARIABLE)
-            return REFUSE(inst, "fmi3SetFloat64: value reference %u is not a Float64 variable", vr[k]);
-        if (status != MODEL_OK) return REFUSE(inst, "%s", message);
+        const unsigned *members;
+        const size_t n = elements(vr[k], &members);
+        for (size_t e = 0; e < n; e++, j++) {
+            ModelStatus status = model_check_real(MODEL(inst), ELEMENT(vr[k], members, e), values[j],
+                                                  initialized(inst), message, sizeof message);
+            if (status == MODEL_NO_VARIABLE)
+                return REFUSE(inst, "fmi3SetFloat64: value reference %u is not a Float64 variable",
+                              vr[k]);
+            if (status != MODEL_OK) return REFUSE(inst, "%s", message);
+        }
     }
-    for (size_t k = 0; k < nvr; k++) model_set_real(MODEL(inst), vr[k], values[k]);
+    for (size_t k = 0, j = 0; k < nvr; k++) {
+        const unsigned *members;
+        const size_t n = elements(vr[k], &members);
+        for (size_t e = 0; e < n; e++, j++)
+            model_set_real(MODEL(inst), ELEMENT(vr[k], members, e), values[j]);
+    }
+    return fmi3OK;
+}
+
+/* Int32: no arrays (every per-link quantity is a Float64). */
+static fmi3Status check_scalars(Instance *inst, const char *function, const void *vr, size_t nvr,
+                                const void *values, size_t nValues)
+{
+    if (nvr && (!vr || !values)) return REFUSE(inst, "%s: valueReferences or values is NULL", function);
+    if (nValues != nvr)
+        return REFUSE(inst, "%s: nValues = %zu, but the %zu value references have %zu values",
+                      function, nValues, nvr, nvr);
     return fmi3OK;
 }
 
@@ -427,7 +488,7 @@ fmi3Status fmi3GetInt32(fmi3Instance c, const fmi3ValueReference vr[], size_t nv
 {
     Instance *inst = CHECKED(c, fmi3GetInt32);
     if (!inst) return fmi3Error;
-    if (check_values(inst, "fmi3GetInt32", vr, nvr, values, nValues)) return fmi3Error;
+    if (check_scalars(inst, "fmi3GetInt32", vr, nvr, values, nValues)) return fmi3Error;
     for (size_t k = 0; k < nvr; k++) {
         int value;
         if (model_get_integer(MODEL(inst), vr[k], &value) != MODEL_OK)
@@ -442,7 +503,7 @@ fmi3Status fmi3SetInt32(fmi3Instance c, const fmi3ValueReference vr[], size_t nv
 {
     Instance *inst = CHECKED(c, fmi3SetInt32);
     if (!inst) return fmi3Error;
-    if (check_values(inst, "fmi3SetInt32", vr, nvr, values, nValues)) return fmi3Error;
+    if (check_scalars(inst, "fmi3SetInt32", vr, nvr, values, nValues)) return fmi3Error;
     char message[MESSAGE_SIZE];
     for (size_t k = 0; k < nvr; k++) {  /* all checked before any is taken */
         ModelStatus status = model_check_integer(MODEL(inst), vr[k], values[k], initialized(inst),
@@ -478,7 +539,6 @@ NO_VARIABLES(fmi3GetInt16, fmi3GetOther, "Int16", fmi3Int16)
 NO_VARIABLES(fmi3GetUInt16, fmi3GetOther, "UInt16", fmi3UInt16)
 NO_VARIABLES(fmi3GetUInt32, fmi3GetOther, "UInt32", fmi3UInt32)
 NO_VARIABLES(fmi3GetInt64, fmi3GetOther, "Int64", fmi3Int64)
-NO_VARIABLES(fmi3GetUInt64, fmi3GetOther, "UInt64", fmi3UInt64)
 NO_VARIABLES(fmi3GetBoolean, fmi3GetOther, "Boolean", fmi3Boolean)
 NO_VARIABLES(fmi3GetString, fmi3GetOther, "String", fmi3String)
 NO_VARIABLES(fmi3SetFloat32, fmi3SetOther, "Float32", const fmi3Float32)
@@ -488,9 +548,39 @@ NO_VARIABLES(fmi3SetInt16, fmi3SetOther, "Int16", const fmi3Int16)
 NO_VARIABLES(fmi3SetUInt16, fmi3SetOther, "UInt16", const fmi3UInt16)
 NO_VARIABLES(fmi3SetUInt32, fmi3SetOther, "UInt32", const fmi3UInt32)
 NO_VARIABLES(fmi3SetInt64, fmi3SetOther, "Int64", const fmi3Int64)
-NO_VARIABLES(fmi3SetUInt64, fmi3SetOther, "UInt64", const fmi3UInt64)
 NO_VARIABLES(fmi3SetBoolean, fmi3SetOther, "Boolean", const fmi3Boolean)
 NO_VARIABLES(fmi3SetString, fmi3SetOther, "String", const fmi3String)
+
+/* UInt64: only the structural parameter n_links, fixed by the build. */
+fmi3Status fmi3GetUInt64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                         fmi3UInt64 values[], size_t nValues)
+{
+    Instance *inst = CHECKED_AS(c, "fmi3GetUInt64", fmi3GetN_links);
+    if (!inst) return fmi3Error;
+    if (check_scalars(inst, "fmi3GetUInt64", vr, nvr, values, nValues)) return fmi3Error;
+    for (size_t k = 0; k < nvr; k++) {
+        if (vr[k] != VR_N_LINKS)
+            return REFUSE(inst, "fmi3GetUInt64: value reference %u is not a UInt64 variable", vr[k]);
+        values[k] = CP_N_LINKS;
+    }
+    return fmi3OK;
+}
+
+fmi3Status fmi3SetUInt64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                         const fmi3UInt64 values[], size_t nValues)
+{
+    Instance *inst = CHECKED_AS(c, "fmi3SetUInt64", fmi3SetOther);
+    if (!inst) return fmi3Error;
+    if (check_scalars(inst, "fmi3SetUInt64", vr, nvr, values, nValues)) return fmi3Error;
+    for (size_t k = 0; k < nvr; k++) {
+        if (vr[k] != VR_N_LINKS)
+            return REFUSE(inst, "fmi3SetUInt64: value reference %u is not a UInt64 variable", vr[k]);
+        return REFUSE(inst, "n_links = %llu: the number of links is fixed when the FMU is built "
+                      "(%d); build the FMU of another scene", (unsigned long long)values[k],
+                      CP_N_LINKS);
+    }
+    return fmi3OK;
+}
 
 fmi3Status fmi3GetBinary(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
                          size_t valueSizes[], fmi3Binary values[], size_t nValues)
@@ -730,8 +820,8 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte serializedStat
 /* ---- partial derivatives ---------------------------------------------------------------- */
 
 /* sensitivity = J seed (FMI 3.0, section 2.2.11), J the Jacobian of the unknowns with respect to
- * the knowns at the current values: model_directional_derivative. Scalars only: nSeed is
- * nKnowns and nSensitivity nUnknowns. */
+ * the knowns at the current values: model_directional_derivative. An array stands for its
+ * n_links elements: nSeed and nSensitivity count the values, as nValues does. */
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
                                         size_t nUnknowns, const fmi3ValueReference knowns[],
                                         size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
@@ -742,43 +832,113 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference
     if (!inst) return fmi3Error;
     if ((nUnknowns && (!unknowns || !sensitivity)) || (nKnowns && (!knowns || !seed)))
         return REFUSE(inst, "%s: a pointer is NULL", function);
-    if (nSeed != nKnowns || nSensitivity != nUnknowns)
-        return REFUSE(inst, "%s: nSeed = %zu and nSensitivity = %zu, but the %zu knowns and %zu "
-                      "unknowns are scalars", function, nSeed, nSensitivity, nKnowns, nUnknowns);
-    for (size_t k = 0; k < nKnowns; k++)
+    /* arrays stand for their members (fmi3_arrays.h): the contract's scalars */
+    unsigned unknown[MAX_ELEMENTS], known[MAX_ELEMENTS];
+    size_t n_unknown = 0, n_known = 0;
+    for (int side = 0; side < 2; side++) {
+        const fmi3ValueReference *refs = side ? knowns : unknowns;
+        const size_t n_refs = side ? nKnowns : nUnknowns;
+        unsigned *out = side ? known : unknown;
+        size_t *count = side ? &n_known : &n_unknown;
+        for (size_t k = 0; k < n_refs; k++) {
+            const unsigned *members;
+            const size_t n = elements(refs[k], &members);
+            if (!n)
+                return REFUSE(inst, "%s: value reference %u is not a variable (it is %s, an element "
+                              "of an array: use the array's value reference)", function, refs[k],
+                              cp_variable_name(refs[k]));
+            if (*count + n > MAX_ELEMENTS)
+                return REFUSE(inst, "%s: more than %d values in one call", function, MAX_ELEMENTS);
+            for (size_t e = 0; e < n; e++) out[(*count)++] = ELEMENT(refs[k], members, e);
+        }
+    }
+    if (nSeed != n_known || nSensitivity != n_unknown)
+        return REFUSE(inst, "%s: nSeed = %zu and nSensitivity = %zu, but the knowns have %zu values "
+                      "and the unknowns %zu", function, nSeed, nSensitivity, n_known, n_unknown);
+    for (size_t k = 0; k < n_known; k++)
         if (!isfinite(seed[k]))
             return REFUSE(inst, "%s: seed of %s = %g: must be finite", function,
-                          cp_variable_name(knowns[k]), seed[k]);
+                          cp_variable_name(known[k]), seed[k]);
     char message[MESSAGE_SIZE];
-    switch (model_directional_derivative(MODEL(inst), unknowns, nUnknowns, knowns, nKnowns, seed,
+    switch (model_directional_derivative(MODEL(inst), unknown, n_unknown, known, n_known, seed,
                                          sensitivity, inst->machine.time, message, sizeof message)) {
     case MODEL_OK: break;
     case MODEL_DISCARD: return discard(inst, message);
     default: return REFUSE(inst, "%s: %s", function, message);
     }
-    for (size_t k = 0; k < nUnknowns; k++)
+    for (size_t k = 0; k < n_unknown; k++)
         if (!isfinite(sensitivity[k])) {
             log_message(inst, fmi3Discard, CP_LOG_STATUS_DISCARD, "%s: the derivative of %s is "
                         "not finite at t = %.9g s; check parameters and state", function,
-                        cp_variable_name(unknowns[k]), inst->machine.time);
+                        cp_variable_name(unknown[k]), inst->machine.time);
             return fmi3Discard;
         }
     return fmi3OK;
 }
 
-/* ADJOINT: sensitivity = seed^T J. The model contract has no transposed product yet
- * (model_adjoint_derivative); until it does, refused, and the model description says
- * providesAdjointDerivatives="false". Its checks are fmi3GetDirectionalDerivative's. */
+/* The contract's scalars behind value references into out (an array: its members in link
+ * order, fmi3_arrays.h), *count of them; or refused, as fmi3GetDirectionalDerivative refuses. */
+static fmi3Status expand(Instance *inst, const char *function, const fmi3ValueReference refs[],
+                         size_t n_refs, unsigned out[], size_t *count)
+{
+    *count = 0;
+    for (size_t k = 0; k < n_refs; k++) {
+        const unsigned *members;
+        const size_t n = elements(refs[k], &members);
+        if (!n)
+            return REFUSE(inst, "%s: value reference %u is not a variable (it is %s, an element "
+                          "of an array: use the array's value reference)", function, refs[k],
+                          cp_variable_name(refs[k]));
+        if (*count + n > MAX_ELEMENTS)
+            return REFUSE(inst, "%s: more than %d values in one call", function, MAX_ELEMENTS);
+        for (size_t e = 0; e < n; e++) out[(*count)++] = ELEMENT(refs[k], members, e);
+    }
+    return fmi3OK;
+}
+
+/* ADJOINT: sensitivity = seed^T J (FMI 3.0, section 2.2.11), J as for
+ * fmi3GetDirectionalDerivative: model_adjoint_derivative, exact to rounding. By complex step
+ * there is no reverse sweep: each known costs one complex evaluation, so a row costs what its
+ * directional derivatives cost. An array stands for its n_links elements: nSeed counts the
+ * unknowns' values, nSensitivity the knowns'. Its checks are fmi3GetDirectionalDerivative's. */
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
                                     size_t nUnknowns, const fmi3ValueReference knowns[],
                                     size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
                                     fmi3Float64 sensitivity[], size_t nSensitivity)
 {
-    (void)unknowns, (void)nUnknowns, (void)knowns, (void)nKnowns, (void)seed, (void)nSeed;
-    (void)sensitivity, (void)nSensitivity;
+    static const char *const function = "fmi3GetAdjointDerivative";
     Instance *inst = CHECKED(c, fmi3GetAdjointDerivative);
     if (!inst) return fmi3Error;
-    return REFUSE(inst, "fmi3GetAdjointDerivative: not provided (providesAdjointDerivatives is false)");
+    if ((nUnknowns && (!unknowns || !seed)) || (nKnowns && (!knowns || !sensitivity)))
+        return REFUSE(inst, "%s: a pointer is NULL", function);
+    unsigned unknown[MAX_ELEMENTS], known[MAX_ELEMENTS];
+    size_t n_unknown, n_known;
+    if (expand(inst, function, unknowns, nUnknowns, unknown, &n_unknown)
+        || expand(inst, function, knowns, nKnowns, known, &n_known))
+        return fmi3Error;
+    if (nSeed != n_unknown || nSensitivity != n_known)
+        return REFUSE(inst, "%s: nSeed = %zu and nSensitivity = %zu, but the unknowns have %zu "
+                      "values and the knowns %zu", function, nSeed, nSensitivity, n_unknown,
+                      n_known);
+    for (size_t k = 0; k < n_unknown; k++)
+        if (!isfinite(seed[k]))
+            return REFUSE(inst, "%s: seed of %s = %g: must be finite", function,
+                          cp_variable_name(unknown[k]), seed[k]);
+    char message[MESSAGE_SIZE];
+    switch (model_adjoint_derivative(MODEL(inst), unknown, n_unknown, known, n_known, seed,
+                                     sensitivity, inst->machine.time, message, sizeof message)) {
+    case MODEL_OK: break;
+    case MODEL_DISCARD: return discard(inst, message);
+    default: return REFUSE(inst, "%s: %s", function, message);
+    }
+    for (size_t k = 0; k < n_known; k++)
+        if (!isfinite(sensitivity[k])) {
+            log_message(inst, fmi3Discard, CP_LOG_STATUS_DISCARD, "%s: the derivative with "
+                        "respect to %s is not finite at t = %.9g s; check parameters and state",
+                        function, cp_variable_name(known[k]), inst->machine.time);
+            return fmi3Discard;
+        }
+    return fmi3OK;
 }
 
 /* ---- Model Exchange ----------------------------------------------------------------------- */
@@ -916,11 +1076,16 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance c, const fmi3ValueReference vr[
                         "(maxOutputDerivativeOrder is 0)") : fmi3OK;
 }
 
-/* One communication step. EARLY RETURN: the model contract's model_do_step returns at t + dt
- * or not at all, so earlyReturn is always false; a discarded step leaves the instance at t
- * (lastSuccessfulTime = t, canReturnEarlyAfterIntermediateUpdate is false). When the contract
- * reports the last good internal time of a failed step, it goes into lastSuccessfulTime here
- * (and, if early_return_allowed, earlyReturn with fmi3OK). */
+/* One communication step. EARLY RETURN: with earlyReturnAllowed (fmi3InstantiateCoSimulation),
+ * a step that cannot complete but got somewhere returns early (model_do_step_early): fmi3OK,
+ * earlyReturn = true, lastSuccessfulTime the last good internal step (RK45 and DOP853: the last
+ * accepted one; RK4: the last completed substep where x' was computed), the state and outputs
+ * there, and the diagnosis logged (logStatusDiscard); the importer goes on from there, and a
+ * shorter step either completes or is discarded. A step that got nowhere, or any that cannot
+ * complete without earlyReturnAllowed, is fmi3Discard with the instance as it was at t
+ * (lastSuccessfulTime = t): FMI 3.0's fmi3Discard leaves the FMU in the state before the call,
+ * and its earlyReturn only reports a point that was computed successfully, never the error
+ * itself (fmi-standard pull request 1845). */
 fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 currentCommunicationPoint,
                       fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                       fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation,
@@ -936,12 +1101,19 @@ fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 currentCommunicationPoint,
         return REFUSE(inst, "fmi3DoStep: currentCommunicationPoint = %.17g s, but the FMU is "
                       "at t = %.17g s", t, inst->machine.time);
     *eventHandlingNeeded = *terminateSimulation = *earlyReturn = fmi3False;
-    if (model_do_step(MODEL(inst), t, dt, inst->discarded, sizeof inst->discarded) != MODEL_OK) {
-        *lastSuccessfulTime = inst->machine.last_successful_time = inst->machine.time;
-        return discard(inst, inst->discarded);
+    double reached = t;
+    if (model_do_step_early(MODEL(inst), t, dt, inst->early_return_allowed, &reached,
+                            inst->discarded, sizeof inst->discarded) != MODEL_OK) {
+        if (!(reached > t)) {
+            *lastSuccessfulTime = inst->machine.last_successful_time = inst->machine.time;
+            return discard(inst, inst->discarded);
+        }
+        log_message(inst, fmi3OK, CP_LOG_STATUS_DISCARD, "fmi3DoStep returns early: %s",
+                    inst->discarded);
+        *earlyReturn = fmi3True;
     }
     inst->discarded[0] = '\0';
-    inst->machine.time = inst->machine.last_successful_time = t + dt;
+    inst->machine.time = inst->machine.last_successful_time = reached;
     *lastSuccessfulTime = inst->machine.time;
     return fmi3OK;
 }
