@@ -7,6 +7,9 @@ A chain hanging from a moving support (inputs a_pivot, outputs F_pivot) of 20 an
 compiled with the native FMU's model sources, no FMI layer), at one fixed state; the knowns
 are every state and input (2n + 3 for n links: all F_pivot depends on). Per operation:
 - rhs: one right-hand side (model_set_states and model_get_derivatives), the unit;
+- outputs: every output once (model_set_states and model_get_real of F_pivot_x), in real
+  arithmetic: what a reverse sweep would start from (reverse mode's cost is a small multiple
+  of it per row; not measured, there is none);
 - adjoint: the 3 rows by model_adjoint_derivative, one call per row (seed 1 on that row);
 - directional: the 3 rows by model_directional_derivative, one call per known, all 3 rows;
 - directional_per_row: 3 x (2n + 3) calls, one row and one known each.
@@ -63,9 +66,11 @@ def main():
             )
             us = {name: float(value) for name, value in (line.split() for line in run.stdout.splitlines())}
             unit = us["rhs"] - us["set"]
+            us["rhs"], us["outputs"] = unit, us["outputs"] - us["set"]
             knowns = len(states) + len(inputs)
             for name, calls in (
                 ("rhs", 1),
+                ("outputs", 1),
                 ("adjoint", 3),
                 ("directional", knowns),
                 ("directional_per_row", 3 * knowns),

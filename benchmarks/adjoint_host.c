@@ -11,6 +11,7 @@
  * line "name microseconds_per_call", the median over the repeats:
  *   rhs          model_set_states and model_get_derivatives (one right-hand side)
  *   set          model_set_states alone
+ *   outputs      model_set_states and model_get_real of the first row (every output computed)
  *   adjoint      one adjoint per row, over every known (ROWS calls)
  *   directional  one directional derivative per known, of every row at once (knowns calls)
  *   directional_per_row  one directional derivative per known and row (ROWS x knowns calls)
@@ -52,8 +53,8 @@ static int compare(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-enum { RHS, SET, ADJOINT, DIRECTIONAL, PER_ROW, N_OPERATION };
-static const char *const names[N_OPERATION] = {"rhs", "set", "adjoint", "directional",
+enum { RHS, SET, OUTPUTS, ADJOINT, DIRECTIONAL, PER_ROW, N_OPERATION };
+static const char *const names[N_OPERATION] = {"rhs", "set", "outputs", "adjoint", "directional",
                                                "directional_per_row"};
 
 static unsigned knowns[MAX_VR], rows[MAX_VR];
@@ -71,6 +72,10 @@ static int run(ModelData *m, int operation)
         break;
     case SET:
         if (model_set_states(m, x, message, MESSAGE)) return 1;
+        break;
+    case OUTPUTS:
+        if (model_set_states(m, x, message, MESSAGE)) return 1;
+        if (model_get_real(m, rows[0], out, 0.0, message, MESSAGE) != MODEL_OK) return 1;
         break;
     case ADJOINT:
         for (size_t i = 0; i < n_row; i++)
@@ -118,7 +123,7 @@ int main(int argc, char **argv)
     double *times = calloc((size_t)repeats * N_OPERATION, sizeof(double));
     for (long r = 0; r < repeats; r++)
         for (int op = 0; op < N_OPERATION; op++) {
-            long n = op == RHS || op == SET ? calls * (long)n_known : calls;
+            long n = op <= OUTPUTS ? calls * (long)n_known : calls;
             double start = now();
             for (long c = 0; c < n; c++)
                 if (run(m, op)) {
