@@ -2,6 +2,7 @@
 behaviour through FMI 3.0's API, run by fmpy against the FMI 2.0 native FMU of the same scene."""
 
 import json
+import shutil
 import struct
 import subprocess
 import sys
@@ -20,8 +21,9 @@ from fmpy.validation import validate_fmu
 from conical_pendulum import Link, Scene
 from conical_pendulum.builder.fmi3 import element_names
 from conical_pendulum.builder.fmu import build_fmu
-from conical_pendulum.builder.native import LOG_CATEGORIES
+from conical_pendulum.builder.native import LOG_CATEGORIES, fmi_headers
 from fmu_helpers import BAD_VALUES
+from required_tools import require_tool
 
 ROOT = Path(__file__).resolve().parent.parent
 OK, DISCARD, ERROR = 0, 2, 3
@@ -515,3 +517,124 @@ def test_build_fmu_py_builds_it_and_refuses_fmi_3_without_native(tmp_path):
     assert "FMI 3.0" in run.stdout and read_model_description(str(out)).fmiVersion == "3.0"
     run = subprocess.run([*command, "--fmi", "3"], check=False, capture_output=True, text=True)
     assert run.returncode != 0 and "--fmi 3: only the native FMU is FMI 3.0; add --native" in run.stderr
+
+
+HOST3_SOURCE = Path(__file__).parent / "hosts" / "fmi3_host.c"
+
+
+def compile_host(compiler, output, *extra):
+    subprocess.run(
+        [
+            compiler,
+            "-std=c99",
+            "-O1",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            f"-I{fmi_headers()}",
+            str(HOST3_SOURCE),
+            "-o",
+            str(output),
+            *extra,
+        ],
+        check=True,
+    )
+    return output
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory):
+    """tests/hosts/fmi3_host.c compiled: an FMI 3.0 host that is a plain C program."""
+    return compile_host("cc", tmp_path_factory.mktemp("host3") / "fmi3_host", "-ldl")
+
+
+def host_arguments(path, stop="10"):
+    """The host's arguments after the library: alpha (an array of 3) and energy, l = (8, 1, 1)."""
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    return [md.guid, stop, repr(1 / 60), "1", f"{vr['alpha']}:3,{vr['energy']}", f"{vr['l']}=8:1:1"]
+
+
+def rows_of(run):
+    return np.array([[float(x) for x in line.split(",")] for line in run.stdout.split()])
+
+
+def test_a_c_host_runs_it_with_a_clean_environment_as_fmpy_does(fmus, host, tmp_path):
+    fmi3, _ = fmus
+    zipfile.ZipFile(fmi3).extractall(tmp_path)
+    so = tmp_path / "binaries" / "x86_64-linux" / "ConicalPendulum.so"
+    run = subprocess.run(
+        [str(host), str(so), *host_arguments(fmi3)], capture_output=True, text=True, env={}, check=True
+    )
+    rows = rows_of(run)
+    ours = simulate_fmu(
+        str(fmi3), stop_time=10.0, output_interval=1 / 60, start_values={"l": [8.0, 1.0, 1.0]}
+    )
+    assert rows.shape == (601, 5)
+    np.testing.assert_array_equal(rows[:, 1:4], ours["alpha"])
+    np.testing.assert_array_equal(rows[:, 4], ours["energy"])
+
+
+def test_a_thousand_cycles_under_valgrind(fmus, host, tmp_path):
+    require_tool("valgrind", None, "Debian's valgrind (.ci/run installs it)")
+    fmi3, _ = fmus
+    zipfile.ZipFile(fmi3).extractall(tmp_path)
+    arguments = host_arguments(fmi3, stop="1")
+    arguments[3] = "1000"  # cycles
+    run = subprocess.run(
+        [
+            "valgrind",
+            "--error-exitcode=3",
+            "--leak-check=full",
+            "--errors-for-leak-kinds=definite,indirect,possible",
+            "--quiet",
+            str(host),
+            str(tmp_path / "binaries" / "x86_64-linux" / "ConicalPendulum.so"),
+            *arguments,
+        ],
+        check=False,
+        capture_output=True,
+        text=True,
+        env={},
+        timeout=1200,
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert len(run.stdout.split()) == 61
+
+
+def test_the_windows_binary_runs_under_wine(tmp_path, host):
+    """binaries/x86_64-windows cross-compiled with mingw-w64, run by the same C host built for
+    Windows under wine64; it agrees with the Linux binary."""
+    compiler = require_tool(
+        "x86_64-w64-mingw32-gcc", None, "Debian's gcc-mingw-w64-x86-64 (.ci/run installs it)"
+    )
+    wine = require_tool("wine64", "/usr/lib/wine/wine64", "Debian's wine64 (.ci/run installs it)")
+    both = build_fmu(
+        SCENE, tmp_path / "Both.fmu", backend="native", platforms=("linux64", "win64"), fmi_version=3
+    ).path
+    assert validate_fmu(str(both)) == []
+    folder = tmp_path / "fmu"
+    zipfile.ZipFile(both).extractall(folder)
+    dll = folder / "binaries" / "x86_64-windows" / "ConicalPendulum.dll"
+    exe = compile_host(compiler, tmp_path / "fmi3_host.exe", "-static-libgcc")
+    shutil.copy2(dll, tmp_path / dll.name)
+    windows = subprocess.run(
+        [wine, str(exe), dll.name, *host_arguments(both)],
+        cwd=tmp_path,
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env={"WINEDEBUG": "-all", "HOME": str(tmp_path), "WINEPREFIX": str(tmp_path / "wine")},
+    )
+    assert windows.returncode == 0, windows.stderr[-2000:]
+    linux = subprocess.run(
+        [str(host), str(folder / "binaries" / "x86_64-linux" / "ConicalPendulum.so"), *host_arguments(both)],
+        capture_output=True,
+        text=True,
+        env={},
+        check=True,
+    )
+    rows = [rows_of(run) for run in (windows, linux)]
+    assert rows[0].shape == rows[1].shape == (601, 5)
+    np.testing.assert_allclose(rows[0], rows[1], rtol=1e-12, atol=1e-12)  # libm differs, not the C
