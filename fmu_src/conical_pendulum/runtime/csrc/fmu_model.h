@@ -23,16 +23,16 @@
  * allocates, copies as a whole (FMU states) and serializes byte for byte; model_invalid
  * checks such bytes before any of them is taken. Nothing is allocated by a model.
  *
- * An FMI 3.0 layer (fmi3_glue.c, not written) sits on the same functions: fmi3GetFloat64 and
+ * The FMI 3.0 layer (fmi3_glue.c) sits on the same functions: fmi3GetFloat64 and
  * fmi3SetFloat64 are model_get_real and model_check_real / model_set_real, fmi3GetInt32 and
  * fmi3SetInt32 the integer ones, fmi3EnterInitializationMode's tolerance goes through
  * model_tolerance_refusal and model_set_tolerance, fmi3ExitInitializationMode calls
  * model_initialize, fmi3DoStep calls model_do_step_early (early return when the importer
  * allows it; no event handling), fmi3GetDirectionalDerivative calls
  * model_directional_derivative and fmi3GetAdjointDerivative model_adjoint_derivative,
- * fmi3GetFMUState and fmi3SerializeFMUState copy the
- * ModelData with the layer's own machine state and header, as fmi2_glue.c does. Only the
- * API, the state machine and the FMU state's wrapping are written again.
+ * fmi3GetFMUState and fmi3SerializeFMUState copy the ModelData with the layer's own machine
+ * state and header, as fmi2_glue.c does. Only the API, the state machine and the FMU state's
+ * wrapping are written again.
  *
  * A second model, the coupled demo's cart (runtime/cart_slave.py today; not written in C):
  * cart_model.c defines its struct ModelData (its Reals by value reference: parameters
