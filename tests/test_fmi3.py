@@ -20,6 +20,7 @@ from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
 
 from conical_pendulum import Link, Scene
+from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.builder.fmi3 import element_names
 from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.builder.native import LOG_CATEGORIES, fmi_headers
@@ -661,3 +662,12 @@ def test_a_host_rebuilds_the_binary_from_the_sources_and_build_description(fmus,
     )
     for name in ("alpha", "beta", "energy"):
         np.testing.assert_allclose(rebuilt[name], shipped[name], rtol=1e-9, atol=1e-12)
+
+
+def test_run_fmu_reads_it_by_the_fmi2_fmus_names(fmus):
+    """analysis.fmpy_runs.run_fmu (what build_fmu.py's check, its CSV and plots read): the FMI
+    3.0 FMU takes and gives the FMI 2.0 scalar names, its arrays set whole and split."""
+    ours, theirs = (run_fmu(path, stop_time=1.0, output_interval=0.1, start_values=START) for path in fmus)
+    assert set(ours.dtype.names) == set(theirs.dtype.names)
+    for name in theirs.dtype.names:
+        np.testing.assert_array_equal(ours[name], theirs[name], err_msg=name)

@@ -28,13 +28,21 @@ def logging_callbacks(on_message):
 
 
 def run_fmu(fmu_path, stop_time=10.0, output_interval=1.0 / 60.0, start_values=None, **kwargs):
-    """fmpy.simulate_fmu with the output interval always given (fmpy ignores step_size for CS)."""
+    """fmpy.simulate_fmu with the output interval always given (fmpy ignores step_size for CS).
+    An FMI 3.0 FMU of this package takes and gives the FMI 2.0 FMU's scalar names (its arrays
+    set whole and split into columns: builder.fmi3)."""
     import fmpy
 
-    return fmpy.simulate_fmu(
+    from ..builder import fmi3
+
+    data = fmi3.fmu_data(fmu_path)
+    if data is not None:
+        start_values = fmi3.array_start_values(data, start_values or {})
+    result = fmpy.simulate_fmu(
         str(fmu_path),
         stop_time=stop_time,
         output_interval=output_interval,
         start_values=start_values or {},
         **kwargs,
     )
+    return result if data is None else fmi3.scalar_columns(data, result)

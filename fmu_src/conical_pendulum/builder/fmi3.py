@@ -257,3 +257,61 @@ def build_description(sources: list[str]) -> bytes:
     ET.SubElement(configuration, "Library", name="m")
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def fmu_data(path) -> dict | None:
+    """model.json of an FMI 3.0 FMU of this package (a .fmu or its unzipped folder), or None for
+    any other FMU."""
+    import json
+    import zipfile
+    from pathlib import Path
+
+    from ..runtime.files import MODEL_FILE
+
+    path = Path(path)
+    names = ("modelDescription.xml", f"resources/{MODEL_FILE}")
+    try:
+        if path.is_dir():
+            description, model = ((path / name).read_bytes() for name in names)
+        else:
+            with zipfile.ZipFile(path) as archive:
+                description, model = (archive.read(name) for name in names)
+    except (KeyError, OSError, zipfile.BadZipFile):
+        return None
+    if ET.fromstring(description).get("fmiVersion") != "3.0":
+        return None
+    return json.loads(model)
+
+
+def array_start_values(data: dict, values: dict) -> dict:
+    """Start values by the FMI 2.0 FMU's names (alpha0, l1, ...) -> the FMI 3.0 FMU's: an array
+    whole, its other elements at their start values."""
+    elements, records = element_names(data), {v["name"]: v for v in data["variables"]}
+    members = {v.name: [m["name"] for m in v.members] for v in layout(data) if v.array}
+    starts = {}
+    for name, value in values.items():
+        if name in elements:
+            array, k = elements[name]
+            starts.setdefault(array, [records[m]["start"] for m in members[array]])[k] = value
+        else:
+            starts[name] = value
+    return starts
+
+
+def scalar_columns(data: dict, result):
+    """An fmpy result of the FMI 3.0 FMU with each array column (shape (n,)) split into the FMI
+    2.0 FMU's scalar columns (alpha -> alpha0, alpha1, ...), so what reads the FMI 2.0 FMU's
+    results reads it."""
+    import numpy as np
+
+    members = {v.name: [m["name"] for m in v.members] for v in layout(data) if v.array}
+    columns = []
+    for name in result.dtype.names:
+        if name in members and result[name].ndim == 2:
+            columns += [(member, result[name][:, k]) for k, member in enumerate(members[name])]
+        else:
+            columns.append((name, result[name]))
+    flat = np.empty(len(result), dtype=[(name, "f8") for name, _ in columns])
+    for name, values in columns:
+        flat[name] = values
+    return flat
