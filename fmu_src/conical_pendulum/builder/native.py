@@ -39,6 +39,7 @@ GLUE_SOURCES = [
     "directional.c",
     "rules.c",
     "pendulum_model.c",
+    "fmi_layer.c",
     "fmi2_glue.c",
 ]
 GLUE_HEADERS = [
@@ -54,6 +55,7 @@ GLUE_HEADERS = [
     "directional.h",
     "rules.h",
     "fmu_model.h",
+    "fmi_layer.h",
     "fmu_config.h",
 ]
 

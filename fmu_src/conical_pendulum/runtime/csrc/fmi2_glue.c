@@ -17,6 +17,7 @@
 
 #include "fmi2Functions.h"
 
+#include "fmi_layer.h"
 #include "fmu_config.h"
 #include "fmu_model.h"
 
@@ -98,11 +99,7 @@ static const char *const state_names[] = {  /* by bit, as the standard's tables 
 
 /* What FMI 2.0 keeps of an instance besides the model's data: where it is in the state
  * machine, its time, and the last communication point a step reached. */
-typedef struct {
-    int state;
-    double time;
-    double last_successful_time;
-} Machine;
+typedef FmiMachine Machine;
 
 /* An FMU state, as fmi2GetFMUstate saves it and fmi2SerializeFMUstate writes it after its
  * header: the machine, then the model's data (model_sizes.data_size bytes), plain data
@@ -127,6 +124,14 @@ typedef struct {
 #define MESSAGE_SIZE 1024
 #define SAVED_SIZE (sizeof(SavedState) + model_sizes.data_size)
 
+/* A layer's message, formatted by fmi_vlog, to the host's logger. */
+static void emit(void *context, int status, int category, const char *text)
+{
+    Instance *inst = context;
+    inst->cb.logger(inst->cb.componentEnvironment, inst->name, (fmi2Status)status,
+                    cp_log_categories[category], text);
+}
+
 /* A message through the host's logger, in one of the model description's log categories
  * (CP_LOG_*, fmu_config.h). FMI 2.0, section 2.1.3: after fmi2Warning, fmi2Error and fmi2Fatal
  * "function logger was called", so those are always reported; other messages (fmi2Discard's
@@ -135,14 +140,11 @@ typedef struct {
 static void log_message(Instance *inst, fmi2Status status, int category, const char *format, ...)
 {
     if (!inst->cb.logger) return;
-    if ((status == fmi2OK || status == fmi2Discard) && !(inst->logging >> category & 1u)) return;
-    char text[4096];
     va_list args;
     va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
+    fmi_vlog(emit, inst, status, status != fmi2OK && status != fmi2Discard, inst->logging,
+             category, format, args);
     va_end(args);
-    inst->cb.logger(inst->cb.componentEnvironment, inst->name, status, cp_log_categories[category],
-                    text);
 }
 
 #define REFUSE(inst, ...) (log_message((inst), fmi2Error, CP_LOG_STATUS_ERROR, __VA_ARGS__), fmi2Error)
@@ -159,16 +161,14 @@ static Instance *checked(fmi2Component c, const char *function, int co_simulatio
     const int cs = inst->type == fmi2CoSimulation;
     const int allowed = cs ? co_simulation : model_exchange;
     if (inst->machine.state & allowed) return inst;
-    const char *state = "?";
-    for (int k = 0; k < (int)(sizeof state_names / sizeof state_names[0]); k++)
-        if (inst->machine.state == 1 << k) state = state_names[k];
-    const char *why = "";
-    if (!allowed && (cs ? model_exchange : co_simulation))
-        why = cs ? ": a Model Exchange function" : ": a Co-Simulation function";
-    else if (!allowed)
-        why = ": only while a step is in progress, and fmi2DoStep never runs asynchronously here";
-    else if (inst->machine.state == STEP_FAILED)
-        why = "; after a discarded step fmi2SetFMUstate or fmi2Reset go back, fmi2Terminate ends";
+    const char *state = fmi_state_name(inst->machine.state, state_names,
+                                       (int)(sizeof state_names / sizeof state_names[0]));
+    const char *why = fmi_refusal_reason(
+        cs, allowed, cs ? model_exchange : co_simulation,
+        ": only while a step is in progress, and fmi2DoStep never runs asynchronously here",
+        inst->machine.state == STEP_FAILED
+            ? "; after a discarded step fmi2SetFMUstate or fmi2Reset go back, fmi2Terminate ends"
+            : "");
     /* the diagnosis again, in an error that is always reported: logged at the discard only in
      * debug mode, it would otherwise never reach a host that did not ask for it */
     const int failed = inst->machine.state == STEP_FAILED && inst->discarded[0];
@@ -181,8 +181,7 @@ static Instance *checked(fmi2Component c, const char *function, int co_simulatio
 /* The instance as it is instantiated, and as fmi2Reset leaves it. */
 static void reset(Instance *inst)
 {
-    memset(&inst->machine, 0, sizeof inst->machine);  /* padding too: it is serialized */
-    inst->machine.state = INSTANTIATED;
+    fmi_machine_reset(&inst->machine, INSTANTIATED);
     inst->discarded[0] = '\0';
     model_reset(MODEL(inst));
 }
@@ -208,25 +207,10 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
      * is refused, naming it, and the categories in force stay as they were. */
     Instance *inst = CHECKED(c, fmi2SetDebugLogging);
     if (!inst) return fmi2Error;
-    if (nCategories && !categories) return REFUSE(inst, "fmi2SetDebugLogging: categories is NULL");
-    unsigned listed = 0;
-    for (size_t k = 0; k < nCategories; k++) {
-        int found = -1;
-        for (int j = 0; j < CP_NLOG && categories[k]; j++)
-            if (strcmp(categories[k], cp_log_categories[j]) == 0) found = j;
-        if (found < 0) {
-            char declared[512] = "";
-            for (int j = 0, n = 0; j < CP_NLOG && n < (int)sizeof declared; j++)
-                n += snprintf(declared + n, sizeof declared - n, "%s%s", j ? ", " : "",
-                              cp_log_categories[j]);
-            return REFUSE(inst, "fmi2SetDebugLogging: log category \"%s\" is not this FMU's "
-                          "(its model description declares %s)",
-                          categories[k] ? categories[k] : "(null)", declared);
-        }
-        listed |= 1u << found;
-    }
-    if (!nCategories) inst->logging = loggingOn ? ALL_CATEGORIES : 0;
-    else inst->logging = loggingOn ? listed : inst->logging & ~listed;
+    char refusal[4096];
+    if (fmi_set_logging(&inst->logging, loggingOn, nCategories, categories, cp_log_categories,
+                        CP_NLOG, "fmi2SetDebugLogging", refusal, sizeof refusal))
+        return REFUSE(inst, "%s", refusal);
     return fmi2OK;
 }
 
@@ -417,11 +401,7 @@ NO_VARIABLES(fmi2SetString, "String", const fmi2String)
 
 #define STATE_MAGIC 0x43504632u  /* "CPF2": a serialized SavedState of this build */
 
-typedef struct {
-    unsigned magic;
-    unsigned size;                /* of the SavedState after the header */
-    char guid[sizeof CP_GUID];
-} StateHeader;
+#define HEADER_SIZE fmi_state_header_size(CP_GUID)
 
 /* NULL if s can be the state of an instance of this type, or what is wrong with it, naming
  * the field and its value: a restored state is checked as values set through the API are.
@@ -490,7 +470,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
     Instance *inst = CHECKED(c, fmi2SerializedFMUstateSize);
     if (!inst) return fmi2Error;
     if (!FMUstate || !size) return REFUSE(inst, "fmi2SerializedFMUstateSize: a pointer is NULL");
-    *size = sizeof(StateHeader) + SAVED_SIZE;
+    *size = HEADER_SIZE + SAVED_SIZE;
     return fmi2OK;
 }
 
@@ -500,12 +480,11 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
     Instance *inst = CHECKED(c, fmi2SerializeFMUstate);
     if (!inst) return fmi2Error;
     if (!FMUstate || !serializedState) return REFUSE(inst, "fmi2SerializeFMUstate: a pointer is NULL");
-    if (size < sizeof(StateHeader) + SAVED_SIZE)
+    if (size < HEADER_SIZE + SAVED_SIZE)
         return REFUSE(inst, "fmi2SerializeFMUstate: %zu bytes are too few; "
                       "fmi2SerializedFMUstateSize says how many", size);
-    StateHeader header = {STATE_MAGIC, (unsigned)SAVED_SIZE, CP_GUID};
-    memcpy(serializedState, &header, sizeof header);
-    memcpy(serializedState + sizeof header, FMUstate, SAVED_SIZE);
+    fmi_state_header_write(serializedState, STATE_MAGIC, (unsigned)SAVED_SIZE, CP_GUID);
+    memcpy(serializedState + HEADER_SIZE, FMUstate, SAVED_SIZE);
     return fmi2OK;
 }
 
@@ -515,18 +494,15 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     Instance *inst = CHECKED(c, fmi2DeSerializeFMUstate);
     if (!inst) return fmi2Error;
     if (!serializedState || !FMUstate) return REFUSE(inst, "fmi2DeSerializeFMUstate: a pointer is NULL");
-    StateHeader header;
-    if (size != sizeof header + SAVED_SIZE)
+    if (size != HEADER_SIZE + SAVED_SIZE)
         return REFUSE(inst, "fmi2DeSerializeFMUstate: %zu bytes are not a state of this FMU", size);
-    memcpy(&header, serializedState, sizeof header);
-    if (header.magic != STATE_MAGIC || header.size != SAVED_SIZE
-        || memcmp(header.guid, CP_GUID, sizeof CP_GUID) != 0)
+    if (!fmi_state_header_matches(serializedState, STATE_MAGIC, (unsigned)SAVED_SIZE, CP_GUID))
         return REFUSE(inst, "fmi2DeSerializeFMUstate: the bytes are not a state of this FMU "
                       "(another model, build or version)");
     /* Checked in a copy of its own (the bytes need not be aligned), taken only if it passes. */
     SavedState *copy = inst->cb.allocateMemory(1, SAVED_SIZE);
     if (!copy) return REFUSE(inst, "fmi2DeSerializeFMUstate: out of memory");
-    memcpy(copy, serializedState + sizeof header, SAVED_SIZE);
+    memcpy(copy, serializedState + HEADER_SIZE, SAVED_SIZE);
     char message[MESSAGE_SIZE];
     if (invalid_state(inst->type, copy, message, sizeof message)) {
         inst->cb.freeMemory(copy);

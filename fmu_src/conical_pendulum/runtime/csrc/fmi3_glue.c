@@ -26,6 +26,7 @@
 #include "fmi3Functions.h"
 
 #include "fmi3_arrays.h"
+#include "fmi_layer.h"
 #include "fmu_config.h"
 #include "fmu_model.h"
 
@@ -110,11 +111,7 @@ enum { CO_SIMULATION = 1, MODEL_EXCHANGE = 2 };
 
 /* What FMI 3.0 keeps of an instance besides the model's data: where it is in the state
  * machine, its time, and the last time a step reached. */
-typedef struct {
-    int state;
-    double time;
-    double last_successful_time;
-} Machine;
+typedef FmiMachine Machine;
 
 /* An FMU state, as fmi3GetFMUState saves it and fmi3SerializeFMUState writes it after its
  * header: the machine, then the model's data (model_sizes.data_size bytes). */
@@ -145,19 +142,24 @@ typedef struct {
 #define MESSAGE_SIZE 1024
 #define SAVED_SIZE (sizeof(SavedState) + model_sizes.data_size)
 
+/* A layer's message, formatted by fmi_vlog, to the host's logger. */
+static void emit(void *context, int status, int category, const char *text)
+{
+    Instance *inst = context;
+    inst->logger(inst->environment, (fmi3Status)status, cp_log_categories[category], text);
+}
+
 /* A message through the host's logMessage, in one of the model description's log categories.
  * Errors are always reported; other messages (fmi3Discard's diagnoses) only when their
  * category is on (loggingOn at instantiation, then fmi3SetDebugLogging). */
 static void log_message(Instance *inst, fmi3Status status, int category, const char *format, ...)
 {
     if (!inst->logger) return;
-    if ((status == fmi3OK || status == fmi3Discard) && !(inst->logging >> category & 1u)) return;
-    char text[4096];
     va_list args;
     va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
+    fmi_vlog(emit, inst, status, status != fmi3OK && status != fmi3Discard, inst->logging,
+             category, format, args);
     va_end(args);
-    inst->logger(inst->environment, status, cp_log_categories[category], text);
 }
 
 #define REFUSE(inst, ...) (log_message((inst), fmi3Error, CP_LOG_STATUS_ERROR, __VA_ARGS__), fmi3Error)
@@ -172,14 +174,11 @@ static Instance *checked(fmi3Instance c, const char *function, int co_simulation
     const int cs = inst->type == CO_SIMULATION;
     const int allowed = cs ? co_simulation : model_exchange;
     if (inst->machine.state & allowed) return inst;
-    const char *state = "?";
-    for (int k = 0; k < (int)(sizeof state_names / sizeof state_names[0]); k++)
-        if (inst->machine.state == 1 << k) state = state_names[k];
-    const char *why = "";
-    if (!allowed && (cs ? model_exchange : co_simulation))
-        why = cs ? ": a Model Exchange function" : ": a Co-Simulation function";
-    else if (!allowed)
-        why = ": only in a state this FMU never enters (no events, clocks or configuration)";
+    const char *state = fmi_state_name(inst->machine.state, state_names,
+                                       (int)(sizeof state_names / sizeof state_names[0]));
+    const char *why = fmi_refusal_reason(
+        cs, allowed, cs ? model_exchange : co_simulation,
+        ": only in a state this FMU never enters (no events, clocks or configuration)", "");
     log_message(inst, fmi3Error, CP_LOG_STATUS_ERROR, "%s is not allowed in %s (FMI 3.0, %s)%s",
                 function, state, cs ? "Co-Simulation" : "Model Exchange", why);
     return NULL;
@@ -187,8 +186,7 @@ static Instance *checked(fmi3Instance c, const char *function, int co_simulation
 
 static void reset(Instance *inst)
 {
-    memset(&inst->machine, 0, sizeof inst->machine);  /* padding too: it is serialized */
-    inst->machine.state = INSTANTIATED;
+    fmi_machine_reset(&inst->machine, INSTANTIATED);
     inst->discarded[0] = '\0';
     model_reset(MODEL(inst));
 }
@@ -211,25 +209,10 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance c, fmi3Boolean loggingOn, size_t nCa
      * categories in force and off turns the listed ones off. An unknown name is refused. */
     Instance *inst = CHECKED(c, fmi3SetDebugLogging);
     if (!inst) return fmi3Error;
-    if (nCategories && !categories) return REFUSE(inst, "fmi3SetDebugLogging: categories is NULL");
-    unsigned listed = 0;
-    for (size_t k = 0; k < nCategories; k++) {
-        int found = -1;
-        for (int j = 0; j < CP_NLOG && categories[k]; j++)
-            if (strcmp(categories[k], cp_log_categories[j]) == 0) found = j;
-        if (found < 0) {
-            char declared[512] = "";
-            for (int j = 0, n = 0; j < CP_NLOG && n < (int)sizeof declared; j++)
-                n += snprintf(declared + n, sizeof declared - n, "%s%s", j ? ", " : "",
-                              cp_log_categories[j]);
-            return REFUSE(inst, "fmi3SetDebugLogging: log category \"%s\" is not this FMU's "
-                          "(its model description declares %s)",
-                          categories[k] ? categories[k] : "(null)", declared);
-        }
-        listed |= 1u << found;
-    }
-    if (!nCategories) inst->logging = loggingOn ? ALL_CATEGORIES : 0;
-    else inst->logging = loggingOn ? listed : inst->logging & ~listed;
+    char refusal[4096];
+    if (fmi_set_logging(&inst->logging, loggingOn, nCategories, categories, cp_log_categories,
+                        CP_NLOG, "fmi3SetDebugLogging", refusal, sizeof refusal))
+        return REFUSE(inst, "%s", refusal);
     return fmi3OK;
 }
 
@@ -698,11 +681,7 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance c, fmi3ValueReference depend
 
 #define STATE_MAGIC 0x43504633u  /* "CPF3": a serialized SavedState of this build */
 
-typedef struct {
-    unsigned magic;
-    unsigned size;
-    char token[sizeof CP_GUID];
-} StateHeader;
+#define HEADER_SIZE fmi_state_header_size(CP_GUID)
 
 static const char *invalid_state(int type, const SavedState *s, char *message, size_t size)
 {
@@ -767,7 +746,7 @@ fmi3Status fmi3SerializedFMUStateSize(fmi3Instance c, fmi3FMUState FMUState, siz
     Instance *inst = CHECKED(c, fmi3SerializedFMUStateSize);
     if (!inst) return fmi3Error;
     if (!FMUState || !size) return REFUSE(inst, "fmi3SerializedFMUStateSize: a pointer is NULL");
-    *size = sizeof(StateHeader) + SAVED_SIZE;
+    *size = HEADER_SIZE + SAVED_SIZE;
     return fmi3OK;
 }
 
@@ -777,12 +756,11 @@ fmi3Status fmi3SerializeFMUState(fmi3Instance c, fmi3FMUState FMUState, fmi3Byte
     Instance *inst = CHECKED(c, fmi3SerializeFMUState);
     if (!inst) return fmi3Error;
     if (!FMUState || !serializedState) return REFUSE(inst, "fmi3SerializeFMUState: a pointer is NULL");
-    if (size < sizeof(StateHeader) + SAVED_SIZE)
+    if (size < HEADER_SIZE + SAVED_SIZE)
         return REFUSE(inst, "fmi3SerializeFMUState: %zu bytes are too few; "
                       "fmi3SerializedFMUStateSize says how many", size);
-    StateHeader header = {STATE_MAGIC, (unsigned)SAVED_SIZE, CP_GUID};
-    memcpy(serializedState, &header, sizeof header);
-    memcpy(serializedState + sizeof header, FMUState, SAVED_SIZE);
+    fmi_state_header_write(serializedState, STATE_MAGIC, (unsigned)SAVED_SIZE, CP_GUID);
+    memcpy(serializedState + HEADER_SIZE, FMUState, SAVED_SIZE);
     return fmi3OK;
 }
 
@@ -792,17 +770,14 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte serializedStat
     Instance *inst = CHECKED(c, fmi3DeserializeFMUState);
     if (!inst) return fmi3Error;
     if (!serializedState || !FMUState) return REFUSE(inst, "fmi3DeserializeFMUState: a pointer is NULL");
-    StateHeader header;
-    if (size != sizeof header + SAVED_SIZE)
+    if (size != HEADER_SIZE + SAVED_SIZE)
         return REFUSE(inst, "fmi3DeserializeFMUState: %zu bytes are not a state of this FMU", size);
-    memcpy(&header, serializedState, sizeof header);
-    if (header.magic != STATE_MAGIC || header.size != SAVED_SIZE
-        || memcmp(header.token, CP_GUID, sizeof CP_GUID) != 0)
+    if (!fmi_state_header_matches(serializedState, STATE_MAGIC, (unsigned)SAVED_SIZE, CP_GUID))
         return REFUSE(inst, "fmi3DeserializeFMUState: the bytes are not a state of this FMU "
                       "(another model, build or version)");
     SavedState *copy = calloc(1, SAVED_SIZE);  /* checked in a copy, taken only if it passes */
     if (!copy) return REFUSE(inst, "fmi3DeserializeFMUState: out of memory");
-    memcpy(copy, serializedState + sizeof header, SAVED_SIZE);
+    memcpy(copy, serializedState + HEADER_SIZE, SAVED_SIZE);
     char message[MESSAGE_SIZE];
     if (invalid_state(inst->type, copy, message, sizeof message)) {
         free(copy);
@@ -819,65 +794,8 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte serializedStat
 
 /* ---- partial derivatives ---------------------------------------------------------------- */
 
-/* sensitivity = J seed (FMI 3.0, section 2.2.11), J the Jacobian of the unknowns with respect to
- * the knowns at the current values: model_directional_derivative. An array stands for its
- * n_links elements: nSeed and nSensitivity count the values, as nValues does. */
-fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
-                                        size_t nUnknowns, const fmi3ValueReference knowns[],
-                                        size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
-                                        fmi3Float64 sensitivity[], size_t nSensitivity)
-{
-    static const char *const function = "fmi3GetDirectionalDerivative";
-    Instance *inst = CHECKED(c, fmi3GetDirectionalDerivative);
-    if (!inst) return fmi3Error;
-    if ((nUnknowns && (!unknowns || !sensitivity)) || (nKnowns && (!knowns || !seed)))
-        return REFUSE(inst, "%s: a pointer is NULL", function);
-    /* arrays stand for their members (fmi3_arrays.h): the contract's scalars */
-    unsigned unknown[MAX_ELEMENTS], known[MAX_ELEMENTS];
-    size_t n_unknown = 0, n_known = 0;
-    for (int side = 0; side < 2; side++) {
-        const fmi3ValueReference *refs = side ? knowns : unknowns;
-        const size_t n_refs = side ? nKnowns : nUnknowns;
-        unsigned *out = side ? known : unknown;
-        size_t *count = side ? &n_known : &n_unknown;
-        for (size_t k = 0; k < n_refs; k++) {
-            const unsigned *members;
-            const size_t n = elements(refs[k], &members);
-            if (!n)
-                return REFUSE(inst, "%s: value reference %u is not a variable (it is %s, an element "
-                              "of an array: use the array's value reference)", function, refs[k],
-                              cp_variable_name(refs[k]));
-            if (*count + n > MAX_ELEMENTS)
-                return REFUSE(inst, "%s: more than %d values in one call", function, MAX_ELEMENTS);
-            for (size_t e = 0; e < n; e++) out[(*count)++] = ELEMENT(refs[k], members, e);
-        }
-    }
-    if (nSeed != n_known || nSensitivity != n_unknown)
-        return REFUSE(inst, "%s: nSeed = %zu and nSensitivity = %zu, but the knowns have %zu values "
-                      "and the unknowns %zu", function, nSeed, nSensitivity, n_known, n_unknown);
-    for (size_t k = 0; k < n_known; k++)
-        if (!isfinite(seed[k]))
-            return REFUSE(inst, "%s: seed of %s = %g: must be finite", function,
-                          cp_variable_name(known[k]), seed[k]);
-    char message[MESSAGE_SIZE];
-    switch (model_directional_derivative(MODEL(inst), unknown, n_unknown, known, n_known, seed,
-                                         sensitivity, inst->machine.time, message, sizeof message)) {
-    case MODEL_OK: break;
-    case MODEL_DISCARD: return discard(inst, message);
-    default: return REFUSE(inst, "%s: %s", function, message);
-    }
-    for (size_t k = 0; k < n_unknown; k++)
-        if (!isfinite(sensitivity[k])) {
-            log_message(inst, fmi3Discard, CP_LOG_STATUS_DISCARD, "%s: the derivative of %s is "
-                        "not finite at t = %.9g s; check parameters and state", function,
-                        cp_variable_name(unknown[k]), inst->machine.time);
-            return fmi3Discard;
-        }
-    return fmi3OK;
-}
-
 /* The contract's scalars behind value references into out (an array: its members in link
- * order, fmi3_arrays.h), *count of them; or refused, as fmi3GetDirectionalDerivative refuses. */
+ * order, fmi3_arrays.h), *count of them; or refused, naming the function. */
 static fmi3Status expand(Instance *inst, const char *function, const fmi3ValueReference refs[],
                          size_t n_refs, unsigned out[], size_t *count)
 {
@@ -896,6 +814,68 @@ static fmi3Status expand(Instance *inst, const char *function, const fmi3ValueRe
     return fmi3OK;
 }
 
+/* fmi3GetDirectionalDerivative's and (adjoint) fmi3GetAdjointDerivative's checks and call, for
+ * the instance inst: the seed is on the knowns (on the unknowns if adjoint), the sensitivity on
+ * the other side; arrays stand for their members (fmi3_arrays.h): the contract's scalars. */
+static fmi3Status derivative(Instance *inst, const char *function, int adjoint,
+                             const fmi3ValueReference unknowns[], size_t nUnknowns,
+                             const fmi3ValueReference knowns[], size_t nKnowns,
+                             const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[],
+                             size_t nSensitivity)
+{
+    const void *on_unknowns = adjoint ? (const void *)seed : sensitivity;
+    const void *on_knowns = adjoint ? (const void *)sensitivity : seed;
+    if ((nUnknowns && (!unknowns || !on_unknowns)) || (nKnowns && (!knowns || !on_knowns)))
+        return REFUSE(inst, "%s: a pointer is NULL", function);
+    unsigned unknown[MAX_ELEMENTS], known[MAX_ELEMENTS];
+    size_t n_unknown, n_known;
+    if (expand(inst, function, unknowns, nUnknowns, unknown, &n_unknown)
+        || expand(inst, function, knowns, nKnowns, known, &n_known))
+        return fmi3Error;
+    const unsigned *seeded = adjoint ? unknown : known, *sensed = adjoint ? known : unknown;
+    const size_t n_seeded = adjoint ? n_unknown : n_known, n_sensed = adjoint ? n_known : n_unknown;
+    const char *seeded_side = adjoint ? "unknowns" : "knowns";
+    if (nSeed != n_seeded || nSensitivity != n_sensed)
+        return REFUSE(inst, "%s: nSeed = %zu and nSensitivity = %zu, but the %s have %zu values "
+                      "and the %s %zu", function, nSeed, nSensitivity, seeded_side, n_seeded,
+                      adjoint ? "knowns" : "unknowns", n_sensed);
+    for (size_t k = 0; k < n_seeded; k++)
+        if (!isfinite(seed[k]))
+            return REFUSE(inst, "%s: seed of %s = %g: must be finite", function,
+                          cp_variable_name(seeded[k]), seed[k]);
+    char message[MESSAGE_SIZE];
+    switch ((adjoint ? model_adjoint_derivative : model_directional_derivative)(
+        MODEL(inst), unknown, n_unknown, known, n_known, seed, sensitivity, inst->machine.time,
+        message, sizeof message)) {
+    case MODEL_OK: break;
+    case MODEL_DISCARD: return discard(inst, message);
+    default: return REFUSE(inst, "%s: %s", function, message);
+    }
+    for (size_t k = 0; k < n_sensed; k++)
+        if (!isfinite(sensitivity[k])) {
+            log_message(inst, fmi3Discard, CP_LOG_STATUS_DISCARD, "%s: the derivative %s%s is "
+                        "not finite at t = %.9g s; check parameters and state", function,
+                        adjoint ? "with respect to " : "of ", cp_variable_name(sensed[k]),
+                        inst->machine.time);
+            return fmi3Discard;
+        }
+    return fmi3OK;
+}
+
+/* sensitivity = J seed (FMI 3.0, section 2.2.11), J the Jacobian of the unknowns with respect to
+ * the knowns at the current values: model_directional_derivative. An array stands for its
+ * n_links elements: nSeed and nSensitivity count the values, as nValues does. */
+fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
+                                        size_t nUnknowns, const fmi3ValueReference knowns[],
+                                        size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
+                                        fmi3Float64 sensitivity[], size_t nSensitivity)
+{
+    Instance *inst = CHECKED(c, fmi3GetDirectionalDerivative);
+    if (!inst) return fmi3Error;
+    return derivative(inst, "fmi3GetDirectionalDerivative", 0, unknowns, nUnknowns, knowns,
+                      nKnowns, seed, nSeed, sensitivity, nSensitivity);
+}
+
 /* ADJOINT: sensitivity = seed^T J (FMI 3.0, section 2.2.11), J as for
  * fmi3GetDirectionalDerivative: model_adjoint_derivative, exact to rounding. By complex step
  * there is no reverse sweep: each known costs one complex evaluation, so a row costs what its
@@ -906,39 +886,10 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference unk
                                     size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
                                     fmi3Float64 sensitivity[], size_t nSensitivity)
 {
-    static const char *const function = "fmi3GetAdjointDerivative";
     Instance *inst = CHECKED(c, fmi3GetAdjointDerivative);
     if (!inst) return fmi3Error;
-    if ((nUnknowns && (!unknowns || !seed)) || (nKnowns && (!knowns || !sensitivity)))
-        return REFUSE(inst, "%s: a pointer is NULL", function);
-    unsigned unknown[MAX_ELEMENTS], known[MAX_ELEMENTS];
-    size_t n_unknown, n_known;
-    if (expand(inst, function, unknowns, nUnknowns, unknown, &n_unknown)
-        || expand(inst, function, knowns, nKnowns, known, &n_known))
-        return fmi3Error;
-    if (nSeed != n_unknown || nSensitivity != n_known)
-        return REFUSE(inst, "%s: nSeed = %zu and nSensitivity = %zu, but the unknowns have %zu "
-                      "values and the knowns %zu", function, nSeed, nSensitivity, n_unknown,
-                      n_known);
-    for (size_t k = 0; k < n_unknown; k++)
-        if (!isfinite(seed[k]))
-            return REFUSE(inst, "%s: seed of %s = %g: must be finite", function,
-                          cp_variable_name(unknown[k]), seed[k]);
-    char message[MESSAGE_SIZE];
-    switch (model_adjoint_derivative(MODEL(inst), unknown, n_unknown, known, n_known, seed,
-                                     sensitivity, inst->machine.time, message, sizeof message)) {
-    case MODEL_OK: break;
-    case MODEL_DISCARD: return discard(inst, message);
-    default: return REFUSE(inst, "%s: %s", function, message);
-    }
-    for (size_t k = 0; k < n_known; k++)
-        if (!isfinite(sensitivity[k])) {
-            log_message(inst, fmi3Discard, CP_LOG_STATUS_DISCARD, "%s: the derivative with "
-                        "respect to %s is not finite at t = %.9g s; check parameters and state",
-                        function, cp_variable_name(known[k]), inst->machine.time);
-            return fmi3Discard;
-        }
-    return fmi3OK;
+    return derivative(inst, "fmi3GetAdjointDerivative", 1, unknowns, nUnknowns, knowns, nKnowns,
+                      seed, nSeed, sensitivity, nSensitivity);
 }
 
 /* ---- Model Exchange ----------------------------------------------------------------------- */
