@@ -20,6 +20,8 @@ import time
 import uuid
 import xml.etree.ElementTree as ET
 import zipfile
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import UserError
@@ -27,37 +29,26 @@ from ..runtime.files import MODEL_FILE, MODEL_NAME
 from ..runtime.rules import CALCULATED, FIXED, RULES, rule_of
 from ..scene import Scene
 from .compiler import CSRC, CoreBuild
-from .variables import first_references, groups
+from .variables import Group, first_references, groups
 
-GLUE_SOURCES = [
-    "model.c",
-    "dynamics.c",
-    "chain.c",
-    "solvers.c",
-    "diagnosis.c",
-    "cosim.c",
-    "directional.c",
-    "rules.c",
-    "pendulum_model.c",
-    "fmi_layer.c",
-    "fmi2_glue.c",
-]
-GLUE_HEADERS = [
-    "model.h",
-    "real.h",
-    "dynamics.h",
-    "chain.h",
-    "solvers.h",
-    "tableaus.h",
-    "status.h",
-    "diagnosis.h",
-    "cosim.h",
-    "directional.h",
-    "rules.h",
-    "fmu_model.h",
-    "fmi_layer.h",
-    "fmu_config.h",
-]
+# The C files of the FMI layers, which serve every model behind fmu_model.h.
+LAYER_SOURCES = {2: ("fmi_layer.c", "fmi2_glue.c"), 3: ("fmi_layer.c", "fmi3_glue.c")}
+LAYER_HEADERS = ("fmu_model.h", "fmi_layer.h", "fmu_config.h")
+
+
+@dataclass(frozen=True)
+class NativeModel:
+    """What builder.native needs of a model behind the model contract (fmu_model.h) besides
+    its variables: the FMU's name, the model's C files, and what its fmu_config.h holds
+    beyond what every model's does."""
+
+    name: str  # modelName, modelIdentifier and the binary's name
+    sources: tuple[str, ...]  # the model's C files in runtime/csrc (or generated: `generated`)
+    headers: tuple[str, ...]
+    groups: Callable[[], list[Group]]  # its variables' groups, in value-reference order
+    config: Callable[[dict], list[str]]  # fmu_config.h's lines only this model reads
+    step_size: float  # the DefaultExperiment's stepSize
+    fmi_versions: tuple[int, ...] = (2,)
 
 
 # The log categories, written once: the model description's LogCategories and fmu_config.h's
@@ -68,11 +59,18 @@ LOG_CATEGORIES = {
 }
 
 
-def glue_sources(fmi_version: int = 2) -> list[str]:
-    """The C sources of the native FMU of an FMI version: the model's, then its FMI glue."""
-    if fmi_version not in (2, 3):
-        raise ValueError(f"fmi_version: {fmi_version!r} is not 2 or 3")
-    return GLUE_SOURCES if fmi_version == 2 else [*GLUE_SOURCES[:-1], "fmi3_glue.c"]
+def glue_sources(fmi_version: int = 2, model: NativeModel | None = None) -> list[str]:
+    """The C sources of a native FMU of an FMI version (the pendulum's by default): the
+    model's, then its FMI layer's."""
+    model = model or PENDULUM
+    if fmi_version not in model.fmi_versions:
+        raise ValueError(f"fmi_version: {fmi_version!r} is not one of {model.fmi_versions} ({model.name})")
+    return [*model.sources, *LAYER_SOURCES[fmi_version]]
+
+
+def glue_headers(model: NativeModel | None = None) -> list[str]:
+    """The C headers a native FMU ships: the model's, then its FMI layer's."""
+    return [*(model or PENDULUM).headers, *LAYER_HEADERS]
 
 
 def fmi_headers() -> Path:
@@ -116,14 +114,24 @@ def settable(variable: dict) -> str:
     return "CP_SET_NEVER"
 
 
-def config_header(data: dict, guid: str) -> str:
+def role(variable: dict) -> str:
+    """A variable's part in directional derivatives, as fmu_config.h's cp_role says it: a
+    state is a known and an unknown (an output of its own value), an input a known, an output
+    or a state derivative an unknown."""
+    known = variable["group"] in ("states", "inputs")
+    unknown = variable["causality"] == "output" or bool(variable["derivative_of"])
+    return " | ".join(["CP_KNOWN"] * known + ["CP_UNKNOWN"] * unknown) or "0"
+
+
+def config_header(data: dict, guid: str, model: NativeModel | None = None) -> str:
     """fmu_config.h: value references, start values, names, rules and log categories for
-    fmi2_glue.c, from the variables' description (builder.variables, in model.json)."""
+    the FMI layer and the model (the pendulum's by default), from the variables' description
+    (builder.variables, in model.json); then the lines only the model reads (model.config)."""
+    model = model or PENDULUM
     variables, reals = data["variables"], real_variables(data)
-    n_state = sum(v["group"] == "states" for v in variables)
     rule_names = list(RULES)
-    first = first_references(variables, "native")
-    named = {group.name for group in groups("native") if group.named}
+    first = first_references(variables, model.groups())
+    named = {group.name for group in model.groups() if group.named}
     names = [v["name"] for v in variables]
     rules = [(v["rule"], rule_of(v["name"])[1]) for v in reals]
     lines = [
@@ -132,32 +140,20 @@ def config_header(data: dict, guid: str) -> str:
         "#define CP_FMU_CONFIG_H",
         "",
         "#include <math.h>",
+        "#include <stdio.h>",
         "",
-        '#include "model.h"',
         '#include "rules.h"',
         "",
         f"#define CP_GUID {_c_string(guid)}",
-        "/* Value references: each group's first, in builder.variables.GROUPS's order. */",
-        *(f"#define CP_VR_{group.c_name} {first[group.name]}" for group in groups("native")),
+        "/* Value references: each group's first, in value-reference order. */",
+        *(f"#define CP_VR_{group.c_name} {first[group.name]}" for group in model.groups()),
         *(
             f"#define CP_VR_{v['name'].upper()} {v['value_reference']}"
             for v in variables
             if v["group"] in named
         ),
         f"#define CP_NREAL {len(reals)}",
-        "/* What the glue takes from that order: the core's p (parameters, then inputs), x and",
-        " * y lie in the Reals as the core reads them. */",
-        "#if CP_VR_STATE != CP_NPARAM || CP_VR_OUTPUT != CP_VR_STATE + CP_NSTATE \\",
-        "    || CP_VR_STATISTICS != CP_VR_OUTPUT + CP_NOUTPUT || CP_VR_INPUT + CP_NINPUT != CP_NPARAM",
-        '#error "the value-reference order does not fit the core\'s arrays (builder/variables.py)"',
-        "#endif",
-        f"#define CP_SOLVER_START {data['settings']['solver']}",
-        f"#define CP_MAX_STEPS_START {data['settings']['max_steps']}",
-        f"#define CP_SOLVER_RULE {rule_names.index('native-solver')}",
-        f"#define CP_MAX_STEPS_RULE {rule_names.index(rule_of('max_steps')[0])}",
         f"#define CP_FINITE_RULE {rule_names.index('finite')}",
-        f"#define CP_STEP_RULE {rule_names.index(rule_of('h')[0])}",
-        f"#define CP_STEP_WHAT {_c_string(rule_of('h')[1])}",
         f"#define CP_CALCULATED_MESSAGE {_c_string(CALCULATED.replace('{name}', '%s'))}",
         f"#define CP_FIXED_MESSAGE {_c_string(FIXED.replace('{name}', '%s'))}",
         "",
@@ -202,23 +198,91 @@ def config_header(data: dict, guid: str) -> str:
         f'    return vr < {len(names)} ? cp_names[vr] : "?";',
         "}",
         "",
-        f"#if CP_NSTATE != {n_state}",
-        '#error "fmu_config.h and model.h come from different scenes"',
-        "#endif",
+        "/* NULL if the variable may be set now, or why not: a calculated variable never, a fixed",
+        " * one (a parameter or a setting) only before the model is initialized, an input always. */",
+        "static inline const char *cp_not_settable(unsigned vr, int initialized, char *message, size_t size)",
+        "{",
+        "    int how = vr < CP_NVARIABLE ? cp_settable[vr] : CP_SET_NEVER;",
+        "    if (how == CP_SET_NEVER) snprintf(message, size, CP_CALCULATED_MESSAGE, cp_variable_name(vr));",
+        "    else if (how == CP_SET_BEFORE_INIT && initialized)",
+        "        snprintf(message, size, CP_FIXED_MESSAGE, cp_variable_name(vr));",
+        "    else return NULL;",
+        "    return message;",
+        "}",
+        "",
+        "/* The directional derivatives' knowns (states and inputs) and unknowns (outputs, states",
+        " * among them, and state derivatives), by value reference. */",
+        "enum { CP_KNOWN = 1, CP_UNKNOWN = 2 };",
+        "static const unsigned char cp_role[CP_NVARIABLE] = {" + ", ".join(map(role, variables)) + "};",
+        "static inline const char *cp_known_refusal(unsigned vr, char *message, size_t size)",
+        "{",
+        "    if (vr < CP_NVARIABLE && (cp_role[vr] & CP_KNOWN)) return NULL;",
+        '    snprintf(message, size, "value reference %u (%s) as a known: only states and inputs are", vr,',
+        "             cp_variable_name(vr));",
+        "    return message;",
+        "}",
+        "static inline const char *cp_unknown_refusal(unsigned vr, char *message, size_t size)",
+        "{",
+        "    if (vr < CP_NVARIABLE && (cp_role[vr] & CP_UNKNOWN)) return NULL;",
+        '    snprintf(message, size, "value reference %u (%s) as an unknown: only outputs and state "',
+        '             "derivatives are", vr, cp_variable_name(vr));',
+        "    return message;",
+        "}",
+        "",
+        *model.config(data),
         "#endif",
         "",
     ]
     return "\n".join(lines)
 
 
-def model_description(data: dict, guid: str) -> bytes:
+def _pendulum_config(data: dict) -> list[str]:
+    """The pendulum's own lines of fmu_config.h: its value references checked against the
+    core's arrays (model.h), its Integer settings' starts and rules, the carried step's rule."""
+    n_state = sum(v["group"] == "states" for v in data["variables"])
+    rule_names = list(RULES)
+    return [
+        '#include "model.h"',
+        "/* What the glue takes from that order: the core's p (parameters, then inputs), x and",
+        " * y lie in the Reals as the core reads them. */",
+        "#if CP_VR_STATE != CP_NPARAM || CP_VR_OUTPUT != CP_VR_STATE + CP_NSTATE \\",
+        "    || CP_VR_STATISTICS != CP_VR_OUTPUT + CP_NOUTPUT || CP_VR_INPUT + CP_NINPUT != CP_NPARAM",
+        '#error "the value-reference order does not fit the core\'s arrays (builder/variables.py)"',
+        "#endif",
+        f"#if CP_NSTATE != {n_state}",
+        '#error "fmu_config.h and model.h come from different scenes"',
+        "#endif",
+        f"#define CP_SOLVER_START {data['settings']['solver']}",
+        f"#define CP_MAX_STEPS_START {data['settings']['max_steps']}",
+        f"#define CP_SOLVER_RULE {rule_names.index('native-solver')}",
+        f"#define CP_MAX_STEPS_RULE {rule_names.index(rule_of('max_steps')[0])}",
+        f"#define CP_STEP_RULE {rule_names.index(rule_of('h')[0])}",
+        f"#define CP_STEP_WHAT {_c_string(rule_of('h')[1])}",
+    ]
+
+
+PENDULUM = NativeModel(
+    MODEL_NAME,
+    ("model.c", "dynamics.c", "chain.c", "solvers.c", "diagnosis.c", "cosim.c", "directional.c", "rules.c")
+    + ("pendulum_model.c",),
+    ("model.h", "real.h", "dynamics.h", "chain.h", "solvers.h", "tableaus.h", "status.h", "diagnosis.h")
+    + ("cosim.h", "directional.h", "rules.h"),
+    lambda: groups("native"),
+    _pendulum_config,
+    1.0 / 60.0,
+    (2, 3),
+)
+
+
+def model_description(data: dict, guid: str, model: NativeModel | None = None) -> bytes:
     """modelDescription.xml for both interfaces, with a complete ModelStructure, from the
-    variables' description (builder.variables, in model.json)."""
+    variables' description (builder.variables, in model.json), of the pendulum by default."""
+    model = model or PENDULUM
     root = ET.Element(
         "fmiModelDescription",
         {
             "fmiVersion": "2.0",
-            "modelName": MODEL_NAME,
+            "modelName": model.name,
             "guid": guid,
             "description": data["description"],
             "author": "conical-pendulum-fmu",
@@ -229,7 +293,7 @@ def model_description(data: dict, guid: str) -> bytes:
         },
     )
     common = {
-        "modelIdentifier": MODEL_NAME,
+        "modelIdentifier": model.name,
         "needsExecutionTool": "false",
         "canBeInstantiatedOnlyOncePerProcess": "false",
         "canGetAndSetFMUstate": "true",
@@ -249,12 +313,12 @@ def model_description(data: dict, guid: str) -> bytes:
     ):
         interface = ET.SubElement(root, kind, {**common, **extra})
         files = ET.SubElement(interface, "SourceFiles")
-        for name in GLUE_SOURCES:
+        for name in glue_sources(2, model):
             ET.SubElement(files, "File", name=name)
     categories = ET.SubElement(root, "LogCategories")
     for name, text in LOG_CATEGORIES.items():
         ET.SubElement(categories, "Category", name=name, description=text)
-    ET.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime="10.0", stepSize=repr(1.0 / 60.0))
+    ET.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime="10.0", stepSize=repr(model.step_size))
     variables = ET.SubElement(root, "ModelVariables")
 
     def add(vr, name, description, causality, variability, initial=None, kind="Real", **value):
@@ -319,13 +383,21 @@ COMPILERS = {
 }
 
 
-def compile_binary(sources: Path, folder: Path, platform: str = "linux64", fmi_version: int = 2) -> Path:
-    """The platform's shared library from the FMU's own sources, exporting only the FMI
-    functions: on Linux it needs libc and libm only, on Windows kernel32 and msvcrt."""
+def compile_binary(
+    sources: Path,
+    folder: Path,
+    platform: str = "linux64",
+    fmi_version: int = 2,
+    model: NativeModel | None = None,
+) -> Path:
+    """The platform's shared library from the FMU's own sources (the pendulum's by default),
+    exporting only the FMI functions: on Linux it needs libc and libm only, on Windows
+    kernel32 and msvcrt."""
+    model = model or PENDULUM
     if platform not in COMPILERS:
         raise ValueError(f"platform: {platform!r} is not one of {sorted(COMPILERS)}")
     compiler, suffix, libraries = COMPILERS[platform]
-    library = folder / f"{MODEL_NAME}{suffix}"
+    library = folder / f"{model.name}{suffix}"
     command = [
         *compiler,
         "-std=c99",
@@ -336,7 +408,7 @@ def compile_binary(sources: Path, folder: Path, platform: str = "linux64", fmi_v
         "-Werror",
         f"-I{sources}",
         f"-I{fmi_headers()}",
-        *(str(sources / name) for name in glue_sources(fmi_version)),
+        *(str(sources / name) for name in glue_sources(fmi_version, model)),
         "-o",
         str(library),
         *libraries,
@@ -353,11 +425,12 @@ def compile_binary(sources: Path, folder: Path, platform: str = "linux64", fmi_v
     return library
 
 
-def guid_of(data: dict, fmi_version: int = 2) -> str:
-    """A GUID that changes with anything the model description or binary says: the scene's
-    variables and start values, the core's build (scene structure and generator), the
-    settings, and every C file it ships from runtime/csrc."""
-    shipped = [CSRC / name for name in glue_sources(fmi_version) + GLUE_HEADERS if (CSRC / name).exists()]
+def guid_of(data: dict, fmi_version: int = 2, model: NativeModel | None = None) -> str:
+    """A GUID that changes with anything the model description or binary says: the
+    variables and start values, for the pendulum the core's build (scene structure and
+    generator) and the settings, and every C file it ships from runtime/csrc."""
+    files = glue_sources(fmi_version, model) + glue_headers(model)
+    shipped = [CSRC / name for name in files if (CSRC / name).exists()]
     glue = b"".join(path.read_bytes() for path in shipped) + Path(__file__).read_bytes()
     if fmi_version == 3:
         glue += (Path(__file__).parent / "fmi3.py").read_bytes()
@@ -384,31 +457,46 @@ def write_native_fmu(
     data its model.json holds; builder.fmu.build_fmu(backend="native") checks the output
     and the settings (check_settings) and makes both. fmi_version=3: the FMI 3.0 FMU
     (fmi3_glue.c, builder.fmi3's model description and buildDescription.xml)."""
+    generated = {name: core.directory / name for name in ("model.c", "model.h")}
+    write_model_fmu(PENDULUM, data, output, platforms, fmi_version, generated)
+
+
+def write_model_fmu(
+    model: NativeModel,
+    data: dict,
+    output: Path,
+    platforms: tuple[str, ...] = ("linux64",),
+    fmi_version: int = 2,
+    generated: dict[str, Path] | None = None,
+) -> None:
+    """The native FMU of any model behind fmu_model.h at `output` (moved into place only
+    when complete): its sources (from runtime/csrc, or `generated` by name), fmu_config.h
+    and the model description written from data's variables, a binary per platform, and
+    model.json in its resources."""
     from . import fmi3
 
-    guid = guid_of(data, fmi_version)
-    shipped = glue_sources(fmi_version)
+    guid = guid_of(data, fmi_version, model)
+    shipped = glue_sources(fmi_version, model)
     output.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_native_") as tmp:
         sources = Path(tmp) / "sources"
         sources.mkdir()
-        for name in shipped + GLUE_HEADERS:
-            origin = core.directory / name if name.startswith("model.") else CSRC / name
+        for name in shipped + glue_headers(model):
             if name != "fmu_config.h":
-                shutil.copy2(origin, sources / name)
-        (sources / "fmu_config.h").write_text(config_header(data, guid))
+                shutil.copy2((generated or {}).get(name, CSRC / name), sources / name)
+        (sources / "fmu_config.h").write_text(config_header(data, guid, model))
         if fmi_version == 3:
             (sources / "fmi3_arrays.h").write_text(fmi3.arrays_header(data))
         libraries = {}
         for platform in dict.fromkeys(platforms):
             (Path(tmp) / platform).mkdir()
-            libraries[platform] = compile_binary(sources, Path(tmp) / platform, platform, fmi_version)
+            libraries[platform] = compile_binary(sources, Path(tmp) / platform, platform, fmi_version, model)
         if fmi_version == 3:
             (sources / "buildDescription.xml").write_bytes(fmi3.build_description(shipped))
         staged = Path(tmp) / "staged.fmu"
         with zipfile.ZipFile(staged, "w", zipfile.ZIP_DEFLATED) as archive:
             description = (
-                model_description(data, guid)
+                model_description(data, guid, model)
                 if fmi_version == 2
                 else fmi3.model_description(data, guid, LOG_CATEGORIES)
             )

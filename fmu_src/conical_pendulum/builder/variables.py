@@ -174,8 +174,14 @@ def variables(scene: Scene, settings: dict, backend: str = "pythonfmu") -> list[
     """Every variable of the scene's FMU for `backend`, in value-reference order.
 
     settings: every solver setting's start value (builder.fmu.checked_settings)."""
+    return variables_of(groups(backend), scene, settings)
+
+
+def variables_of(in_order, scene: Scene | None = None, settings: dict | None = None) -> list[Variable]:
+    """The variables of groups in_order, in value-reference order (a variable's value
+    reference is its place): the pendulum's (variables), or another model's (builder.cart)."""
     records = []
-    for group in groups(backend):
+    for group in in_order:
         for member in group.members(scene, settings):
             records.append(
                 Variable(
@@ -196,11 +202,12 @@ def variables(scene: Scene, settings: dict, backend: str = "pythonfmu") -> list[
     return records
 
 
-def first_references(records: list[dict], backend: str = "pythonfmu") -> dict[str, int]:
+def first_references(records: list[dict], in_order) -> dict[str, int]:
     """Each group's first value reference (where it would start when empty), by group name;
-    records: the variables as dicts (Variable.to_dict, model.json)."""
+    records: the variables as dicts (Variable.to_dict, model.json) of the groups in_order
+    (groups(backend), or another model's: builder.cart)."""
     first, seen = {}, 0
-    for group in groups(backend):
+    for group in in_order:
         first[group.name] = seen
         seen += sum(v["group"] == group.name for v in records)
     return first

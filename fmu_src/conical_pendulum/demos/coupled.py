@@ -24,11 +24,11 @@ from pathlib import Path
 import numpy as np
 
 from ..builder import fmu as builder
+from ..builder.cart import build_cart
 from ..builder.compiler import load_core
-from ..runtime.cart_slave import PARAMETERS
 from ..scene import Scene
 from . import ecospy_run
-from .monolithic import CART_START, cart_parameters, monolithic
+from .monolithic import cart_parameters, monolithic
 
 STEPS = (0.2, 0.1, 0.05, 0.02, 0.01, 0.005)
 STOP_TIME = 10.0
@@ -51,16 +51,8 @@ EXCHANGED = ["cart::x", "cart::v", "cart::a", "p::F_pivot_x"] + [f"p::{name}" fo
 
 
 def build_cart_fmu(output: Path | str) -> Path:
-    """Cart.fmu from runtime/cart_slave.py, packaged as the pendulum is."""
-    output = Path(output)
-    starts = {
-        **{name: value for name, (_, value) in PARAMETERS.items()},
-        **CART_START,
-        "F_x": 0.0,
-        "M_x": 0.0,
-    }
-    builder.package("cart_slave", [], output, starts, feedthrough=["a"])
-    return output
+    """Cart.fmu: the cart as a native FMU (builder/cart.py, runtime/csrc/cart_model.c)."""
+    return build_cart(Path(output))
 
 
 def cosimulate(

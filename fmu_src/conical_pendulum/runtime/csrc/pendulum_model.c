@@ -57,9 +57,7 @@ static int is_integer(unsigned vr)
 static const char *integer_refusal(unsigned vr, int value, char *message, size_t size)
 {
     const cp_rule *rule = &cp_rules[vr == CP_VR_SOLVER ? CP_SOLVER_RULE : CP_MAX_STEPS_RULE];
-    char shown[16];
-    snprintf(shown, sizeof shown, "%d", value);  /* a count reads as one: 7, not 7.0 */
-    return cp_refusal(cp_variable_name(vr), shown, value, rule, "", message, size);
+    return cp_integer_refusal(cp_variable_name(vr), value, rule, "", message, size);
 }
 
 static const char *real_rule_refusal(unsigned vr, double value, char *message, size_t size)
@@ -148,24 +146,12 @@ ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time
     return status;
 }
 
-/* NULL if the variable may be set now, or why not: a calculated variable never, a fixed one
- * (a parameter or a setting) only before the model is initialized, an input always. */
-static const char *not_settable(unsigned vr, int initialized, char *message, size_t size)
-{
-    int how = vr < CP_NVARIABLE ? cp_settable[vr] : CP_SET_NEVER;  /* fmu_config.h */
-    int input = how == CP_SET_ALWAYS, calculated = how == CP_SET_NEVER;
-    if (calculated) snprintf(message, size, CP_CALCULATED_MESSAGE, cp_variable_name(vr));
-    else if (!input && initialized) snprintf(message, size, CP_FIXED_MESSAGE, cp_variable_name(vr));
-    else return NULL;
-    return message;
-}
-
 ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int initialized,
                              char *message, size_t size)
 {
     (void)m;
     if (vr >= CP_NREAL && !is_derivative(vr)) return MODEL_NO_VARIABLE;
-    if (not_settable(vr, initialized, message, size)
+    if (cp_not_settable(vr, initialized, message, size)
         || real_rule_refusal(vr, value, message, size))
         return MODEL_REFUSED;
     return MODEL_OK;
@@ -240,25 +226,6 @@ ModelStatus model_get_derivatives(ModelData *m, double dx[], double time, char *
 /* From directional.c: the model's own C evaluated in complex arithmetic, exact to rounding.
  * A state as unknown is an output of its own value; the statistics depend on nothing
  * (ModelStructure). */
-/* NULL if vr may be a known (a state or an input), or the message refusing it. */
-static const char *known_refusal(unsigned vr, char *message, size_t size)
-{
-    if (vr >= CP_VR_INPUT && vr < CP_VR_STATE + CP_NSTATE) return NULL;
-    snprintf(message, size, "value reference %u (%s) as a known: only states and inputs are", vr,
-             cp_variable_name(vr));
-    return message;
-}
-
-/* NULL if vr may be an unknown (a state derivative, an output, a state, a statistic), or the
- * message refusing it. */
-static const char *unknown_refusal(unsigned vr, char *message, size_t size)
-{
-    if (is_derivative(vr) || (vr >= CP_VR_STATE && vr < CP_VR_SETTINGS)) return NULL;
-    snprintf(message, size, "value reference %u (%s) as an unknown: only outputs and state "
-             "derivatives are", vr, cp_variable_name(vr));
-    return message;
-}
-
 /* The column of the unknowns along (dx_seed, dp_seed): the derivatives and the outputs where
  * wanted (cp_directional), or MODEL_DISCARD with the diagnosis. */
 static ModelStatus column(ModelData *m, const double *dx_seed, const double *dp_seed,
@@ -292,13 +259,13 @@ ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[]
     double dx_seed[CP_NSTATE] = {0}, dp_seed[CP_NPARAM] = {0};
     for (size_t k = 0; k < n_known; k++) {
         const unsigned vr = knowns[k];
-        if (known_refusal(vr, message, size)) return MODEL_REFUSED;
+        if (cp_known_refusal(vr, message, size)) return MODEL_REFUSED;
         if (vr < CP_VR_STATE) dp_seed[vr] += seed[k];  /* the inputs end p (fmu_config.h) */
         else dx_seed[vr - CP_VR_STATE] += seed[k];
     }
     int want_derivatives = 0, want_outputs = 0;
     for (size_t k = 0; k < n_unknown; k++) {
-        if (unknown_refusal(unknowns[k], message, size)) return MODEL_REFUSED;
+        if (cp_unknown_refusal(unknowns[k], message, size)) return MODEL_REFUSED;
         want_derivatives |= is_derivative(unknowns[k]);
         want_outputs |= is_output(unknowns[k]);
     }
@@ -320,10 +287,10 @@ ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], si
 {
     int want_derivatives = 0, want_outputs = 0;
     for (size_t k = 0; k < n_known; k++)
-        if (known_refusal(knowns[k], message, size)) return MODEL_REFUSED;
+        if (cp_known_refusal(knowns[k], message, size)) return MODEL_REFUSED;
     for (size_t k = 0; k < n_unknown; k++) {
         const unsigned vr = unknowns[k];
-        if (unknown_refusal(vr, message, size)) return MODEL_REFUSED;
+        if (cp_unknown_refusal(vr, message, size)) return MODEL_REFUSED;
         if (!isfinite(seed[k])) {
             snprintf(message, size, "seed of %s = %g: must be finite", cp_variable_name(vr),
                      seed[k]);

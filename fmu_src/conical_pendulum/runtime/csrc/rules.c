@@ -43,3 +43,11 @@ const char *cp_real_refusal(const char *name, double value, const cp_rule *rule,
     cp_python_repr(shown, sizeof shown, value);
     return cp_refusal(name, shown, value, rule, what, message, size);
 }
+
+const char *cp_integer_refusal(const char *name, int value, const cp_rule *rule, const char *what,
+                               char *message, size_t size)
+{
+    char shown[16];
+    snprintf(shown, sizeof shown, "%d", value);
+    return cp_refusal(name, shown, value, rule, what, message, size);
+}

@@ -29,4 +29,8 @@ const char *cp_refusal(const char *name, const char *shown, double value, const 
 const char *cp_real_refusal(const char *name, double value, const cp_rule *rule, const char *what,
                             char *message, size_t size);
 
+/* cp_refusal of an Integer, shown as a count reads (7, not 7.0). */
+const char *cp_integer_refusal(const char *name, int value, const cp_rule *rule, const char *what,
+                               char *message, size_t size);
+
 #endif

@@ -1,0 +1,153 @@
+"""The coupled demo's cart, described once: its variables, defaults and native FMU.
+
+A mass on a spring and damper along X that carries the pendulum, whose force on it answers
+the cart's acceleration a at once: F_pivot_x = F_free_x - M_pivot_xx a. Its inputs are a
+force F_x and the apparent mass M_x of what it carries, and it moves by
+(m_cart + M_x) a = F_x - k_cart x - c_cart v; its output `a` is the pendulum's a_pivot_x.
+Over a communication step the force is held (F_x_order = 0) or extrapolated linearly
+through the last two communication points (1), and the step is solved exactly with the
+matrix exponential (runtime/csrc/cart_model.c): all the error of the coupled demo is the
+coupling's. Its FMU is written by builder.native's code paths, as the pendulum's is, and
+links with the same FMI layer.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..runtime.rules import RULES, rule_of
+from .native import NativeModel, write_model_fmu
+from .variables import Group, Member, variables_of
+
+NAME = "Cart"
+DESCRIPTION = (
+    "cart on a spring and damper along X carrying an apparent mass M_x; inputs F_x (held or "
+    "extrapolated) and M_x (held) over each communication step, solved exactly"
+)
+PARAMETERS = {
+    "m_cart": ("mass of the cart [kg]", 100.0),
+    "k_cart": ("stiffness of the spring from the ground to the cart [N/m]", 150.0),
+    "c_cart": ("damping from the ground to the cart [N s/m]", 20.0),
+}
+START = {"x": 1.0, "v": 0.0}  # the cart's state at t = 0 [m, m/s]
+STATES = {"x": "position of the cart along X [m]", "v": "velocity of the cart along X [m/s]"}
+INPUTS = {
+    "F_x": "force on the cart along X [N]: the pendulum's F_pivot_x, or F_free_x with M_x",
+    "M_x": "apparent mass along X of what the cart carries [kg] (the pendulum's M_pivot_xx), moved "
+    "with the cart: (m_cart + M_x) a = F_x - k_cart x - c_cart v; 0 for an explicit exchange; "
+    "held over each step",
+}
+ACCELERATION = (
+    "acceleration of the cart along X [m/s2] (the pendulum's a_pivot_x); depends at once on F_x and M_x"
+)
+F_X_ORDER = (
+    "the force over a step: 0 held at its value, 1 extrapolated linearly through the last two "
+    "communication points (for F_free_x only: F_pivot_x answers the acceleration and diverges "
+    "so); Co-Simulation only"
+)
+KNOWNS = (*STATES, *INPUTS)  # what a (and so der(v)) depends on
+
+
+def _members(*members):
+    return lambda scene, settings: list(members)
+
+
+# The value-reference order: Reals (parameters, inputs, states, the output), the Integer,
+# then the state derivatives (Model Exchange), as the pendulum's groups go.
+GROUPS = (
+    Group(
+        "parameters",
+        "Real",
+        "parameter",
+        "fixed",
+        None,
+        "PARAMETER",
+        _members(*(Member(name, start, text) for name, (text, start) in PARAMETERS.items())),
+        named=True,
+    ),
+    Group(
+        "inputs",
+        "Real",
+        "input",
+        "continuous",
+        None,
+        "INPUT",
+        _members(*(Member(name, 0.0, text) for name, text in INPUTS.items())),
+        named=True,
+    ),
+    Group(
+        "states",
+        "Real",
+        "output",
+        "continuous",
+        "exact",
+        "STATE",
+        _members(*(Member(name, START[name], text, (name,)) for name, text in STATES.items())),
+        named=True,
+    ),
+    Group(
+        "outputs",
+        "Real",
+        "output",
+        "continuous",
+        "calculated",
+        "OUTPUT",
+        _members(Member("a", None, ACCELERATION, KNOWNS)),
+        named=True,
+    ),
+    Group(
+        "integer_parameters",
+        "Integer",
+        "parameter",
+        "fixed",
+        None,
+        "INTEGER_PARAMETER",
+        _members(Member("F_x_order", 0, F_X_ORDER)),
+        named=True,
+    ),
+    Group(
+        "derivatives",
+        "Real",
+        "local",
+        "continuous",
+        "calculated",
+        "DERIVATIVE",
+        _members(
+            Member("der(x)", None, "time derivative of x", ("v",), "x"),
+            Member("der(v)", None, "time derivative of v: a", KNOWNS, "v"),
+        ),
+    ),
+)
+
+
+def _config(data: dict) -> list[str]:
+    """The cart's own lines of fmu_config.h: F_x_order's start and rule, the rule a
+    tolerance keeps."""
+    start = next(v["start"] for v in data["variables"] if v["name"] == "F_x_order")
+    rule_names = list(RULES)
+    return [
+        f"#define CP_F_X_ORDER_START {start}",
+        f"#define CP_F_X_ORDER_RULE {rule_names.index(rule_of('F_x_order')[0])}",
+        f"#define CP_TOLERANCE_RULE {rule_names.index(rule_of('atol')[0])}",
+        f"#define CP_TOLERANCE_WHAT {json.dumps(rule_of('atol')[1])}",
+    ]
+
+
+MODEL = NativeModel(NAME, ("rules.c", "cart_model.c"), ("rules.h",), lambda: list(GROUPS), _config, 0.01)
+
+
+def cart_data() -> dict:
+    """What the cart's model description and fmu_config.h are written from (and its FMU's
+    model.json holds): its variables in value-reference order."""
+    return {
+        "model": NAME,
+        "description": DESCRIPTION,
+        "variables": [v.to_dict() for v in variables_of(GROUPS)],
+    }
+
+
+def build_cart(output: Path, platforms: tuple[str, ...] = ("linux64",)) -> Path:
+    """The cart's native FMI 2.0 FMU (Co-Simulation and Model Exchange) at `output`."""
+    write_model_fmu(MODEL, cart_data(), Path(output), platforms)
+    return Path(output)

@@ -1,0 +1,362 @@
+/* The coupled demo's cart behind the model contract (fmu_model.h): a mass on a spring and
+ * damper along X carrying an apparent mass M_x, (m_cart + M_x) a = F - k_cart x - c_cart v,
+ * F the force in effect. Co-Simulation: over a step the input F_x is held (F_x_order = 0) or
+ * extrapolated linearly through the last two communication points (1), and the step is
+ * solved exactly by the matrix exponential of (x, v, F, F'), by scaling and squaring with the
+ * Taylor series the pythonfmu cart used, so the numbers are its own to rounding. Model
+ * Exchange: x' = v, v' = a with F = F_x (F_x_order does not apply). Its variables, starts
+ * and value rules are builder/cart.py's (fmu_config.h). */
+#include "fmu_model.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "fmu_config.h"
+#include "rules.h"
+
+#define N_STATE 2
+#define N_HELD CP_VR_OUTPUT   /* the Reals held: parameters, inputs, states (a is computed) */
+#define N_EXP 4               /* the step's system: (x, v, F, F') */
+
+struct ModelData {
+    double r[N_HELD];       /* the held Reals by value reference (fmu_config.h) */
+    int f_x_order;
+    int has_last;           /* last_time and last_input are a step's */
+    double force;           /* the force in effect now: F_x as set, or extrapolated to now */
+    double last_time, last_input;  /* the last step's start and F_x there */
+};
+
+const ModelSizes model_sizes = {sizeof(ModelData), CP_NREAL, CP_VR_DERIVATIVE - CP_NREAL, N_STATE,
+                                0, CP_VR_STATE, CP_VR_DERIVATIVE};
+
+static const char *const tolerance_name = "tolerance (from setupExperiment)";
+
+static double mass(const ModelData *m)
+{
+    return m->r[CP_VR_M_CART] + m->r[CP_VR_M_X];
+}
+
+static double acceleration(const ModelData *m)  /* written as the pythonfmu cart wrote it */
+{
+    return (m->force - m->r[CP_VR_K_CART] * m->r[CP_VR_X] - m->r[CP_VR_C_CART] * m->r[CP_VR_V])
+           / mass(m);
+}
+
+/* a, or MODEL_DISCARD where values too large for a double make it infinite. */
+static ModelStatus checked_acceleration(const ModelData *m, double *a, double time, char *message,
+                                        size_t size)
+{
+    *a = acceleration(m);
+    if (isfinite(*a)) return MODEL_OK;
+    snprintf(message, size, "a at t = %.9g s is not finite (F = %g N, x = %g m, v = %g m/s): "
+             "values too large for a double", time, m->force, m->r[CP_VR_X], m->r[CP_VR_V]);
+    return MODEL_DISCARD;
+}
+
+static const char *real_rule_refusal(unsigned vr, double value, char *message, size_t size)
+{
+    return cp_real_refusal(cp_variable_name(vr), value, &cp_rules[cp_real_rule[vr]],
+                           cp_real_what[vr], message, size);
+}
+
+static const char *order_refusal(int value, char *message, size_t size)
+{
+    return cp_integer_refusal(cp_variable_name(CP_VR_F_X_ORDER), value,
+                              &cp_rules[CP_F_X_ORDER_RULE], "", message, size);
+}
+
+/* ---- start values, experiment, initialization ---- */
+
+void model_reset(ModelData *m)
+{
+    memset(m, 0, sizeof *m);
+    memcpy(m->r, cp_real_start, sizeof m->r);
+    m->f_x_order = CP_F_X_ORDER_START;
+    m->force = m->r[CP_VR_F_X];
+}
+
+/* The cart's step is exact: a tolerance has nothing to tighten, but is refused as the
+ * pendulum's atol would be when it is no tolerance at all. */
+const char *model_tolerance_refusal(double tolerance, char *message, size_t size)
+{
+    return cp_real_refusal(tolerance_name, tolerance, &cp_rules[CP_TOLERANCE_RULE],
+                           CP_TOLERANCE_WHAT, message, size);
+}
+
+void model_set_tolerance(ModelData *m, double tolerance)
+{
+    (void)m, (void)tolerance;
+}
+
+void model_initialize(ModelData *m)
+{
+    m->has_last = 0;
+    m->force = m->r[CP_VR_F_X];
+}
+
+/* ---- the variable table ---- */
+
+ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time, char *message,
+                           size_t size)
+{
+    if (vr < N_HELD) {
+        *value = m->r[vr];
+        return MODEL_OK;
+    }
+    if (vr == CP_VR_DERIVATIVE) {  /* der(x) = v */
+        *value = m->r[CP_VR_V];
+        return MODEL_OK;
+    }
+    if (vr == CP_VR_A || vr == CP_VR_DERIVATIVE + 1)  /* a, and der(v) = a */
+        return checked_acceleration(m, value, time, message, size);
+    return MODEL_NO_VARIABLE;
+}
+
+ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int initialized,
+                             char *message, size_t size)
+{
+    (void)m;
+    if (vr >= CP_NREAL && (vr < CP_VR_DERIVATIVE || vr >= CP_VR_DERIVATIVE + N_STATE))
+        return MODEL_NO_VARIABLE;
+    if (cp_not_settable(vr, initialized, message, size)
+        || real_rule_refusal(vr, value, message, size))
+        return MODEL_REFUSED;
+    return MODEL_OK;
+}
+
+void model_set_real(ModelData *m, unsigned vr, double value)
+{
+    m->r[vr] = value;
+    if (vr == CP_VR_F_X) m->force = value;
+}
+
+ModelStatus model_get_integer(const ModelData *m, unsigned vr, int *value)
+{
+    if (vr != CP_VR_F_X_ORDER) return MODEL_NO_VARIABLE;
+    *value = m->f_x_order;
+    return MODEL_OK;
+}
+
+ModelStatus model_check_integer(const ModelData *m, unsigned vr, int value, int initialized,
+                                char *message, size_t size)
+{
+    (void)m;
+    if (vr != CP_VR_F_X_ORDER) return MODEL_NO_VARIABLE;
+    return cp_not_settable(vr, initialized, message, size) || order_refusal(value, message, size)
+               ? MODEL_REFUSED
+               : MODEL_OK;
+}
+
+void model_set_integer(ModelData *m, unsigned vr, int value)
+{
+    (void)vr;
+    m->f_x_order = value;
+}
+
+/* ---- Model Exchange ---- */
+
+void model_get_states(const ModelData *m, double x[])
+{
+    memcpy(x, m->r + CP_VR_STATE, N_STATE * sizeof x[0]);
+}
+
+const char *model_set_states(ModelData *m, const double x[], char *message, size_t size)
+{
+    for (int k = 0; k < N_STATE; k++)
+        if (real_rule_refusal(CP_VR_STATE + k, x[k], message, size)) return message;
+    memcpy(m->r + CP_VR_STATE, x, N_STATE * sizeof x[0]);
+    return NULL;
+}
+
+void model_get_nominals(const ModelData *m, double x_nominal[])
+{
+    (void)m;
+    for (int k = 0; k < N_STATE; k++) x_nominal[k] = 1.0;  /* metres and metres per second */
+}
+
+ModelStatus model_get_derivatives(ModelData *m, double dx[], double time, char *message,
+                                  size_t size)
+{
+    dx[0] = m->r[CP_VR_V];
+    return checked_acceleration(m, &dx[1], time, message, size);
+}
+
+/* ---- directional derivatives ---- */
+
+/* d unknown / d known, exact: the cart is linear in its state and F_x, and a depends on M_x
+ * through 1 / (m_cart + M_x). A state as unknown is an output of its own value. */
+static double jacobian(const ModelData *m, unsigned unknown, unsigned known)
+{
+    if (unknown == CP_VR_X || unknown == CP_VR_V) return unknown == known;
+    if (unknown == CP_VR_DERIVATIVE) return known == CP_VR_V;  /* der(x) = v */
+    switch (known) {  /* a and der(v) */
+    case CP_VR_X: return -m->r[CP_VR_K_CART] / mass(m);
+    case CP_VR_V: return -m->r[CP_VR_C_CART] / mass(m);
+    case CP_VR_F_X: return 1.0 / mass(m);
+    default: return -acceleration(m) / mass(m);  /* M_x */
+    }
+}
+
+/* NULL if every value reference is a known or an unknown as its list says, or the message. */
+static const char *role_refusal(const unsigned unknowns[], size_t n_unknown,
+                                const unsigned knowns[], size_t n_known, char *message,
+                                size_t size)
+{
+    for (size_t k = 0; k < n_known; k++)
+        if (cp_known_refusal(knowns[k], message, size)) return message;
+    for (size_t k = 0; k < n_unknown; k++)
+        if (cp_unknown_refusal(unknowns[k], message, size)) return message;
+    return NULL;
+}
+
+ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[], size_t n_unknown,
+                                         const unsigned knowns[], size_t n_known,
+                                         const double seed[], double sensitivity[], double time,
+                                         char *message, size_t size)
+{
+    (void)time;
+    if (role_refusal(unknowns, n_unknown, knowns, n_known, message, size)) return MODEL_REFUSED;
+    for (size_t i = 0; i < n_unknown; i++) {
+        double sum = 0.0;
+        for (size_t j = 0; j < n_known; j++) sum += jacobian(m, unknowns[i], knowns[j]) * seed[j];
+        sensitivity[i] = sum;
+    }
+    return MODEL_OK;
+}
+
+ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], size_t n_unknown,
+                                     const unsigned knowns[], size_t n_known, const double seed[],
+                                     double sensitivity[], double time, char *message, size_t size)
+{
+    (void)time;
+    if (role_refusal(unknowns, n_unknown, knowns, n_known, message, size)) return MODEL_REFUSED;
+    for (size_t i = 0; i < n_unknown; i++)
+        if (!isfinite(seed[i])) {
+            snprintf(message, size, "seed of %s = %g: must be finite", cp_variable_name(unknowns[i]),
+                     seed[i]);
+            return MODEL_REFUSED;
+        }
+    for (size_t j = 0; j < n_known; j++) {
+        double sum = 0.0;
+        for (size_t i = 0; i < n_unknown; i++) sum += seed[i] * jacobian(m, unknowns[i], knowns[j]);
+        sensitivity[j] = sum;
+    }
+    return MODEL_OK;
+}
+
+/* ---- co-simulation ---- */
+
+/* c = a b, 4 x 4. */
+static void product(double c[N_EXP][N_EXP], double a[N_EXP][N_EXP], double b[N_EXP][N_EXP])
+{
+    for (int i = 0; i < N_EXP; i++)
+        for (int j = 0; j < N_EXP; j++) {
+            double sum = 0.0;
+            for (int l = 0; l < N_EXP; l++) sum += a[i][l] * b[l][j];
+            c[i][j] = sum;
+        }
+}
+
+/* e = exp(a) by scaling and squaring with a Taylor series (runtime/cart_slave.py's expm,
+ * step for step): the norm scaled to 0.25 or below, 0.25^16 / 16! < 1e-22. */
+static void expm(double e[N_EXP][N_EXP], double a[N_EXP][N_EXP])
+{
+    double norm = 0.0, x[N_EXP][N_EXP], term[N_EXP][N_EXP], next[N_EXP][N_EXP];
+    for (int i = 0; i < N_EXP; i++) {
+        double row = 0.0;
+        for (int j = 0; j < N_EXP; j++) row += fabs(a[i][j]);
+        norm = fmax(norm, row);
+    }
+    int squarings = norm > 0.25 ? (int)fmax(0.0, ceil(log2(norm / 0.25))) : 0;
+    for (int i = 0; i < N_EXP; i++)
+        for (int j = 0; j < N_EXP; j++) {
+            x[i][j] = a[i][j] / ldexp(1.0, squarings);
+            term[i][j] = e[i][j] = i == j;
+        }
+    for (int k = 1; k < 16; k++) {
+        product(next, term, x);
+        for (int i = 0; i < N_EXP; i++)
+            for (int j = 0; j < N_EXP; j++) {
+                term[i][j] = next[i][j] / k;
+                e[i][j] += term[i][j];
+            }
+    }
+    for (int s = 0; s < squarings; s++) {
+        product(next, e, e);
+        memcpy(e, next, sizeof next);
+    }
+}
+
+ModelStatus model_do_step(ModelData *m, double t, double dt, char *message, size_t size)
+{
+    return model_do_step_early(m, t, dt, 0, NULL, message, size);
+}
+
+/* The step is exact and all or nothing: early return never applies. */
+ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_return_allowed,
+                                double *last_successful_time, char *message, size_t size)
+{
+    (void)early_return_allowed;
+    if (last_successful_time) *last_successful_time = t;
+    if (!(dt >= 0 && isfinite(dt))) {
+        char shown[40];
+        cp_python_repr(shown, sizeof shown, dt);
+        snprintf(message, size, "do_step at t = %.9g s: communication step %s: must be a "
+                 "non-negative finite number; the state is kept", t, shown);
+        return MODEL_DISCARD;
+    }
+    const double input = m->r[CP_VR_F_X], k = m->r[CP_VR_K_CART], c = m->r[CP_VR_C_CART];
+    double slope = 0.0;
+    if (m->f_x_order == 1 && m->has_last && t > m->last_time)
+        slope = (input - m->last_input) / (t - m->last_time);
+    /* (x, v, F, F') with x' = v, mass v' = F - k x - c v, F' = slope: exact over the step */
+    double system[N_EXP][N_EXP] = {{0.0, 1.0, 0.0, 0.0},
+                                   {-k / mass(m), -c / mass(m), 1.0 / mass(m), 0.0},
+                                   {0.0, 0.0, 0.0, 1.0},
+                                   {0.0, 0.0, 0.0, 0.0}};
+    for (int i = 0; i < N_EXP; i++)
+        for (int j = 0; j < N_EXP; j++) system[i][j] *= dt;
+    double e[N_EXP][N_EXP], start[N_EXP] = {m->r[CP_VR_X], m->r[CP_VR_V], input, slope}, end[3];
+    expm(e, system);
+    for (int i = 0; i < 3; i++) {
+        end[i] = 0.0;
+        for (int j = 0; j < N_EXP; j++) end[i] += e[i][j] * start[j];
+        if (!isfinite(end[i])) {
+            snprintf(message, size, "do_step at t = %.9g s: the cart's state is not finite after "
+                     "the step (values too large for a double); the state is kept", t);
+            return MODEL_DISCARD;
+        }
+    }
+    m->has_last = 1;
+    m->last_time = t;
+    m->last_input = input;
+    m->r[CP_VR_X] = end[0];
+    m->r[CP_VR_V] = end[1];
+    m->force = end[2];
+    if (last_successful_time) *last_successful_time = t + dt;
+    return MODEL_OK;
+}
+
+/* ---- FMU states ---- */
+
+/* Every held Real keeps its variable's rule as model_check_real applies it, F_x_order its
+ * own; the flag is 0 or 1, the force in effect and what the extrapolation carries are
+ * finite. */
+const char *model_invalid(const ModelData *m, char *message, size_t size)
+{
+    if (m->has_last != 0 && m->has_last != 1) {
+        snprintf(message, size, "has_last = %d: must be 0 or 1", m->has_last);
+        return message;
+    }
+    for (unsigned vr = 0; vr < N_HELD; vr++)
+        if (real_rule_refusal(vr, m->r[vr], message, size)) return message;
+    if (order_refusal(m->f_x_order, message, size)) return message;
+    const struct { const char *name; double value; } carried[] = {
+        {"force", m->force}, {"last_time", m->last_time}, {"last_input", m->last_input}};
+    for (size_t k = 0; k < sizeof carried / sizeof carried[0]; k++)
+        if (cp_real_refusal(carried[k].name, carried[k].value, &cp_rules[CP_FINITE_RULE], "",
+                            message, size))
+            return message;
+    return NULL;
+}
