@@ -14,28 +14,34 @@ JOB_JSON is a JSON object (the text itself):
                                                # limit or is not finite (a diverging exchange)
      "warm_up": true}                          # first one step at the largest step, not reported
 
-Only "models", "steps", "stop_time" and "record" are required. The last line printed is
+Instead of "models", "connections" and "parameters", a job may name an SSP package:
+"ssp": its path (a .ssp, or a folder holding it unpacked), whose SystemStructure.ssd ecos
+reads, and "parameter_set": the name of one of its parameter sets, applied at
+initialisation (demos/ssp.py writes such packages).
+
+Only "steps", "stop_time", "record" and "models" or "ssp" are required. The last line printed is
 {"runs": [{"step": dt, "seconds": s, "ended": why or null, "values": {"time": [...], name:
 [...]}}]}, one run per step in the order given; "seconds" is the wall time spent in ecospy's
 step() (a warm-up run pays the first step's imports, a Python slave's lazy ones, outside
 the timings); "ended" says why a run stopped before stop_time (its values end there).
 
-It must be a process of its own: ecospy's library needs libtbb loaded first, globally
-(ctypes RTLD_GLOBAL), and pythonfmu 0.7's exit-time destructor can abort an interpreter
-that still has an FMU's library mapped, so the process leaves with os._exit once the
-results are printed. `cosimulate(job)` runs it and returns the runs.
+It must be a process of its own (demos/isolated.py): ecospy's library needs libtbb loaded
+first, globally (ctypes RTLD_GLOBAL), and pythonfmu 0.7's exit-time destructor can abort
+an interpreter that still has an FMU's library mapped. `cosimulate(job)` runs it and
+returns the runs.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
+
+from . import isolated
 
 MODULE = "conical_pendulum.demos.ecospy_run"  # run as python -m MODULE, also when this is __main__
 TBB = os.path.join(sys.prefix, "lib", "libtbb.so.12")  # the tbb wheel's library, which ecospy's needs
-REQUIRED = ("models", "steps", "stop_time", "record")
+REQUIRED = ("steps", "stop_time", "record")  # and "models" or "ssp"
 
 
 def missing() -> str | None:
@@ -54,13 +60,19 @@ def check_job(job) -> dict:
     """The job with its defaults filled in; ValueError naming what is wrong."""
     if not isinstance(job, dict):
         raise ValueError(f"job: expected a JSON object, got {type(job).__name__}")
-    missing = [key for key in REQUIRED if key not in job]
+    missing = [key for key in REQUIRED if key not in job] + (
+        [] if {"models", "ssp"} & set(job) else ["models"]
+    )
     if missing:
         raise ValueError(f"job: missing {', '.join(missing)}")
-    unknown = sorted(set(job) - {*REQUIRED, "connections", "parameters", "limits", "warm_up"})
+    structure = {"ssp", "parameter_set"} if "ssp" in job else {"models", "connections", "parameters"}
+    unknown = sorted(set(job) - {*REQUIRED, *structure, "limits", "warm_up"})
     if unknown:
         raise ValueError(f"job: unknown key(s) {', '.join(unknown)}")
-    if not (isinstance(job["models"], dict) and job["models"]):
+    if "ssp" in job:
+        if not isinstance(job["ssp"], str):
+            raise ValueError(f"job: ssp must be the path of an SSP package, got {job['ssp']!r}")
+    elif not (isinstance(job["models"], dict) and job["models"]):
         raise ValueError("job: models must name at least one FMU, as {instance: path}")
     steps = job["steps"]
     if not (
@@ -79,7 +91,8 @@ def check_job(job) -> dict:
         and all(isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 for v in limits.values())
     ):
         raise ValueError(f"job: limits must map recorded variables to positive numbers, got {limits!r}")
-    return {"connections": [], "parameters": {}, "limits": {}, "warm_up": False, **job}
+    defaults = {"parameter_set": None} if "ssp" in job else {"connections": [], "parameters": {}}
+    return {**defaults, "limits": {}, "warm_up": False, **job}
 
 
 def _beyond_limits(values: dict, limits: dict) -> str | None:
@@ -92,66 +105,64 @@ def _beyond_limits(values: dict, limits: dict) -> str | None:
 
 
 def cosimulate(job: dict, timeout: float = 1800.0) -> list[dict]:
-    """Run the job in a fresh interpreter; its runs, as printed. RuntimeError when ecospy fails."""
-    job = check_job(job)
-    try:
-        run = subprocess.run(
-            [sys.executable, "-m", MODULE, json.dumps(job)],
-            check=False,
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-        )
-    except subprocess.TimeoutExpired:
-        raise RuntimeError(f"ecospy did not finish the co-simulations within {timeout:g} s") from None
-    if run.returncode != 0:
-        if "No module named 'ecospy'" in run.stderr or "libtbb" in run.stderr:
-            raise RuntimeError('ecospy co-simulation needs ecospy and tbb: pip install -e ".[cosim]"')
-        raise RuntimeError(f"ecospy failed (exit {run.returncode}):\n{run.stderr[-3000:]}")
-    return json.loads(run.stdout.strip().splitlines()[-1])["runs"]
+    """Run the job in a fresh interpreter (demos/isolated.py); its runs, as printed.
+    RuntimeError when ecospy fails."""
+    run = isolated.call(MODULE, check_job(job), timeout, "ecospy")
+    if run.returncode != 0 and ("No module named 'ecospy'" in run.stderr or "libtbb" in run.stderr):
+        raise RuntimeError('ecospy co-simulation needs ecospy and tbb: pip install -e ".[cosim]"')
+    return isolated.answer(run, "ecospy")["runs"]
 
 
 def _simulate(job: dict) -> list[dict]:
     """In this process, with libtbb already loaded: every run of the job."""
-    import time
-
     from ecospy import EcosLib, EcosSimulation, EcosSimulationStructure
 
     EcosLib.set_log_level("warn")
     runs = []
     plan = [(True, max(job["steps"]))] if job["warm_up"] else []
     for warm_up, dt in plan + [(False, dt) for dt in job["steps"]]:
-        stepping = 0.0
-        with EcosSimulationStructure() as structure:
-            for name, path in job["models"].items():
-                structure.add_model(name, os.path.abspath(path))
-            for source, target in job["connections"]:
-                structure.make_real_connection(source, target)
-            if job["parameters"]:
-                structure.add_parameter_set("job", job["parameters"])
-            with EcosSimulation(structure=structure, step_size=dt) as sim:
+        if "ssp" in job:
+            with EcosSimulation(ssp_path=os.path.abspath(job["ssp"]), step_size=dt) as sim:
+                run = _run(sim, job, dt, warm_up, job["parameter_set"])
+        else:
+            with EcosSimulationStructure() as structure:
+                for name, path in job["models"].items():
+                    structure.add_model(name, os.path.abspath(path))
+                for source, target in job["connections"]:
+                    structure.make_real_connection(source, target)
                 if job["parameters"]:
-                    sim.init(parameter_set="job")
-                else:
-                    sim.init()
-                values = {name: [] for name in ["time", *job["record"]]}
-                steps = 1 if warm_up else round(job["stop_time"] / dt)
-                ended = None
-                for k in range(steps + 1):
-                    if k:
-                        start = time.perf_counter()
-                        sim.step()
-                        stepping += time.perf_counter() - start
-                    values["time"].append(sim.get_time())
-                    for name in job["record"]:
-                        values[name].append(sim.get_real(name))
-                    ended = _beyond_limits(values, job["limits"])
-                    if ended:
-                        break
-                sim.terminate()
+                    structure.add_parameter_set("job", job["parameters"])
+                with EcosSimulation(structure=structure, step_size=dt) as sim:
+                    run = _run(sim, job, dt, warm_up, "job" if job["parameters"] else None)
         if not warm_up:
-            runs.append({"step": dt, "seconds": stepping, "ended": ended, "values": values})
+            runs.append(run)
     return runs
+
+
+def _run(sim, job: dict, dt: float, warm_up: bool, parameter_set: str | None) -> dict:
+    """One run of an initialised-to-be EcosSimulation at the step dt (one step if warm_up)."""
+    import time
+
+    if parameter_set:
+        sim.init(parameter_set=parameter_set)
+    else:
+        sim.init()
+    values = {name: [] for name in ["time", *job["record"]]}
+    steps = 1 if warm_up else round(job["stop_time"] / dt)
+    ended, stepping = None, 0.0
+    for k in range(steps + 1):
+        if k:
+            start = time.perf_counter()
+            sim.step()
+            stepping += time.perf_counter() - start
+        values["time"].append(sim.get_time())
+        for name in job["record"]:
+            values[name].append(sim.get_real(name))
+        ended = _beyond_limits(values, job["limits"])
+        if ended:
+            break
+    sim.terminate()
+    return {"step": dt, "seconds": stepping, "ended": ended, "values": values}
 
 
 def main(argv=None) -> None:
@@ -171,11 +182,7 @@ def main(argv=None) -> None:
 
     # before ecospy: its library needs tbb's symbols, which the tbb wheel does not put on its path
     ctypes.CDLL(TBB, mode=ctypes.RTLD_GLOBAL)
-    print(json.dumps({"runs": _simulate(job)}))
-    sys.stdout.flush()
-    sys.stderr.flush()
-    # not the interpreter's own exit: pythonfmu's destructor can abort it while an FMU is mapped
-    os._exit(0)
+    isolated.reply({"runs": _simulate(job)})
 
 
 if __name__ == "__main__":
