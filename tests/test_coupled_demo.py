@@ -1,93 +1,14 @@
-"""The coupled demo: the Cart FMU, the monolithic reference, ecospy's co-simulation."""
+"""The coupled demo: the monolithic reference, ecospy's co-simulation (the cart: test_cart.py)."""
 
 import csv
-import math
 
 import numpy as np
 import pytest
-from fmpy import read_model_description
-from fmpy.fmi1 import FMICallException
-from fmpy.validation import validate_fmu
 
 from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.cli import main as cli
-from conical_pendulum.demos.coupled import SCENE, SCHEMES, build_cart_fmu
+from conical_pendulum.demos.coupled import SCENE, SCHEMES
 from conical_pendulum.demos.monolithic import cart_parameters, monolithic
-from fmu_helpers import Instance
-
-
-@pytest.fixture(scope="module")
-def cart_fmu(tmp_path_factory):
-    return build_cart_fmu(tmp_path_factory.mktemp("cart") / "Cart.fmu")
-
-
-def test_cart_alone_is_the_exact_damped_oscillator(cart_fmu):
-    assert validate_fmu(str(cart_fmu)) == []
-    md = read_model_description(str(cart_fmu))
-    dependencies = {u.variable.name: [v.name for v in u.dependencies] for u in md.outputs}
-    assert dependencies == {"x": [], "v": [], "a": ["F_x", "M_x"]}  # only a answers the inputs at once
-    m, k, c = cart_parameters().values()
-    for carried in (0.0, 30.0):  # an apparent mass moves with the cart's own
-        fmu = Instance(cart_fmu, start_values={"x": 1.0, "v": 0.0, "M_x": carried})
-        mass = m + carried
-        rate, damping = math.sqrt(k / mass - (c / (2 * mass)) ** 2), c / (2 * mass)
-        for dt in (0.3, 1e-3, 2.0):  # exact whatever the step
-            fmu.step(dt)
-            t = fmu.time
-            x = math.exp(-damping * t) * (math.cos(rate * t) + damping / rate * math.sin(rate * t))
-            assert fmu.get("x")[0] == pytest.approx(x, abs=1e-13)
-        fmu.set({"F_x": 50.0})  # the acceleration answers the inputs at once
-        x, v = fmu.get("x", "v")
-        assert fmu.get("a")[0] == pytest.approx((50.0 - k * x - c * v) / mass, rel=1e-14)
-        fmu.close()
-
-
-def test_cart_extrapolates_its_force_linearly_when_asked(cart_fmu):
-    """F_x_order = 1: a force that grows linearly is followed exactly once two values are
-    known (the first step holds it: no slope yet); held, the cart lags it."""
-    from scipy.integrate import solve_ivp
-
-    m, k, c = cart_parameters().values()
-    slope, dt, steps = 40.0, 0.25, 8
-
-    def motion(force, start, span):
-        return solve_ivp(
-            lambda t, y: [y[1], (force(t) - k * y[0] - c * y[1]) / m],
-            span,
-            start,
-            dense_output=True,
-            rtol=1e-13,
-            atol=1e-13,
-        ).sol
-
-    first = motion(lambda t: 0.0, [1.0, 0.0], (0.0, dt))  # the first step: F_x = 0 held
-    rest = motion(lambda t: slope * t, first(dt), (dt, steps * dt))
-    errors = {}
-    for order in (0, 1):
-        fmu = Instance(cart_fmu, start_values={"x": 1.0, "v": 0.0, "F_x_order": order})
-        for step in range(steps):
-            fmu.set({"F_x": slope * step * dt})
-            fmu.step(dt)
-        errors[order] = abs(fmu.get("x")[0] - rest(steps * dt)[0])
-        fmu.close()
-    assert errors[1] < 1e-11 and errors[0] > 1e-3, errors
-
-
-@pytest.mark.parametrize(
-    "name, value, message",
-    [
-        ("m_cart", -1.0, "m_cart = -1.0: a mass must be positive"),
-        ("M_x", -2.0, "M_x = -2.0: an apparent mass cannot be negative"),
-        ("F_x_order", 2, "F_x_order = 2: choose 0 (held over the step) or 1 (extrapolated linearly)"),
-    ],
-)
-def test_cart_with_a_bad_value_discards_its_step_and_says_why(cart_fmu, name, value, message):
-    fmu = Instance(cart_fmu, start_values={name: value})
-    with pytest.raises(FMICallException) as failure:
-        fmu.step(0.1)
-    assert failure.value.status == 2  # fmi2Discard
-    assert any(message in text for _, text in fmu.messages), fmu.messages
-    fmu.close()
 
 
 def test_monolithic_model_is_the_coupled_pieces_physics():

@@ -97,8 +97,7 @@ def build_fmu(
             "slave",
             [model_file, core.library],
             output,
-            {},
-            described=data["variables"],
+            data["variables"],
             canGetAndSetFMUstate=True,
             canSerializeFMUstate=True,
         )
@@ -155,19 +154,16 @@ def package(
     slave_module: str,
     data_files: list[Path],
     output: Path,
-    starts: dict,
-    feedthrough=(),
-    described: list[dict] | None = None,
+    described: list[dict],
     **capabilities,
 ) -> str:
     """Build the FMU of runtime/<slave_module>.py (its SLAVE class) at `output`.
 
-    The FMU's resources hold the runtime's modules the slave runs with (runtime_modules,
-    not the other slaves) as the package cp_runtime_<digest>, the entry module pythonfmu
-    loads (runtime/entry.py as <slave_module>_<digest>.py) and `data_files`. `starts` are the start values by name (pythonfmu rounds them);
-    `feedthrough` names the outputs that depend at once on the inputs; `described`, the
-    variables as builder.variables describes them, replaces both (model_description.complete).
-    Returns the entry module's name.
+    The FMU's resources hold the runtime's modules the slave runs with (runtime_modules)
+    as the package cp_runtime_<digest>, the entry module pythonfmu loads (runtime/entry.py
+    as <slave_module>_<digest>.py) and `data_files`; its model description is completed
+    from `described`, the variables as builder.variables describes them
+    (model_description.complete). Returns the entry module's name.
     """
     from pythonfmu import FmuBuilder  # build time only
 
@@ -197,7 +193,7 @@ def package(
             for name in set(sys.modules) - saved_modules:
                 if name == entry_name or name.split(".")[0] == runtime_name:
                     del sys.modules[name]
-        complete(staged, starts, set(feedthrough), described)
+        complete(staged, described)
         os.replace(staged, output)
     return entry_name
 

@@ -9,16 +9,15 @@ from pathlib import Path
 from ..scene import Scene
 
 
-def complete(fmu: Path, starts: dict, feedthrough: set[str], described: list[dict] | None = None) -> None:
+def complete(fmu: Path, described: list[dict]) -> None:
     """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only;
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
-    Outputs declare their direct feedthrough (the `feedthrough` outputs depend on every
-    input, the others on none), so a master knows where an algebraic loop can be.
     `described`: the FMU's variables as builder.variables describes them (as dicts, in
-    value-reference order); then pythonfmu's variables must be exactly those (name, value
+    value-reference order); pythonfmu's variables must be exactly those (name, value
     reference, type, causality, variability, initial), and the starts and each output's
-    dependencies on the inputs are theirs.
+    dependencies on the inputs (its direct feedthrough, so a master knows where an algebraic
+    loop can be) are theirs.
 
     pythonfmu lists no InitialUnknowns, writes Real starts with 16 digits (a double
     needs 17 to round-trip), and packs binaries for every platform it has, while the
@@ -40,21 +39,14 @@ def complete(fmu: Path, starts: dict, feedthrough: set[str], described: list[dic
         structure.remove(child)
     outputs = ET.SubElement(structure, "Outputs")
     initial = ET.SubElement(structure, "InitialUnknowns")
-    inputs = " ".join(
-        str(index) for index, var in enumerate(variables, start=1) if var.get("causality") == "input"
-    )
-    if described is not None:
-        _check_described(variables, described)
-        starts = {v["name"]: v["start"] for v in described if v["start"] is not None}
-        index_of = {v["name"]: str(index) for index, v in enumerate(described, start=1)}
-        inputs_of = {v["name"]: v["causality"] == "input" for v in described}
-        # Co-Simulation only: an output depends on the inputs it names (the state is not a known)
-        depends = {
-            v["name"]: " ".join(index_of[name] for name in v["depends_on"] if inputs_of[name])
-            for v in described
-        }
-    else:
-        depends = {var.get("name"): inputs if var.get("name") in feedthrough else "" for var in variables}
+    _check_described(variables, described)
+    starts = {v["name"]: v["start"] for v in described if v["start"] is not None}
+    index_of = {v["name"]: str(index) for index, v in enumerate(described, start=1)}
+    inputs_of = {v["name"]: v["causality"] == "input" for v in described}
+    # Co-Simulation only: an output depends on the inputs it names (the state is not a known)
+    depends = {
+        v["name"]: " ".join(index_of[name] for name in v["depends_on"] if inputs_of[name]) for v in described
+    }
     for index, var in enumerate(variables, start=1):
         real = var.find("Real")
         if real is not None and real.get("start") is not None:

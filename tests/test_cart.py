@@ -1,0 +1,294 @@
+"""The coupled demo's cart as a native FMU: cart_model.c behind the same FMI glue as the pendulum."""
+
+import math
+import struct
+import zipfile
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+from scipy.linalg import expm
+
+from conical_pendulum.builder import cart, native
+from conical_pendulum.builder.compiler import CSRC
+from conical_pendulum.demos.coupled import build_cart_fmu
+from conical_pendulum.demos.monolithic import cart_parameters
+from fmu_helpers import Instance
+
+ERROR, DISCARD = 3, 2  # fmi2Error, fmi2Discard
+
+
+@pytest.fixture(scope="module")
+def cart_fmu(tmp_path_factory):
+    return build_cart_fmu(tmp_path_factory.mktemp("cart") / "Cart.fmu")
+
+
+def test_the_cart_fmu_is_valid_and_says_what_depends_on_what(cart_fmu):
+    assert validate_fmu(str(cart_fmu)) == []
+    md = read_model_description(str(cart_fmu))
+    assert md.coSimulation.modelIdentifier == md.modelExchange.modelIdentifier == "Cart"
+    experiment = md.defaultExperiment
+    assert (experiment.startTime, experiment.stopTime, experiment.stepSize) == ("0.0", "10.0", "0.01")
+    dependencies = {u.variable.name: [v.name for v in u.dependencies] for u in md.outputs}
+    # a state is an output of its own value; only a answers the inputs at once
+    assert dependencies == {"x": ["x"], "v": ["v"], "a": ["x", "v", "F_x", "M_x"]}
+    assert {u.variable.name: [v.name for v in u.dependencies] for u in md.derivatives} == {
+        "der(x)": ["v"],
+        "der(v)": ["x", "v", "F_x", "M_x"],
+    }
+    starts = {v.name: v.start for v in md.modelVariables if v.start is not None}
+    assert starts == {
+        **{name: repr(value) for name, (_, value) in cart.PARAMETERS.items()},
+        **{name: repr(value) for name, value in cart.START.items()},
+        "F_x": "0.0",
+        "M_x": "0.0",
+        "F_x_order": "0",
+    }
+
+
+def test_the_glue_is_the_pendulums_unchanged(cart_fmu):
+    """One more model file, not a copy of the glue: the cart ships runtime/csrc's FMI layer
+    byte for byte, the files the pendulum's native FMU ships."""
+    with zipfile.ZipFile(cart_fmu) as archive:
+        shipped = {name.split("/", 1)[1] for name in archive.namelist() if name.startswith("sources/")}
+        for name in (*native.LAYER_SOURCES[2], "fmi_layer.h", "fmu_model.h", "rules.c", "rules.h"):
+            assert archive.read(f"sources/{name}") == (CSRC / name).read_bytes(), name
+    assert shipped == {*native.glue_sources(2, cart.MODEL), *native.glue_headers(cart.MODEL)}
+    pendulum, cart_sources = native.glue_sources(2), native.glue_sources(2, cart.MODEL)
+    assert pendulum[-2:] == cart_sources[-2:] == ["fmi_layer.c", "fmi2_glue.c"]
+    assert "pendulum_model.c" not in cart_sources and "cart_model.c" not in pendulum
+
+
+# The pythonfmu cart (runtime/cart_slave.py, removed) on the same run: M_x = 30 kg, F_x =
+# 50 sin t + 20 t set before each of six 0.25 s steps; (x, v, a) after each step.
+PYTHONFMU = {
+    0: [
+        (0.9646130540058507, -0.27959571109287873, -1.0700003375309233),
+        (0.8668256055665973, -0.49660262496552426, -0.7901660797919459),
+        (0.7238306574398281, -0.6395555455359462, -0.4754785444234241),
+        (0.5548208444524838, -0.7039739813101674, -0.15432083877309635),
+        (0.3792470263150546, -0.6922409522005483, 0.14639472567036618),
+        (0.21517709132585783, -0.6129308591716334, 0.4033175727102561),
+    ],
+    1: [
+        (0.9646130540058507, -0.27959571109287873, -1.0700003375309233),
+        (0.8681992211755418, -0.480211204773133, -0.6606558704262794),
+        (0.7304403675493332, -0.6090736478524377, -0.36009404828966973),
+        (0.5697778512382631, -0.6632959352796377, -0.061601230061718804),
+        (0.40455906514423884, -0.6464411886889214, 0.2100778806289658),
+        (0.2515119400339422, -0.5677453042014645, 0.4342540598007825),
+    ],
+}
+
+
+def _run(cart_fmu, order):
+    fmu = Instance(cart_fmu, start_values={"M_x": 30.0, "F_x_order": order})
+    rows = []
+    for _ in range(6):
+        fmu.set({"F_x": 50.0 * math.sin(fmu.time) + 20.0 * fmu.time})
+        fmu.step(0.25)
+        rows.append(fmu.get("x", "v", "a"))
+    fmu.close()
+    return np.array(rows)
+
+
+@pytest.mark.parametrize("order", [0, 1])
+def test_the_native_cart_is_the_pythonfmu_cart_to_rounding(cart_fmu, order):
+    """Held and extrapolated force with an apparent mass: the same scaling and squaring, in C
+    (BLAS sums numpy's products in another order: a few units in the last place)."""
+    np.testing.assert_allclose(_run(cart_fmu, order), PYTHONFMU[order], rtol=0, atol=4e-15)
+
+
+@pytest.mark.parametrize("order", [0, 1])
+def test_each_step_is_the_exact_solution(cart_fmu, order):
+    """Against scipy's expm of the same (x, v, F, F') system, step by step."""
+    m, k, c = cart_parameters().values()
+    mass = m + 30.0
+    system = np.zeros((4, 4))
+    system[0, 1], system[1, :3], system[2, 3] = 1.0, (-k / mass, -c / mass, 1.0 / mass), 1.0
+    state, last, expected = np.array([1.0, 0.0]), None, []
+    for step in range(6):
+        t = 0.25 * step
+        force = 50.0 * math.sin(t) + 20.0 * t
+        slope = (force - last) / 0.25 if order == 1 and last is not None else 0.0
+        last = force
+        x, v, f, _ = expm(system * 0.25) @ (*state, force, slope)
+        state = np.array([x, v])
+        expected.append((x, v, (f - k * x - c * v) / mass))
+    np.testing.assert_allclose(_run(cart_fmu, order), expected, rtol=0, atol=1e-13)
+
+
+def test_cart_alone_is_the_exact_damped_oscillator(cart_fmu):
+    m, k, c = cart_parameters().values()
+    for carried in (0.0, 30.0):  # an apparent mass moves with the cart's own
+        fmu = Instance(cart_fmu, start_values={"x": 1.0, "v": 0.0, "M_x": carried})
+        mass = m + carried
+        rate, damping = math.sqrt(k / mass - (c / (2 * mass)) ** 2), c / (2 * mass)
+        for dt in (0.3, 1e-3, 2.0):  # exact whatever the step
+            fmu.step(dt)
+            t = fmu.time
+            x = math.exp(-damping * t) * (math.cos(rate * t) + damping / rate * math.sin(rate * t))
+            assert fmu.get("x")[0] == pytest.approx(x, abs=1e-13)
+        fmu.set({"F_x": 50.0})  # the acceleration answers the inputs at once
+        x, v = fmu.get("x", "v")
+        assert fmu.get("a")[0] == pytest.approx((50.0 - k * x - c * v) / mass, rel=1e-14)
+        fmu.close()
+
+
+def test_cart_extrapolates_its_force_linearly_when_asked(cart_fmu):
+    """F_x_order = 1: a force that grows linearly is followed exactly once two values are
+    known (the first step holds it: no slope yet); held, the cart lags it."""
+    from scipy.integrate import solve_ivp
+
+    m, k, c = cart_parameters().values()
+    slope, dt, steps = 40.0, 0.25, 8
+
+    def motion(force, start, span):
+        return solve_ivp(
+            lambda t, y: [y[1], (force(t) - k * y[0] - c * y[1]) / m],
+            span,
+            start,
+            dense_output=True,
+            rtol=1e-13,
+            atol=1e-13,
+        ).sol
+
+    first = motion(lambda t: 0.0, [1.0, 0.0], (0.0, dt))  # the first step: F_x = 0 held
+    rest = motion(lambda t: slope * t, first(dt), (dt, steps * dt))
+    errors = {}
+    for order in (0, 1):
+        fmu = Instance(cart_fmu, start_values={"x": 1.0, "v": 0.0, "F_x_order": order})
+        for step in range(steps):
+            fmu.set({"F_x": slope * step * dt})
+            fmu.step(dt)
+        errors[order] = abs(fmu.get("x")[0] - rest(steps * dt)[0])
+        fmu.close()
+    assert errors[1] < 1e-11 and errors[0] > 1e-3, errors
+
+
+def test_model_exchange_in_cvode_is_the_exact_solution(cart_fmu):
+    """F_x_order is Co-Simulation's: in Model Exchange the host integrates x' = v, v' = a."""
+    m, k, c = cart_parameters().values()
+    result = fmpy.simulate_fmu(
+        str(cart_fmu), fmi_type="ModelExchange", stop_time=3.0, output_interval=0.1, relative_tolerance=1e-10
+    )
+    rate, damping = math.sqrt(k / m - (c / (2 * m)) ** 2), c / (2 * m)
+    t = result["time"]
+    x = np.exp(-damping * t) * (np.cos(rate * t) + damping / rate * np.sin(rate * t))
+    assert np.abs(result["x"] - x).max() < 1e-7
+
+
+@pytest.mark.parametrize(
+    "name, value, message",
+    [
+        ("m_cart", -1.0, "m_cart = -1.0: a mass must be positive"),
+        ("k_cart", -3.0, "k_cart = -3.0: a stiffness cannot be negative"),
+        ("M_x", -2.0, "M_x = -2.0: an apparent mass cannot be negative"),
+        ("F_x", float("nan"), "F_x = nan: must be finite"),
+        ("F_x_order", 2, "F_x_order = 2: choose 0 (held over the step) or 1 (extrapolated linearly)"),
+        ("a", 1.0, "a is a calculated output: it cannot be set"),
+    ],
+)
+def test_a_bad_value_is_an_error_with_the_pythonfmu_carts_words(cart_fmu, name, value, message):
+    """runtime/rules.py's words, as the pythonfmu cart said them at its next step; here the
+    value is refused where it is set, and the instance goes on."""
+    fmu = Instance(cart_fmu, initialize=False)
+    with pytest.raises(FMICallException) as failure:
+        fmu.set({name: value})
+    assert failure.value.status == ERROR
+    assert any(s == ERROR and message in text for s, text in fmu.messages), fmu.messages
+    fmu.fmu.setupExperiment(startTime=0.0)
+    fmu.fmu.enterInitializationMode()
+    fmu.fmu.exitInitializationMode()
+    fmu.step(0.1)
+    assert fmu.get("m_cart", "M_x") == [100.0, 0.0]
+    fmu.close()
+
+
+def test_what_the_glue_refuses_it_refuses_for_the_cart_too(cart_fmu):
+    fmu = Instance(cart_fmu)
+    with pytest.raises(FMICallException):
+        fmu.set({"m_cart": 50.0})  # fixed: before initialization only
+    with pytest.raises(FMICallException):
+        fmu.fmu.enterInitializationMode()  # once only
+    with pytest.raises(FMICallException) as failure:
+        fmu.step(-0.1)
+    assert failure.value.status == DISCARD
+    with pytest.raises(FMICallException):
+        fmu.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=0.1)  # stepFailed
+    texts = [text for _, text in fmu.messages]
+    assert any("m_cart cannot be set after initialization (variability fixed)" in text for text in texts), (
+        texts
+    )
+    assert any("fmi2EnterInitializationMode is not allowed in state stepComplete" in text for text in texts)
+    assert any(
+        "communication step -0.1: must be a non-negative finite number; the state is kept" in text
+        for text in texts
+    )
+    assert any("fmi2DoStep is not allowed in state stepFailed" in text for text in texts)
+    fmu.fmu.reset()
+    fmu.fmu.freeInstance()
+
+
+def test_fmu_state_get_set_and_serialize_replay_bit_for_bit(cart_fmu):
+    fmu = Instance(cart_fmu, start_values={"F_x_order": 1, "M_x": 30.0})
+
+    def run_on(instance):
+        for step in range(5):
+            instance.set({"F_x": 10.0 * (instance.time + step) ** 2})
+            instance.step(0.2)
+        return instance.get("x", "v", "a")
+
+    run_on(fmu)  # the extrapolation carries the last point
+    saved = fmu.fmu.getFMUstate()
+    data = fmu.fmu.serializeFMUstate(saved)
+    start_time = fmu.time
+    first = run_on(fmu)
+    fmu.fmu.setFMUstate(saved)
+    fmu.time = start_time
+    assert run_on(fmu) == first
+    other = Instance(cart_fmu, name="other")
+    restored = other.fmu.deSerializeFMUstate(data)
+    other.fmu.setFMUstate(restored)
+    other.time = start_time
+    assert run_on(other) == first
+    # bytes with a mass that is no mass: refused, naming it, and nothing taken
+    mass = struct.pack("<d", 100.0)
+    assert data.count(mass) == 1
+    with pytest.raises(FMICallException) as failure:
+        other.fmu.deSerializeFMUstate(data.replace(mass, struct.pack("<d", -1.0)))
+    assert failure.value.status == ERROR
+    assert any(
+        "fmi2DeSerializeFMUstate: the state's m_cart = -1.0: a mass must be positive" in text
+        for _, text in other.messages
+    ), other.messages[-3:]
+    fmu.fmu.freeFMUstate(saved)
+    other.fmu.freeFMUstate(restored)
+    fmu.close()
+    other.close()
+
+
+def test_directional_derivatives_are_exact(cart_fmu):
+    m, k, c = cart_parameters().values()
+    fmu = Instance(cart_fmu, start_values={"M_x": 30.0, "F_x": 40.0})
+    fmu.step(0.5)
+    fmu.set({"F_x": 25.0})
+    vr = fmu.vr
+    mass, (a,) = m + 30.0, fmu.get("a")
+    knowns = ["x", "v", "F_x", "M_x"]
+    expected = {"a": [-k / mass, -c / mass, 1 / mass, -a / mass], "der(x)": [0, 1, 0, 0], "x": [1, 0, 0, 0]}
+    expected["der(v)"] = expected["a"]
+    for unknown, row in expected.items():
+        for known, entry in zip(knowns, row):
+            (value,) = fmu.fmu.getDirectionalDerivative([vr[unknown]], [vr[known]], [1.0])
+            assert value == pytest.approx(entry, rel=1e-15, abs=0), (unknown, known)
+    with pytest.raises(FMICallException):
+        fmu.fmu.getDirectionalDerivative([vr["a"]], [vr["m_cart"]], [1.0])
+    assert any(
+        "value reference 0 (m_cart) as a known: only states and inputs are" in text
+        for _, text in fmu.messages
+    )
+    fmu.close()
