@@ -2,6 +2,7 @@
 messages, one Parquet file, the FMU loaded once per worker, and a command that refuses
 what it cannot run."""
 
+import logging
 import math
 import subprocess
 import sys
@@ -12,6 +13,7 @@ import pandas as pd
 import pytest
 from distributed import Client, LocalCluster
 
+from conical_pendulum.analysis import runner
 from conical_pendulum.analysis import sweep as sweep_module
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.sweep import LoadedFmu, grid, random_samples, sweep
@@ -46,6 +48,37 @@ def test_runs_equal_fmpy_one_by_one(seed_fmu):
         expected = run_fmu(seed_fmu, start_values=run)
         for name in ["time", *results.attrs["outputs"]]:
             assert np.array_equal(got[name].to_numpy(), expected[name]), (index, name)
+
+
+def test_both_loops_give_the_same_file_on_a_running_cluster(native_seed_fmu, cluster):
+    runs = random_samples({"l0": (5, 15), "alpha0": (-1, 1)}, 12, seed=2) + [{"l0": -1.0}, DISCARDED_AT_1_5]
+    results = {
+        loop: sweep(
+            native_seed_fmu,
+            runs,
+            output_interval=0.5,
+            scheduler=cluster.scheduler_address,
+            progress=False,
+            loop=loop,
+        )
+        for loop in ("runner", "fmpy")
+    }
+    pd.testing.assert_frame_equal(results["runner"], results["fmpy"])
+    assert list(by_run(results["runner"])["status"]) == ["ok"] * 12 + ["failed"] * 2
+
+
+def test_a_worker_without_the_runner_uses_fmpys_loop_and_says_why(seed_fmu, monkeypatch, caplog):
+    monkeypatch.setattr(runner, "unavailable", lambda: "no C compiler cc")
+    with (
+        LocalCluster(n_workers=1, processes=False, dashboard_address="127.0.0.1:0") as in_process,
+        caplog.at_level(logging.WARNING, logger="conical_pendulum.analysis.sweep"),
+    ):
+        results = sweep(
+            seed_fmu, [{"l0": 5.0}], stop_time=1.0, scheduler=in_process.scheduler_address, progress=False
+        )
+    assert (results["status"] == "ok").all()
+    assert "runs fmpy's loop, not the compiled runner: no C compiler cc" in caplog.text
+    assert "ConicalPendulum: fmpy's loop instead of the compiled runner: no C compiler cc" in caplog.text
 
 
 def test_a_refused_value_fails_only_its_run(seed_fmu, cluster):
@@ -87,7 +120,7 @@ def test_non_finite_outputs_fail_the_run(seed_fmu, monkeypatch):
         rows["energy"][3] = np.nan
         return rows
 
-    fmu = LoadedFmu(seed_fmu.read_bytes())
+    fmu = LoadedFmu(seed_fmu.read_bytes(), loop="fmpy")
     try:
         rows, ok, message = fmu.run({}, 1.0, 0.1, ["energy", "bob2_x"])
         assert ok and message == "" and rows["time"][-1] == 1.0
@@ -207,6 +240,8 @@ def test_command_writes_the_sweep(seed_fmu, tmp_path):
         "energy,bob2_x",
         "--workers",
         "1",
+        "--loop",
+        "fmpy",
         "--out",
         out,
         cwd=tmp_path,
@@ -242,6 +277,7 @@ def test_command_writes_the_sweep(seed_fmu, tmp_path):
         (["--grid", "solver=1.5"], "solver = 1.5: solver is an Integer variable"),
         (["--grid", "l0=5", "--outputs", "energy,bob9_x"], "unknown output(s) bob9_x"),
         (["--grid", "l0=5", "--interval", "0"], "must be positive"),
+        (["--grid", "l0=5", "--loop", "python"], "argument --loop: invalid choice: 'python'"),
         (["--grid", "l0=5", "--workers", "0"], "argument --workers: '0': expected a whole number"),
         (["--grid", "l0=5", "--out", "missing/s.parquet"], "out: missing is not a directory"),
         (

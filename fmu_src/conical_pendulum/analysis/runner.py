@@ -52,7 +52,11 @@ LOOP_FUNCTIONS = (
     "fmi2GetRealStatus",
 )
 # per recorded type: Run's field for one row of values, and the values' C type
-ROW_VALUES = {"Real": ("reals", np.float64), "Integer": ("integers", np.int32), "Boolean": ("booleans", np.int32)}
+ROW_VALUES = {
+    "Real": ("reals", np.float64),
+    "Integer": ("integers", np.int32),
+    "Boolean": ("booleans", np.int32),
+}
 
 
 class _Run(ctypes.Structure):
@@ -113,7 +117,9 @@ def library() -> ctypes.CDLL:
     compiler = COMPILERS["linux64"][0][0]
     if shutil.which(compiler) is None:
         raise UserError(f"the compiled runner needs the C compiler {compiler}, which is not on PATH")
-    digest = hashlib.sha256(" ".join(_compile_command(Path("runner.so"))).encode() + platform.machine().encode())
+    digest = hashlib.sha256(
+        " ".join(_compile_command(Path("runner.so"))).encode() + platform.machine().encode()
+    )
     for path in [SOURCE, fmi_headers() / "fmi2FunctionTypes.h", fmi_headers() / "fmi2TypesPlatform.h"]:
         digest.update(path.read_bytes())
     path = cache_root() / "runner" / f"fmi2_runner_{digest.hexdigest()[:16]}.so"
@@ -171,8 +177,12 @@ class Runner:
         run.rowSize = self.dtype.itemsize
         run.canHandleVariableStepSize = bool(md.coSimulation.canHandleVariableCommunicationStepSize)
         experiment = md.defaultExperiment
-        self.start_time = float(experiment.startTime) if experiment and experiment.startTime is not None else 0.0
-        self.tolerance = float(experiment.tolerance) if experiment and experiment.tolerance is not None else None
+        self.start_time = (
+            float(experiment.startTime) if experiment and experiment.startTime is not None else 0.0
+        )
+        self.tolerance = (
+            float(experiment.tolerance) if experiment and experiment.tolerance is not None else None
+        )
         self._library = library()
 
     def simulate(self, stop_time: float, output_interval: float, start_values=None) -> np.ndarray:

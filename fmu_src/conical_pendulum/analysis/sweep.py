@@ -6,8 +6,10 @@
 Each worker process extracts the FMU, reads its model description and loads its library
 once (a WorkerPlugin carries the FMU's bytes, so a remote cluster needs no shared
 filesystem), then instantiates it once per run, since pythonfmu 0.7 has no fmi2Reset
-to rely on. Runs travel in batches, several to a task, so that Dask's cost per task
-stays small next to a run's 25 ms. A run fails, keeping the rows it produced and the
+to rely on, and runs it with the communication loop in C (analysis.runner; fmpy's own
+loop with loop="fmpy", or where the runner cannot be compiled: the same rows). Runs
+travel in batches, several to a task, so that Dask's cost per task stays small next to
+a run's few milliseconds. A run fails, keeping the rows it produced and the
 FMU's message, when a value is refused (fmi2Fatal), a step is discarded (fmpy then
 stops quietly, short of the stop time) or an output is not finite.
 """
@@ -38,7 +40,11 @@ from fmpy.fmi2 import FMU2Slave
 from fmpy.simulation import settable_in_initialization_mode, settable_in_instantiated
 
 from ..progress import bar
+from . import runner
 from .fmpy_runs import logging_callbacks, run_fmu
+
+logger = logging.getLogger(__name__)
+LOOPS = ("runner", "fmpy")  # sweep()'s loop: analysis.runner's compiled loop, or fmpy's own
 
 
 def grid(axes: Mapping[str, Sequence[float]]) -> list[dict]:
@@ -64,13 +70,15 @@ def random_samples(ranges: Mapping[str, tuple[float, float]], n: int, seed=None)
 class LoadedFmu:
     """An FMU extracted, described and its library loaded once; instantiated afresh per run.
 
-    Runs in one process take turns: one library serves them, and the slave, being
+    A run goes through the compiled runner (analysis.runner) or, with loop="fmpy" or where
+    the runner cannot serve (`fallback` says why), fmpy's own loop: the same rows.
+    Runs in one process take turns: one library serves them, and a pythonfmu slave, being
     Python, would hold the GIL anyway. `loads` counts the FMUs this process has loaded (a sweep loads once per worker).
     """
 
     loads = 0
 
-    def __init__(self, data: bytes):
+    def __init__(self, data: bytes, loop: str = "runner"):
         self.directory = tempfile.mkdtemp(prefix="conical_pendulum_sweep_")
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
             archive.extractall(self.directory)
@@ -88,17 +96,26 @@ class LoadedFmu:
             instanceName="sweep",
         )
         self._lock = threading.Lock()
+        self.messages = []
+        self.loop, self.fallback = loop, None
+        if loop == "runner":
+            self.fallback = runner.unavailable()
+            if self.fallback:
+                self.loop = "fmpy"
+                logger.warning(
+                    "%s: fmpy's loop instead of the compiled runner: %s", self.md.modelName, self.fallback
+                )
+        self._runners = {}  # by the outputs recorded
         LoadedFmu.loads += 1
 
-    def run(
+    def simulate(
         self, start_values: dict, stop_time: float, output_interval: float, outputs: list[str]
-    ) -> tuple[np.ndarray | None, bool, str]:
-        """(rows as fmpy records them or None, ok, message): fmpy's way, on a fresh instance."""
-        with self._lock:
-            self.messages = problems = []  # this run's, also once the next has begun
-            self.slave.instantiate(callbacks=self._callbacks, loggingOn=True)
-            try:
-                rows = run_fmu(
+    ) -> np.ndarray:
+        """fmpy.simulate_fmu's rows on a fresh instance, by this FMU's loop; raises as fmpy does."""
+        self.slave.instantiate(callbacks=self._callbacks, loggingOn=True)
+        try:
+            if self.loop == "fmpy":
+                return run_fmu(
                     self.directory,
                     stop_time,
                     output_interval,
@@ -107,10 +124,23 @@ class LoadedFmu:
                     model_description=self.md,
                     fmu_instance=self.slave,
                 )
+            key = tuple(outputs)
+            if key not in self._runners:
+                self._runners[key] = runner.Runner(self.slave, self.md, outputs)
+            return self._runners[key].simulate(stop_time, output_interval, start_values)
+        finally:  # fmi2FreeInstance is all FMI allows after fmi2Fatal
+            self.slave.fmi2FreeInstance(self.slave.component)
+
+    def run(
+        self, start_values: dict, stop_time: float, output_interval: float, outputs: list[str]
+    ) -> tuple[np.ndarray | None, bool, str]:
+        """(rows as fmpy records them or None, ok, message), with the FMU's messages."""
+        with self._lock:
+            self.messages = problems = []  # this run's, also once the next has begun
+            try:
+                rows = self.simulate(start_values, stop_time, output_interval, outputs)
             except Exception as exc:
                 return None, False, "; ".join([*problems, str(exc)])
-            finally:  # fmi2FreeInstance is all FMI allows after fmi2Fatal
-                self.slave.fmi2FreeInstance(self.slave.component)
         # after a discarded step fmpy samples the last good point a second time
         rows = rows[np.r_[True, np.diff(rows["time"]) > 0]]
         end = rows["time"][-1]
@@ -130,11 +160,11 @@ class LoadedFmu:
 class _FmuPlugin(WorkerPlugin):
     """Loads the FMU it carries once on each worker, and removes it when unregistered."""
 
-    def __init__(self, data: bytes):
-        self.data = data
+    def __init__(self, data: bytes, loop: str):
+        self.data, self.loop = data, loop
 
     def setup(self, worker):
-        self.fmu = LoadedFmu(self.data)
+        self.fmu = LoadedFmu(self.data, self.loop)
         self.data = None  # extracted: the worker keeps no second copy
 
     def teardown(self, worker):
@@ -269,6 +299,7 @@ def sweep(
     out=None,
     progress: bool = True,
     timeout: float = 10.0,
+    loop: str = "runner",
 ) -> pd.DataFrame:
     """Run the FMU once per run (a dict of parameters and start values) on a Dask cluster.
 
@@ -281,6 +312,8 @@ def sweep(
     `outputs` (default: all of the FMU's). With `out`, also written there as Parquet;
     the FMU's name and the sweep's settings are in `attrs`, which the file keeps.
     `batch` runs go to a task (default: about four tasks per worker, at most 25 runs).
+    `loop`: "runner", the compiled runner (analysis.runner), or "fmpy", fmpy's own loop: the
+    same rows; a worker that cannot compile the runner uses fmpy's, and the log says why.
     """
     path = Path(fmu)
     try:
@@ -296,6 +329,8 @@ def sweep(
         math.isfinite(stop_time) and stop_time > 0 and math.isfinite(output_interval) and output_interval > 0
     ):
         raise ValueError(f"stop time {stop_time} and output interval {output_interval} must be positive")
+    if loop not in LOOPS:
+        raise ValueError(f"loop = {loop!r}: choose {' or '.join(map(repr, LOOPS))}")
     if batch is not None and batch < 1:
         raise ValueError(f"batch = {batch}: must be at least 1")
     if out is not None and not Path(out).parent.is_dir():
@@ -306,8 +341,14 @@ def sweep(
     start, frames, done, failed = time.perf_counter(), [], 0, 0
     with _client(scheduler, n_workers, timeout) as client:
         plugin = f"conical-pendulum-sweep-{uuid.uuid4().hex}"
-        client.register_plugin(_FmuPlugin(data), name=plugin)
+        client.register_plugin(_FmuPlugin(data, loop), name=plugin)
         try:
+            fallbacks = client.run(lambda dask_worker: dask_worker.plugins[plugin].fmu.fallback)
+            for worker, reason in sorted(fallbacks.items()):
+                if reason:
+                    logger.warning(
+                        "sweep: worker %s runs fmpy's loop, not the compiled runner: %s", worker, reason
+                    )
             size = batch or max(1, min(25, math.ceil(len(runs) / (4 * sum(client.nthreads().values())))))
             numbered = list(enumerate(runs))
             futures = [

@@ -100,6 +100,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--batch", type=positive_int, help="runs per task (default: automatic)")
     parser.add_argument(
+        "--loop",
+        choices=sweeps.LOOPS,
+        default="runner",
+        help="the communication loop: the compiled runner (default; fmpy's where it cannot "
+        "be compiled) or fmpy's own; the same results",
+    )
+    parser.add_argument(
         "--out", type=Path, default=Path("sweep.parquet"), help="Parquet file (sweep.parquet)"
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
@@ -141,6 +148,7 @@ def run(args) -> int:
             out=args.out,
             progress=not args.no_progress,
             timeout=args.connect_timeout,
+            loop=args.loop,
         )
     except (ValueError, ConnectionError) as exc:
         raise UserError(str(exc)) from None
