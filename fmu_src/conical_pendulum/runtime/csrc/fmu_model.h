@@ -34,14 +34,12 @@
  * state and header, as fmi2_glue.c does. Only the API, the state machine and the FMU state's
  * wrapping are written again.
  *
- * A second model, the coupled demo's cart (runtime/cart_slave.py today; not written in C):
- * cart_model.c defines its struct ModelData (its Reals by value reference: parameters
- * m_cart, k_cart, c_cart, inputs F_x and M_x, states x and v, its outputs; the Integer
- * F_x_order; whatever its step carries) and these functions over it, with its own generated
- * fmu_config.h (GUID, names, value rules, the same log categories) and its own equations;
- * model_sizes says 2 states. It links with fmi2_glue.c (and later fmi3_glue.c) unchanged:
- * one more model file, not a copy of the glue. Its model_do_step may integrate with
- * solvers.c through a cp_system of its own, as cosim.c does for the pendulum.
+ * A second model, the coupled demo's cart (cart_model.c): its struct ModelData (its held
+ * Reals by value reference, F_x_order, the force in effect and the extrapolation's last
+ * point) and these functions over it, with its own generated fmu_config.h (builder/cart.py:
+ * GUID, names, value rules, the same log categories); model_sizes says 2 states. It links
+ * with fmi2_glue.c unchanged: one more model file, not a copy of the glue (fmi3_glue.c also
+ * reads the pendulum's fmi3_arrays.h).
  *
  * Not in the contract: Boolean and String variables, event indicators and events (neither
  * model has any; the FMI layer refuses them), input and output derivatives. */
