@@ -121,18 +121,23 @@ def reference(times, scene: Scene = SCENE, cart: dict | None = None) -> dict:
     return truth
 
 
+def on_times(truth: dict, times, spacing: float) -> dict:
+    """The reference (on a grid of `spacing` from 0) at `times`, each a point of the grid."""
+    index = np.rint(np.asarray(times) / spacing).astype(int)
+    return {name: values[index] for name, values in truth.items()}
+
+
 def coupling_errors(
     runs: dict, truth: dict, scheme: str, cart_mass: float, scene: Scene = SCENE
 ) -> list[CouplingError]:
     """Each run against the reference (on the finest step's times) at its own communication
-    points, up to where it ended."""
+    points (its "time"), up to where it ended."""
     finest = min(runs)
     span = np.abs(truth["x_cart"]).max()
     angles = scene.state_names()[: 2 * scene.n]
     errors = []
     for dt, run in sorted(runs.items()):
-        count = len(run["x"])
-        ref = {name: values[:: round(dt / finest)][:count] for name, values in truth.items()}
+        ref = on_times(truth, run["time"], finest)
         cart_error = np.abs(run["x"] - ref["x_cart"]).max()
         errors.append(
             CouplingError(
