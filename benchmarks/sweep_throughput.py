@@ -14,7 +14,9 @@ recorded; l0 and alpha0 drawn at random), in one run of the script:
   workers' profiler off): the sweep on a cluster already running, and end to end (the
   default path: the cluster started and closed by the sweep).
 
-Every method must give bit-identical results; the methods take turns, in rounds, and
+Every method here runs fmpy's loop (loop="fmpy"); the compiled runner, the sweep's
+default, is measured against it by runner_throughput.py. Every method must give
+bit-identical results; the methods take turns, in rounds, and
 medians are reported. Writes benchmarks/results/sweep_throughput.csv.
 """
 
@@ -68,7 +70,7 @@ def methods(path, runs):
         return [r["energy"] for r in results], seconds, None
 
     def loaded_once():
-        fmu = LoadedFmu(path.read_bytes())
+        fmu = LoadedFmu(path.read_bytes(), loop="fmpy")
         outputs = [v.name for v in fmu.md.modelVariables if v.causality == "output"]
         try:
             results, seconds = timed(lambda: [fmu.run(run, STOP, INTERVAL, outputs)[0] for run in runs])
@@ -90,6 +92,7 @@ def methods(path, runs):
                     output_interval=INTERVAL,
                     scheduler=cluster.scheduler_address,
                     progress=False,
+                    loop="fmpy",
                 )
             )
         return sweep_energies(results, len(runs)), seconds, start_seconds
@@ -97,7 +100,13 @@ def methods(path, runs):
     def end_to_end(workers):
         results, seconds = timed(
             lambda: sweep(
-                path, runs, stop_time=STOP, output_interval=INTERVAL, n_workers=workers, progress=False
+                path,
+                runs,
+                stop_time=STOP,
+                output_interval=INTERVAL,
+                n_workers=workers,
+                progress=False,
+                loop="fmpy",
             )
         )
         return sweep_energies(results, len(runs)), seconds, None
