@@ -6,6 +6,8 @@ fmi2GetDerivatives). Same variable names, value references, starts and descripti
 the pythonfmu FMU of the scene, plus the state derivatives `der(<state>)` that Model
 Exchange needs. The binary links only libc and libm; the C sources ship in `sources/`
 and are listed in the model description, so a host can compile it for its platform.
+The same code paths write any model behind fmu_model.h, given as a NativeModel: the
+coupled demo's cart (builder.cart) is the second.
 """
 
 from __future__ import annotations
