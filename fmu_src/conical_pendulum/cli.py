@@ -1,8 +1,8 @@
-"""The `conical-pendulum` command (also `python -m conical_pendulum`): one entry point, six subcommands.
+"""The `conical-pendulum` command (also `python -m conical_pendulum`): one entry point, seven subcommands.
 
 This module is the entry point only: the table of commands (COMMANDS), argparse, the
 dispatch, and the one place where errors become a line and an exit status. Each
-subcommand is a module of its own in commands/ (build, check, show, page, sweep, demo),
+subcommand is a module of its own in commands/ (build, check, show, page, sweep, demo, system),
 with `add_arguments(parser)` and `run(args) -> int`, its options defined once there.
 Only the chosen subcommand's module is imported, so `--help` is quick and `build` needs
 neither the sweep extra (Dask) nor the cosim one (ecospy). Being this package's code, a
@@ -95,6 +95,14 @@ COMMANDS = {
         ),
         "conical_pendulum.commands.demo",
         "cosim",
+    ),
+    "system": Command(
+        "write the coupled demo as an SSP 1.0 package and run it in ecos, libcosim and FMPy",
+        (
+            "conical-pendulum system --out dist/system",
+            "conical-pendulum system --cart-mass 100,5 --step 0.1,0.01 --run all",
+        ),
+        "conical_pendulum.commands.system",
     ),
 }
 

@@ -6,9 +6,8 @@ JOB_JSON: {"ssp": path, "stop_time": 10.0, "record": ["cart::x", "p::alpha0"]}. 
 .ssp file (libcosim reads its SystemStructure.ssd) or an .ssd file among the package's
 unpacked files (a variant). libcosim takes the step from the package itself (the
 default experiment's osp:FixedStepAlgorithm) and applies each component's first
-parameter set. The last line printed is {"seconds": s, "values": {"time": [...], name:
-[...]}}: the recorded variables after each step (libcosim initialises at its first step),
-and the wall time from loading the package to the last step.
+parameter set. The last line printed is {"values": {"time": [...], name: [...]}}: the
+recorded variables after each step (libcosim initialises at its first step).
 
 A process of its own (demos/isolated.py): libcosim aborts the process on an internal
 error, and a pythonfmu FMU can abort an interpreter at exit.
@@ -18,7 +17,6 @@ from __future__ import annotations
 
 import json
 import sys
-import time
 
 from . import isolated
 
@@ -43,7 +41,6 @@ def _simulate(job: dict) -> dict:
     from libcosimpy.CosimObserver import CosimObserver
 
     log_output_level(CosimLogLevel.WARNING)
-    start = time.perf_counter()
     execution = CosimExecution.from_ssp_file(job["ssp"])
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer)
@@ -67,7 +64,7 @@ def _simulate(job: dict) -> dict:
             )
         if now >= job["stop_time"] - 1e-9:
             break
-    return {"seconds": time.perf_counter() - start, "values": values}
+    return {"values": values}
 
 
 def main(argv=None) -> None:

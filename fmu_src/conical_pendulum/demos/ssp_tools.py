@@ -42,7 +42,7 @@ class ToolRun:
     tool: str
     scheme: str
     values: dict  # {"time": array, variable: array}, empty when refused
-    seconds: float  # wall time from loading the package to its last step (ecos: the whole process)
+    seconds: float  # wall time of the call that runs it: a process for ecospy, ecos and libcosim
     warnings: list[str] = field(default_factory=list)  # what the tool printed as warnings or errors
     refused: str | None = None  # why the tool could not run it
     ended: str | None = None  # why the run stopped early (ecospy: the cart beyond coupled.DIVERGED)
@@ -110,7 +110,7 @@ def run_ecos(package: Path, scheme: str, work: Path) -> ToolRun:
         )
     home = work / f"ecos-{scheme}"
     folder = ssp.variant(package, scheme, home / "package")
-    (home / "lib").mkdir()
+    (home / "lib").mkdir(exist_ok=True)
     engine = home / "ecos"
     shutil.copy2(ecos_binary(), engine)
     engine.chmod(0o755)
@@ -156,14 +156,12 @@ def run_libcosim(package: Path, scheme: str, work: Path) -> ToolRun:
             with zipfile.ZipFile(package) as archive:
                 archive.extractall(folder)
         source = folder / ssp.VARIANTS[scheme]
-    child = isolated.call(
-        libcosim_run.MODULE,
-        {"ssp": str(source), "stop_time": stop_time, "record": EXCHANGED},
-        1800.0,
-        "libcosim",
-    )
+    start = time.perf_counter()
+    job = {"ssp": str(source), "stop_time": stop_time, "record": EXCHANGED}
+    child = isolated.call(libcosim_run.MODULE, job, 1800.0, "libcosim")
     run = isolated.answer(child, "libcosim")
-    return ToolRun("libcosim", scheme, _short(run["values"], "::"), run["seconds"], _warnings(child.stderr))
+    seconds = time.perf_counter() - start
+    return ToolRun("libcosim", scheme, _short(run["values"], "::"), seconds, _warnings(child.stderr))
 
 
 def run_fmpy(package: Path, scheme: str, work: Path) -> ToolRun:
@@ -199,8 +197,8 @@ RUNNERS = {"ecospy": run_ecospy, "ecos": run_ecos, "libcosim": run_libcosim, "fm
 
 
 def run(tool: str, package: Path, scheme: str, work: Path) -> ToolRun:
-    """The package's `scheme` variant in `tool` (one of TOOLS), with scratch files in `work`;
-    a run that the tool refused says why in `refused`."""
+    """The package's `scheme` variant in `tool` (one of TOOLS), with scratch files in `work`
+    (a folder for this package alone); a run that the tool refused says why in `refused`."""
     work = work.absolute()
     work.mkdir(parents=True, exist_ok=True)
     try:
