@@ -14,6 +14,7 @@ from scipy.linalg import expm
 
 from conical_pendulum.builder import cart, native
 from conical_pendulum.builder.compiler import CSRC
+from conical_pendulum.cli import main
 from conical_pendulum.demos.coupled import build_cart_fmu
 from conical_pendulum.demos.monolithic import cart_parameters
 from fmu_helpers import Instance
@@ -292,3 +293,12 @@ def test_directional_derivatives_are_exact(cart_fmu):
         for _, text in fmu.messages
     )
     fmu.close()
+
+
+def test_check_on_the_cart_says_it_is_no_pendulum(cart_fmu, capsys):
+    """The cart is built here too, but has no scene to check against: one line, no traceback."""
+    assert main(["check", str(cart_fmu)]) == 2
+    assert (
+        capsys.readouterr().err
+        == f"conical-pendulum check: {cart_fmu}: Cart is no pendulum: it has no scene\n"
+    )

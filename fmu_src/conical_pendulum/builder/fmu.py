@@ -205,4 +205,6 @@ def fmu_scene(path: Path | str) -> Scene:
             data = json.loads(archive.read(f"resources/{MODEL_FILE}"))
     except (OSError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: not an FMU built by conical_pendulum ({exc})") from None
+    if "scene" not in data:  # the coupled demo's cart: built here, but no pendulum
+        raise ValueError(f"{path}: {data.get('model', 'this FMU')} is no pendulum: it has no scene")
     return Scene.from_dict(data["scene"])
