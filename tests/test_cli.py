@@ -16,7 +16,7 @@ import pytest
 from conical_pendulum.cli import COMMANDS, main, run_command
 
 COMMAND = str(Path(sys.executable).with_name("conical-pendulum"))  # the installed console script
-NAMES = ["build", "check", "show", "page", "sweep", "demo"]
+NAMES = ["build", "check", "show", "page", "sweep", "demo", "system"]
 
 
 def cli(*args, cwd=None, timeout=300):
@@ -59,6 +59,7 @@ def test_python_m_runs_the_same_command():
         ("page", ["FMU", "--out", "--stop-time", "--start NAME=VALUE", "--serve", "--port"]),
         ("sweep", ["--grid", "--random", "--samples", "--workers", "--scheduler", "--out"]),
         ("demo", ["--out", "--steps", "--stop-time", "--cart-mass"]),
+        ("system", ["--out", "--cart-mass", "--step", "--stop-time", "--run", "SystemStructure.ssd"]),
     ],
 )
 def test_each_command_explains_its_options(name, options):
@@ -209,6 +210,19 @@ def test_page_serves_until_interrupted(seed_fmu, tmp_path):
         ),
         (["sweep", "FMU"], "conical-pendulum sweep: one of the arguments --grid --random is required"),
         (["demo", "--steps", "0.1,x"], "conical-pendulum demo: argument --steps: expected numbers"),
+        (
+            ["system", "--run", "ecos,omsimulator"],
+            "conical-pendulum system: argument --run: unknown tool(s) 'omsimulator'; "
+            "choose from ecospy, ecos, libcosim, fmpy or all",
+        ),
+        (
+            ["system", "--step", "0.3", "--stop-time", "1"],
+            "conical-pendulum system: --step: 0.3 must be positive, divide --stop-time 1",
+        ),
+        (
+            ["system", "--cart-mass", "5,-1"],
+            "conical-pendulum system: --cart-mass: must be a positive number",
+        ),
         (["build", "--links", "0"], "conical-pendulum build: links: 0 is out of range"),
     ],
 )
@@ -293,6 +307,18 @@ def test_demo_without_tbb_says_what_to_install(monkeypatch, capsys, tmp_path):
     monkeypatch.setattr(ecospy_run, "TBB", str(tmp_path / "libtbb.so.12"))
     status, _, err = run_main(capsys, "demo", "--out", tmp_path / "out")
     assert status == 2 and one_line(err, "demo") == 'needs tbb: pip install -e ".[cosim]"'
+    assert not list(tmp_path.iterdir())
+
+
+def test_system_without_libcosimpy_says_what_to_install_before_building(monkeypatch, capsys, tmp_path):
+    from conical_pendulum.demos import libcosim_run
+
+    monkeypatch.setattr(libcosim_run, "missing", lambda: "libcosimpy")
+    status, _, err = run_main(capsys, "system", "--out", tmp_path / "out", "--run", "ecos,libcosim")
+    assert (
+        status == 2
+        and one_line(err, "system") == '--run libcosim: needs libcosimpy: pip install -e ".[cosim]"'
+    )
     assert not list(tmp_path.iterdir())
 
 
@@ -388,6 +414,7 @@ def test_a_bad_or_unreadable_file_is_one_line(capsys, tmp_path, name, args, suff
         ("page", ["FMU", "--out", "FILE"], "--out FILE: not a directory"),
         ("sweep", ["FMU", "--grid", "l0=5,6", "--out", "FOLDER"], "out: FOLDER is a directory"),
         ("demo", ["--out", "FILE"], "--out FILE: not a directory"),
+        ("system", ["--out", "FILE"], "--out FILE: not a directory"),
     ],
 )
 def test_an_output_where_a_file_or_folder_cannot_be_is_one_line(
@@ -424,6 +451,7 @@ WORK = {  # what each command spends its time in, and a command line that gets t
         ["FMU", "--grid", "l0=5,6", "--out", "OUT/s.parquet"],
     ),
     "demo": ("conical_pendulum.builder.fmu", "build_fmu", ["--out", "OUT"]),
+    "system": ("conical_pendulum.builder.fmu", "build_fmu", ["--out", "OUT"]),
 }
 
 

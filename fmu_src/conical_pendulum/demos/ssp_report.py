@@ -92,7 +92,17 @@ def compare(
     return results, agreement
 
 
-HEADER = ["tool", "scheme", "cart_mass_kg", "step_s", "cart_error_m", "angle_error_rad", "seconds", "note"]
+HEADER = [
+    "tool",
+    "scheme",
+    "cart_mass_kg",
+    "step_s",
+    "cart_error_m",
+    "angle_error_rad",
+    "diverged",
+    "seconds",
+    "note",
+]
 
 
 def write(results: list[ToolResult], out: Path) -> list[list[str]]:
@@ -108,6 +118,7 @@ def write(results: list[ToolResult], out: Path) -> list[list[str]]:
                 f"{r.step:g}",
                 f"{r.error.cart_error:.3e}" if r.error else "",
                 f"{r.error.angle_error:.3e}" if r.error else "",
+                str(r.error.diverged).lower() if r.error else "",
                 f"{r.run.seconds:.3f}",
                 note.replace("\n", " ")[:300],
             ]
@@ -178,9 +189,9 @@ def draw_system(path: Path) -> None:
         "p": "ConicalPendulum.fmu (p)\n3-link chain, native FMI 2.0",
         "cart": "Cart.fmu (cart)\nmass, spring, damper",
     }
-    fig, axes = plt.subplots(1, len(coupled.SCHEMES), figsize=(6.2 * len(coupled.SCHEMES), 3.4))
+    fig, axes = plt.subplots(1, len(coupled.SCHEMES), figsize=(6.2 * len(coupled.SCHEMES), 2.6))
     for ax, (scheme, (connections, settings)) in zip(axes, coupled.SCHEMES.items()):
-        ax.set(xlim=(0, 10), ylim=(0, 6), title=f"{ssp.VARIANTS[scheme]}: {scheme}")
+        ax.set(xlim=(0, 10), ylim=(1.2, 4.8), title=f"{ssp.VARIANTS[scheme]}: {scheme}")
         ax.axis("off")
         boxes = {"cart": (0.3, 1.5), "p": (6.2, 1.5)}
         for instance, (x, y) in boxes.items():
@@ -191,7 +202,9 @@ def draw_system(path: Path) -> None:
         ax.text(
             2.05,
             2.0,
-            ", ".join(f"{k} = {v}" for k, v in settings.items()) + f"\n(resources/{scheme}.ssv)",
+            "m_cart, k_cart, c_cart, "
+            + ", ".join(f"{k} = {v}" for k, v in settings.items())
+            + f"\n(resources/{scheme}.ssv)",
             ha="center",
             va="center",
             fontsize=7.5,

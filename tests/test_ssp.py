@@ -1,0 +1,189 @@
+"""The coupled demo as an SSP 1.0 package (demos/ssp.py) and its runs in the tools that read
+SSP (demos/ssp_tools.py): ecospy, ecos' command line, libcosim, FMPy's simulate_ssp."""
+
+import math
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy.ssp.ssd import read_ssd, read_ssv
+from lxml import etree
+
+from conical_pendulum.builder.fmu import build_fmu
+from conical_pendulum.demos import coupled, ecospy_run, libcosim_run, ssp, ssp_tools
+from conical_pendulum.demos.monolithic import cart_parameters
+from fmu_helpers import Instance
+from required_tools import require_tool
+
+STEP, STOP_TIME, CART_MASS = 0.01, 0.1, 5.0  # 10 steps: the fewest ecos' command line takes
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("ssp_fmus")
+    pendulum = build_fmu(coupled.SCENE, folder / "ConicalPendulum.fmu", backend="native").path
+    return pendulum, coupled.build_cart_fmu(folder / "Cart.fmu")
+
+
+@pytest.fixture(scope="module")
+def package(fmus, tmp_path_factory):
+    """A light cart (5 kg, not the FMU's 100 kg start), so a run shows its parameters applied."""
+    path = tmp_path_factory.mktemp("ssp") / "PendulumOnCart.ssp"
+    return ssp.write_package(path, *fmus, cart_mass=CART_MASS, step=STEP, stop_time=STOP_TIME)
+
+
+@pytest.fixture(scope="module")
+def ecospy_runs(package, tmp_path_factory):
+    require_tool("ecospy", lambda: ssp_tools.missing("ecospy") is None, 'pip install -e ".[cosim]"')
+    work = tmp_path_factory.mktemp("ecospy")
+    return {scheme: ssp_tools.run("ecospy", package, scheme, work) for scheme in ssp.VARIANTS}
+
+
+def test_the_package_is_valid_ssp_with_units_parameters_and_the_step(package):
+    assert ssp.validate(package) == []
+    with zipfile.ZipFile(package) as archive:
+        assert sorted(archive.namelist()) == sorted(
+            ["SystemStructure.ssd", "ApparentMass.ssd", *ssp.FMUS.values()]
+            + [ssp.parameter_file(scheme) for scheme in ssp.VARIANTS]
+        )
+        for scheme, name in ssp.VARIANTS.items():
+            root = etree.fromstring(archive.read(name))
+            connections = [
+                [
+                    f"{c.get('startElement')}::{c.get('startConnector')}",
+                    f"{c.get('endElement')}::{c.get('endConnector')}",
+                ]
+                for c in root.iterfind(".//ssd:Connection", ssp.NS)
+            ]
+            assert connections == coupled.SCHEMES[scheme][0]
+            (x,) = root.xpath(
+                ".//ssd:Component[@name='cart']/ssd:Connectors/ssd:Connector[@name='x']", namespaces=ssp.NS
+            )
+            assert x.get("kind") == "output" and x.find("ssc:Real", ssp.NS).get("unit") == "m"
+            (newton,) = root.xpath("ssd:Units/ssc:Unit[@name='N']/ssc:BaseUnit", namespaces=ssp.NS)
+            assert dict(newton.attrib) == {"kg": "1", "m": "1", "s": "-2"}
+            (binding,) = root.xpath(".//ssd:ParameterBinding/@source", namespaces=ssp.NS)
+            assert binding == ssp.parameter_file(scheme)
+    assert ssp.experiment(package) == (STEP, STOP_TIME)
+    assert read_ssd(str(package)).system.name == ssp.SYSTEM  # FMPy reads (and validates) it too
+    for scheme in ssp.VARIANTS:
+        values = {
+            p.name: p.value for p in read_ssv(str(package), resource=ssp.parameter_file(scheme)).parameters
+        }
+        expected = {**cart_parameters(m_cart=CART_MASS), **coupled.SCHEMES[scheme][1]}
+        assert {name: float(value) for name, value in values.items()} == expected
+
+
+def test_no_input_is_left_unconnected(package):
+    """FMPy's simulate_ssp wires an unconnected input to the previous input's source."""
+    with zipfile.ZipFile(package) as archive:
+        for name in ssp.VARIANTS.values():
+            root = etree.fromstring(archive.read(name))
+            inputs = {
+                f"{c.getparent().getparent().get('name')}::{c.get('name')}"
+                for c in root.iterfind(".//ssd:Connector[@kind='input']", ssp.NS)
+            }
+            ends = {
+                f"{c.get('endElement')}::{c.get('endConnector')}"
+                for c in root.iterfind(".//ssd:Connection", ssp.NS)
+            }
+            assert inputs == ends
+
+
+def test_a_package_against_the_schema_is_named_line_by_line(package, tmp_path):
+    broken = tmp_path / "broken.ssp"
+    with zipfile.ZipFile(package) as source, zipfile.ZipFile(broken, "w") as target:
+        for item in source.infolist():
+            data = source.read(item)
+            if item.filename == "SystemStructure.ssd":
+                data = data.replace(b' version="1.0"', b"", 1)
+            if item.filename != ssp.FMUS["cart"]:
+                target.writestr(item, data)
+    problems = ssp.validate(broken)
+    assert any(p.startswith("SystemStructure.ssd:") and "'version' is required" in p for p in problems), (
+        problems
+    )
+    assert f"SystemStructure.ssd: names {ssp.FMUS['cart']}, which the package lacks" in problems
+
+
+def test_ecospy_runs_the_package_as_todays_demo(fmus, ecospy_runs):
+    """ecos from the package is the demo's own master wiring the same FMUs in Python: the same numbers."""
+    for scheme, run in ecospy_runs.items():
+        assert run.refused is None and run.warnings == []
+        demo = coupled.cosimulate(*fmus, [STEP], STOP_TIME, cart_parameters(m_cart=CART_MASS), scheme)[STEP]
+        assert len(run.values["time"]) == round(STOP_TIME / STEP) + 1
+        for name, values in run.values.items():
+            np.testing.assert_array_equal(values, demo[name], err_msg=f"{scheme}: {name}")
+
+
+def test_ecos_command_line_runs_it_with_a_clean_environment(package, ecospy_runs, tmp_path):
+    """Only LD_LIBRARY_PATH, to a folder with ecos' libtbb: no Python. Its CSV has six decimals."""
+    require_tool("ecos", lambda: ssp_tools.missing("ecos") is None, 'pip install -e ".[cosim]"')
+    for scheme, library in ecospy_runs.items():
+        run = ssp_tools.run("ecos", package, scheme, tmp_path)
+        assert run.refused is None, run.refused
+        times = run.values["time"]
+        np.testing.assert_allclose(times, library.values["time"][: len(times)], rtol=0, atol=1e-12)
+        assert len(times) >= round(STOP_TIME / STEP)  # its last row may be the step before the end
+        for name, values in run.values.items():
+            np.testing.assert_allclose(
+                values, library.values[name][: len(times)], rtol=0, atol=5.1e-7, err_msg=f"{scheme}: {name}"
+            )
+
+
+def test_ecos_command_line_refuses_fewer_than_ten_steps(fmus, tmp_path):
+    short = ssp.write_package(tmp_path / "short.ssp", *fmus, step=0.01, stop_time=0.05)
+    run = ssp_tools.run("ecos", short, "explicit", tmp_path / "work")
+    assert run.values == {} and "fewer than 10 steps" in run.refused and "SIGFPE" in run.refused
+
+
+def test_libcosim_takes_the_step_from_the_annotation_and_follows_ecos(package, ecospy_runs, tmp_path):
+    """The same Jacobi step as ecos: without an algebraic loop (apparent-mass) the same numbers."""
+    require_tool("libcosim", lambda: ssp_tools.missing("libcosim") is None, 'pip install -e ".[cosim]"')
+    runs = {scheme: ssp_tools.run("libcosim", package, scheme, tmp_path) for scheme in ssp.VARIANTS}
+    for run in runs.values():
+        assert run.refused is None and run.warnings == [], (run.refused, run.warnings)
+        np.testing.assert_allclose(run.values["time"], STEP * np.arange(1, 11), rtol=0, atol=1e-12)
+    ecos = ecospy_runs["apparent-mass"].values
+    for name in ["x", "v", *coupled.SCENE.state_names()]:
+        np.testing.assert_allclose(runs["apparent-mass"].values[name], ecos[name][1:], rtol=0, atol=1e-14)
+
+
+def test_the_explicit_loop_is_initialised_by_two_jacobi_sweeps_in_ecos_and_three_in_libcosim(
+    fmus, package, tmp_path
+):
+    """cart.a and p.F_pivot_x answer each other at once (explicit scheme): both masters
+    iterate that loop while initialising, from the inputs' starts (0), and step 1 holds the
+    force they stopped at: ecos two sweeps, libcosim three; the consistent force is neither."""
+    require_tool("libcosim", lambda: ssp_tools.missing("libcosim") is None, 'pip install -e ".[cosim]"')
+    pendulum = Instance(fmus[0])
+    free, apparent = pendulum.get("F_free_x", "M_pivot_xx")
+    pendulum.close()
+    m, k, _ = cart_parameters(m_cart=CART_MASS).values()
+    a, force, sweeps = 0.0, 0.0, []
+    for _ in range(3):  # Jacobi: each side answers the other's last value
+        a, force = (force - k * 1.0) / m, free - apparent * a  # the cart starts at x = 1, v = 0
+        sweeps.append(force)
+    folder = ssp.variant(package, "explicit", tmp_path / "explicit")
+    job = {"ssp": str(folder), "parameter_set": "explicit", "steps": [STEP], "stop_time": STEP}
+    (ecos,) = ecospy_run.cosimulate({**job, "record": ["cart::F_x"]})
+    libcosim = libcosim_run.simulate({"ssp": str(package), "stop_time": STEP, "record": ["cart::F_x"]})
+    assert ecos["values"]["cart::F_x"][0] == pytest.approx(sweeps[1], abs=1e-12)  # set for step 1
+    assert libcosim["values"]["cart::F_x"][0] == pytest.approx(sweeps[2], abs=1e-12)  # held in step 1
+    consistent = free - apparent * (free - k) / (m + apparent)
+    assert abs(sweeps[1] - consistent) > 1.0 and abs(sweeps[2] - consistent) > 0.1
+
+
+def test_fmpy_runs_it_with_its_own_master(package, ecospy_runs, tmp_path):
+    """simulate_ssp starts every connector at 0: its first step has F_x = M_x = 0 at the cart,
+    which then moves as alone with its parameters applied (5 kg); then the same Jacobi step."""
+    for scheme in ssp.VARIANTS:
+        run = ssp_tools.run("fmpy", package, scheme, tmp_path)
+        assert run.refused is None
+        np.testing.assert_allclose(run.values["time"], STEP * np.arange(1, 11), rtol=0, atol=1e-12)
+        m, k, c = cart_parameters(m_cart=CART_MASS).values()
+        damping = c / (2 * m)
+        rate = math.sqrt(k / m - damping**2)
+        alone = math.exp(-damping * STEP) * (math.cos(rate * STEP) + damping / rate * math.sin(rate * STEP))
+        assert run.values["x"][0] == pytest.approx(alone, abs=1e-13)
+        assert run.values["x"][0] != pytest.approx(ecospy_runs[scheme].values["x"][1], abs=1e-6)
