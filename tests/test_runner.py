@@ -81,12 +81,14 @@ def loaded():
 
 
 def outcome(fmu: LoadedFmu, *args):
-    """(rows, None, messages) or (None, the exception's text, messages) of one simulate()."""
+    """(rows, None, messages) or (the rows the exception kept or None, the exception's text as
+    fmpy's, messages) of one simulate()."""
     fmu.messages = []
     try:
         return fmu.simulate(*args), None, fmu.messages
     except Exception as exc:
-        return None, f"{type(exc).__name__}: {exc}", fmu.messages
+        kind = "FMICallException" if isinstance(exc, FMICallException) else type(exc).__name__
+        return getattr(exc, "rows", None), f"{kind}: {exc}", fmu.messages
 
 
 def assert_same_rows(got, expected):
@@ -116,7 +118,8 @@ def test_our_fmus_bit_for_bit(backend, seed_fmu, native_seed_fmu, loaded):
 @pytest.mark.parametrize("backend", ["pythonfmu", "native"])
 def test_a_discarded_step_stops_where_fmpy_stops(backend, seed_fmu, native_seed_fmu, loaded):
     """pythonfmu's FMU says it terminated: fmpy records the last good point again and stops.
-    The native FMU says it did not: fmpy steps again, and the FMU refuses (fmi2Error)."""
+    The native FMU says it did not: fmpy steps again, the FMU refuses (fmi2Error) and fmpy
+    raises; the runner raises the same, with the rows before the failure."""
     path = seed_fmu if backend == "pythonfmu" else native_seed_fmu
     start_values = {"alpha0": 1.2, "delta2": 3.0, "max_steps": 25}  # fails from 1.5 s by 0.5 s
     got, got_error, got_messages = outcome(loaded(path, "runner"), start_values, 10.0, 0.5, ["energy"])
@@ -127,7 +130,9 @@ def test_a_discarded_step_stops_where_fmpy_stops(backend, seed_fmu, native_seed_
         assert_same_rows(got, expected)
         assert list(got["time"]) == [0.0, 0.5, 1.0, 1.5, 1.5]
     else:
-        assert got is None and error == "FMICallException: fmi2DoStep failed with status 3 (error)."
+        assert error == "FMICallException: fmi2DoStep failed with status 3 (error)." and expected is None
+        assert list(got["time"]) == [0.0, 0.5, 1.0, 1.5, 1.5]  # the discard's repeat, as fmpy records it
+        assert np.isfinite(got["energy"]).all()
 
 
 @pytest.mark.parametrize("variable_steps", [True, False])
@@ -173,9 +178,14 @@ def test_another_shape_bit_for_bit(shapes_fmu, loaded, variable_steps, start_val
 )
 def test_refusals_raise_as_fmpy_raises(shapes_fmu, loaded, start_values, error, messages):
     args = (start_values, 1.0, 0.1, ["x", "count"])
-    got = outcome(loaded(shapes_fmu[True], "runner"), *args)
-    assert got == outcome(loaded(shapes_fmu[True], "fmpy"), *args)
-    assert got == (None, error, messages)
+    kept, *got = outcome(loaded(shapes_fmu[True], "runner"), *args)
+    assert outcome(loaded(shapes_fmu[True], "fmpy"), *args) == (None, *got)
+    assert got == [error, messages]
+    # a failed step: the runner also keeps the rows before it; a refused start value has none
+    if "fail_at" in start_values:
+        assert list(kept["time"]) == [0.0, 0.1, 0.2]
+    else:
+        assert kept is None
 
 
 def test_a_failing_get_raises_with_its_function(shapes_fmu, loaded, monkeypatch):
@@ -201,10 +211,13 @@ def test_the_sweep_reports_failures_alike_by_either_loop(shapes_fmu, loaded):
             ]
             for loop in LOOPS
         }
-        for (rows, ok, message), (fmpy_rows, fmpy_ok, fmpy_message) in zip(*results.values()):
+        for run, (rows, ok, message), (fmpy_rows, fmpy_ok, fmpy_message) in zip(runs, *results.values()):
             assert (ok, message) == (fmpy_ok, fmpy_message)
-            assert (rows is None) == (fmpy_rows is None)
-            if rows is not None:
+            if run.get("mode") == 3:  # a step refused (fmi2Error): fmpy's loop keeps no rows
+                assert fmpy_rows is None and list(rows["time"]) == [0.0, 0.1, 0.2]
+            elif rows is None:
+                assert fmpy_rows is None
+            else:
                 assert_same_rows(rows, fmpy_rows)
         oks = [ok for _, ok, _ in results["runner"]]
         messages = [message for _, _, message in results["runner"]]

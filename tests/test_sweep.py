@@ -101,9 +101,13 @@ def test_a_refused_value_fails_only_its_run(seed_fmu, cluster):
     assert ok.groupby("run")["time"].max().eq(2.0).all() and not ok["energy"].isna().any()
 
 
-def test_a_discarded_step_fails_the_run_with_the_rows_before(seed_fmu, cluster):
+@pytest.mark.parametrize("backend", ["pythonfmu", "native"])
+def test_a_discarded_step_fails_the_run_with_the_rows_before(backend, seed_fmu, native_seed_fmu, cluster):
+    """The native FMU's discard ends in fmi2Error at the next step (fmpy's loop keeps no rows
+    then); the compiled runner keeps the rows before it, as pythonfmu's terminated run has."""
+    fmu = seed_fmu if backend == "pythonfmu" else native_seed_fmu
     runs = [{"alpha0": 1.2, "delta2": 3.0}, DISCARDED_AT_1_5]
-    results = sweep(seed_fmu, runs, output_interval=0.5, scheduler=cluster.scheduler_address, progress=False)
+    results = sweep(fmu, runs, output_interval=0.5, scheduler=cluster.scheduler_address, progress=False)
     assert list(by_run(results)["status"]) == ["ok", "failed"]
     failed = results[results["run"] == 1]
     assert list(failed["time"]) == [0.0, 0.5, 1.0, 1.5]  # fmpy's repeat of the last good point dropped

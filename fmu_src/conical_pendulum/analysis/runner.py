@@ -59,6 +59,15 @@ ROW_VALUES = {
 }
 
 
+class RunFailed(FMICallException):
+    """fmpy's FMICallException for a call of the loop that failed, with the rows recorded
+    before it: fmpy's loop loses them, a sweep keeps them."""
+
+    def __init__(self, function: str, status: int, rows: np.ndarray):
+        super().__init__(function=function, status=status)
+        self.rows = rows
+
+
 class _Run(ctypes.Structure):
     """runner.c's Run."""
 
@@ -187,7 +196,8 @@ class Runner:
 
     def simulate(self, stop_time: float, output_interval: float, start_values=None) -> np.ndarray:
         """fmpy.simulate_fmu(..., fmu_instance=slave) on the instantiated slave: its rows, or
-        fmpy's exceptions (FMICallException with the function and status) where it raises."""
+        fmpy's exceptions where it raises (a failed call of the loop: RunFailed, with the rows
+        before it)."""
         slave, start_time, stop_time = self.slave, self.start_time, float(stop_time)
         slave.setupExperiment(tolerance=self.tolerance, startTime=start_time, stopTime=stop_time)
         left = apply_start_values(slave, self.md, start_values or {}, settable=settable_in_instantiated)
@@ -211,6 +221,6 @@ class Runner:
                 break
             rows = np.concatenate([rows, np.empty(len(rows), dtype=self.dtype)])
         if outcome == RUN_FAILED:
-            raise FMICallException(function=LOOP_FUNCTIONS[run.failedFunction], status=run.failedStatus)
+            raise RunFailed(LOOP_FUNCTIONS[run.failedFunction], run.failedStatus, rows[: run.nRows].copy())
         slave.terminate()
         return rows[: run.nRows]

@@ -137,10 +137,15 @@ class LoadedFmu:
         """(rows as fmpy records them or None, ok, message), with the FMU's messages."""
         with self._lock:
             self.messages = problems = []  # this run's, also once the next has begun
+            failure = None
             try:
                 rows = self.simulate(start_values, stop_time, output_interval, outputs)
             except Exception as exc:
-                return None, False, "; ".join([*problems, str(exc)])
+                # the compiled runner keeps the rows before a failed call (runner.RunFailed)
+                rows, failure = getattr(exc, "rows", None), str(exc)
+                problems.append(failure)
+        if rows is None or len(rows) == 0:
+            return None, False, "; ".join(problems)
         # after a discarded step fmpy samples the last good point a second time
         rows = rows[np.r_[True, np.diff(rows["time"]) > 0]]
         end = rows["time"][-1]
@@ -150,7 +155,7 @@ class LoadedFmu:
         not_finite = [name for name in outputs if not np.isfinite(rows[name]).all()]
         if not_finite:
             problems.append(f"non-finite values in {', '.join(not_finite)}")
-        return rows, not (stopped_early or not_finite), "; ".join(problems)
+        return rows, not (failure or stopped_early or not_finite), "; ".join(problems)
 
     def close(self):
         self.slave.freeLibrary()
