@@ -147,7 +147,9 @@ class LoadedFmu:
         if rows is None or len(rows) == 0:
             return None, False, "; ".join(problems)
         # after a discarded step fmpy samples the last good point a second time
-        rows = rows[np.r_[True, np.diff(rows["time"]) > 0]]
+        later = np.diff(rows["time"]) > 0
+        if not later.all():
+            rows = rows[np.r_[True, later]]
         end = rows["time"][-1]
         stopped_early = end < stop_time and not math.isclose(end, stop_time)
         if stopped_early and not problems:
@@ -179,23 +181,47 @@ class _FmuPlugin(WorkerPlugin):
 def _run_batch(
     plugin: str, batch: list[tuple[int, dict]], stop_time: float, output_interval: float, outputs: list[str]
 ):
-    """On a worker: the batch's runs, as one long frame (run, status, message, time, outputs),
-    made in one go from the runs' columns: a DataFrame per run would cost more than a run."""
+    """On a worker: the batch's runs as ([(run, ok, message, rows kept)], their rows in one
+    record array or None). One buffer crosses to the client: a frame of the rows, with a
+    message per row, cost more to build and send than the runs themselves."""
     fmu = get_worker().plugins[plugin].fmu
-    done = [fmu.run(start_values, stop_time, output_interval, outputs) for _, start_values in batch]
-    lengths = [1 if rows is None else len(rows) for rows, _, _ in done]  # a failed run: one row of NaN
+    done = [
+        (index, *fmu.run(start_values, stop_time, output_interval, outputs)) for index, start_values in batch
+    ]
+    kept = [rows for _, rows, _, _ in done if rows is not None]
+    summary = [(index, ok, message, 0 if rows is None else len(rows)) for index, rows, ok, message in done]
+    return summary, np.concatenate(kept) if kept else None
+
+
+def _table(batches: list, inputs: pd.DataFrame, outputs: list[str]) -> pd.DataFrame:
+    """The sweep's long table from its batches: each column copied once; a run that kept no
+    rows gets one row of NaN."""
+    batches = sorted(batches, key=lambda batch: batch[0][0][0])
+    index, ok, message, kept = zip(*(run for summary, _ in batches for run in summary))
+    kept = np.array(kept)
+    lengths = np.maximum(kept, 1)
 
     def repeated(values):
         return np.repeat(np.array(values, dtype=object), lengths)
 
-    frame = {
-        "run": np.repeat([index for index, _ in batch], lengths),
-        "status": repeated(["ok" if ok else "failed" for _, ok, _ in done]),
-        "message": repeated([message for _, _, message in done]),
+    run = np.repeat(np.array(index), lengths)
+    columns = {
+        "run": run,
+        **{name: inputs[name].to_numpy()[run] for name in inputs.columns},
+        "status": repeated(["ok" if good else "failed" for good in ok]),
+        "message": repeated(message),
     }
+    blocks = [rows for _, rows in batches if rows is not None]
+    rows = np.concatenate(blocks) if blocks else None
+    has_rows = np.repeat(kept > 0, lengths)
     for name in ["time", *outputs]:
-        frame[name] = np.concatenate([[math.nan] if rows is None else rows[name] for rows, _, _ in done])
-    return pd.DataFrame(frame)
+        if has_rows.all():
+            columns[name] = np.ascontiguousarray(rows[name])
+        else:
+            columns[name] = np.full(len(run), math.nan)
+            if rows is not None:
+                columns[name][has_rows] = rows[name]
+    return pd.DataFrame(columns, copy=False)
 
 
 def _check_runs(md, runs: Iterable[Mapping]) -> list[dict]:
@@ -346,7 +372,7 @@ def sweep(
     if out is not None and Path(out).is_dir():
         raise ValueError(f"out: {out} is a directory; give a file name")
     inputs = _inputs(md, runs)
-    start, frames, done, failed = time.perf_counter(), [], 0, 0
+    start, batches, done, failed = time.perf_counter(), [], 0, 0
     with _client(scheduler, n_workers, timeout) as client:
         plugin = f"conical-pendulum-sweep-{uuid.uuid4().hex}"
         client.register_plugin(_FmuPlugin(data, loop), name=plugin)
@@ -374,22 +400,15 @@ def sweep(
             if progress:
                 _show_progress(0, len(runs), 0, start)
             for future in as_completed(futures):
-                frame = future.result()
-                frames.append(frame)
-                done += frame["run"].nunique()
-                failed += frame.loc[frame["status"] == "failed", "run"].nunique()
+                summary, rows = future.result()
+                batches.append((summary, rows))
+                done += len(summary)
+                failed += sum(not ok for _, ok, _, _ in summary)
                 if progress:
                     _show_progress(done, len(runs), failed, start)
         finally:
             client.unregister_worker_plugin(plugin)
-    frames.sort(key=lambda frame: frame["run"].iat[0])
-    # one copy of each column into the result (concatenating frames and then joining the
-    # inputs copied all of it three times, a third of a sweep's time with every output)
-    run = np.concatenate([frame["run"].to_numpy() for frame in frames])
-    columns = {"run": run, **{name: inputs[name].to_numpy()[run] for name in inputs.columns}}
-    for name in frames[0].columns.drop("run"):
-        columns[name] = np.concatenate([frame[name].to_numpy() for frame in frames])
-    results = pd.DataFrame(columns, copy=False)
+    results = _table(batches, inputs, outputs)
     results.attrs = {
         "fmu": md.modelName,
         "fmu_guid": md.guid,
