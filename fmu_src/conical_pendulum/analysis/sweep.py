@@ -10,8 +10,8 @@ to rely on, and runs it with the communication loop in C (analysis.runner; fmpy'
 loop with loop="fmpy", or where the runner cannot be compiled: the same rows). Runs
 travel in batches, several to a task, so that Dask's cost per task stays small next to
 a run's few milliseconds. A run fails, keeping the rows it produced and the
-FMU's message, when a value is refused (fmi2Fatal), a step is discarded (fmpy then
-stops quietly, short of the stop time) or an output is not finite.
+FMU's message, when a value is refused (fmi2Fatal), a step is discarded (the rows up
+to the last good point) or an output is not finite.
 """
 
 from __future__ import annotations
