@@ -1,8 +1,10 @@
-"""What more than one command needs: positive numbers, the scene an FMU was built from,
-and the report of an FMU run against the native reference (build and check)."""
+"""What more than one command needs: positive numbers, lists of steps and cart masses and
+an output folder (demo and system), the scene an FMU was built from, and the report of an
+FMU run against the native reference (build and check)."""
 
 from __future__ import annotations
 
+import argparse
 import time
 from pathlib import Path
 
@@ -17,6 +19,45 @@ def positive(option: str, value: float) -> float:
     if not (value > 0 and value != float("inf")):
         raise UserError(f"{option}: must be a positive number, got {value:g}")
     return value
+
+
+def numbers(text: str) -> list[float]:
+    try:
+        return sorted({float(s) for s in text.split(",")})
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
+
+
+def check_steps(option: str, steps: list[float], stop_time: float) -> None:
+    """Communication steps (sorted) that each divide the stop time and are multiples of the
+    smallest, so every run's points lie on the finest one's."""
+    for dt in steps:
+        if not (
+            dt > 0
+            and abs(stop_time / dt - round(stop_time / dt)) < 1e-9
+            and abs(dt / steps[0] - round(dt / steps[0])) < 1e-9
+        ):
+            raise UserError(
+                f"{option}: {dt:g} must be positive, divide --stop-time {stop_time:g} "
+                f"and be a multiple of the smallest step {steps[0]:g}"
+            )
+
+
+def check_cart_masses(masses: list[float]) -> None:
+    for mass in masses:
+        if not (mass > 0 and mass != float("inf")):
+            raise UserError(f"--cart-mass: must be a positive number of kg, got {mass!r}")
+
+
+def output_folder(out: Path) -> Path:
+    """The folder `out`, made if needed; UserError when it cannot be."""
+    if out.exists() and not out.is_dir():
+        raise UserError(f"--out {out}: not a directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:  # a file above the folder, or no permission
+        raise UserError(f"--out {out}: {exc.strerror or exc}") from None
+    return out
 
 
 def fmu_scene(path: Path):

@@ -4,18 +4,11 @@ against one monolithic model (demos/coupled.py; the cosim extra)."""
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 from ..demos import coupled, ecospy_run
 from ..errors import UserError
-
-
-def numbers(text: str) -> list[float]:
-    try:
-        return sorted({float(s) for s in text.split(",")})
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
+from .common import check_cart_masses, check_steps, numbers, output_folder
 
 
 def schemes(text: str) -> list[str]:
@@ -76,31 +69,14 @@ def run(args) -> int:
     """Build both FMUs, co-simulate each scheme and cart mass at each step, compare with the
     monolithic model, write coupling_error.csv and coupling.png. 0; a UserError of status 1
     when ecospy failed, of status 2 for bad options or without the cosim extra."""
-    steps = args.steps
-    for dt in steps:
-        if not (
-            dt > 0
-            and abs(args.stop_time / dt - round(args.stop_time / dt)) < 1e-9
-            and abs(dt / steps[0] - round(dt / steps[0])) < 1e-9
-        ):
-            raise UserError(
-                f"--steps: {dt:g} must be positive, divide --stop-time {args.stop_time:g} "
-                f"and be a multiple of the smallest step {steps[0]:g}"
-            )
-    for mass in args.cart_mass:
-        if not (mass > 0 and math.isfinite(mass)):
-            raise UserError(f"--cart-mass: must be a positive number of kg, got {mass!r}")
+    check_steps("--steps", args.steps, args.stop_time)
+    check_cart_masses(args.cart_mass)
     lacking = ecospy_run.missing()
     if lacking:  # before the builds and the reference, which take a while
         raise UserError(f'needs {lacking}: pip install -e ".[cosim]"')
-    if args.out.exists() and not args.out.is_dir():
-        raise UserError(f"--out {args.out}: not a directory")
+    output_folder(args.out)
     try:
-        args.out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:  # a file above the folder, or no permission
-        raise UserError(f"--out {args.out}: {exc.strerror or exc}") from None
-    try:
-        errors = coupled.demo(args.out, steps, args.stop_time, args.cart_mass, args.scheme)
+        errors = coupled.demo(args.out, args.steps, args.stop_time, args.cart_mass, args.scheme)
     except RuntimeError as exc:
         raise UserError(str(exc), status=1) from None
     print("\n".join("\t".join(row) for row in coupled.write(errors, args.out)))

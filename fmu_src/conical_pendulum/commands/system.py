@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..demos import coupled, ssp, ssp_report, ssp_tools
 from ..errors import UserError
-from .demo import numbers
+from .common import check_cart_masses, check_steps, numbers, output_folder
 
 
 def tools(text: str) -> list[str]:
@@ -68,29 +68,13 @@ def run(args) -> int:
     them in each tool and write ssp_runs.csv and ssp_runs.png. 0; a UserError of status 2
     for bad options or a missing package, of status 1 when a tool ran and failed."""
     steps = args.step
-    for dt in steps:
-        if not (
-            dt > 0
-            and abs(args.stop_time / dt - round(args.stop_time / dt)) < 1e-9
-            and abs(dt / steps[0] - round(dt / steps[0])) < 1e-9
-        ):
-            raise UserError(
-                f"--step: {dt:g} must be positive, divide --stop-time {args.stop_time:g} "
-                f"and be a multiple of the smallest step {steps[0]:g}"
-            )
-    for mass in args.cart_mass:
-        if not (mass > 0 and mass != float("inf")):
-            raise UserError(f"--cart-mass: must be a positive number of kg, got {mass!r}")
+    check_steps("--step", steps, args.stop_time)
+    check_cart_masses(args.cart_mass)
     for tool in args.tools:
         lacking = ssp_tools.missing(tool)
         if lacking:  # before the builds, which take a while
             raise UserError(f'--run {tool}: needs {lacking}: pip install -e ".[cosim]"')
-    if args.out.exists() and not args.out.is_dir():
-        raise UserError(f"--out {args.out}: not a directory")
-    try:
-        args.out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise UserError(f"--out {args.out}: {exc.strerror or exc}") from None
+    output_folder(args.out)
     from ..builder.fmu import build_fmu
 
     pendulum = build_fmu(coupled.SCENE, args.out / "ConicalPendulum.fmu", backend="native").path
