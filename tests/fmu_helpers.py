@@ -1,13 +1,18 @@
-"""Driving an FMU through fmpy's low-level API, with its log messages collected."""
+"""Driving an FMU through fmpy's low-level API (FMI 2.0: Instance, FMI 3.0: Instance3), with its log
+messages collected."""
 
 from __future__ import annotations
 
+import json
 import shutil
+import zipfile
 
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi3 import FMU3Model, FMU3Slave
 
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
+from conical_pendulum.builder.fmi3 import element_names
 
 # Values every FMU of the package refuses, whatever its backend, with these words (runtime.rules).
 BAD_VALUES = [
@@ -78,3 +83,89 @@ class Instance:
             self.fmu.terminate()
         self.fmu.freeInstance()
         shutil.rmtree(self.unzipdir, ignore_errors=True)
+
+
+def fmi3_names(path):
+    """The FMI 2.0 scalars' names -> (the FMI 3.0 array, 0-based index), and the records
+    (the variables' description) from the FMU's model.json."""
+    with zipfile.ZipFile(path) as archive:
+        data = json.loads(archive.read("resources/model.json"))
+    return element_names(data), {v["name"]: v for v in data["variables"]}
+
+
+def fmi3_start_values(path, values):
+    """start values by FMI 2.0 scalar name -> fmpy's start values of the FMI 3.0 FMU (arrays whole)."""
+    elements, records = fmi3_names(path)
+    starts = {}
+    for name, value in values.items():
+        if name in elements:
+            array, k = elements[name]
+            members = sorted((i, n) for n, (a, i) in elements.items() if a == array)
+            current = starts.setdefault(array, [records[n]["start"] for _, n in members])
+            current[k] = value
+        else:
+            starts[name] = value
+    return starts
+
+
+class Instance3:
+    """One FMI 3.0 instance through fmpy's low-level API, read and set by the FMI 2.0 FMU's scalar
+    names (an element of an array through its array); `messages` collects (status, text)."""
+
+    def __init__(self, path, interface="CoSimulation", start_values=None, initialize=True, **options):
+        self.md = read_model_description(str(path))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.types = {v.name: v.type for v in self.md.modelVariables}
+        self.elements, self.records = fmi3_names(path)
+        self.path = path
+        self.unzipdir = extract(str(path))
+        self.messages = []
+
+        def log(environment, status, category, message):
+            self.messages.append((status, message.decode(errors="replace")))
+
+        self._log = log
+        cls = FMU3Slave if interface == "CoSimulation" else FMU3Model
+        self.fmu = cls(
+            guid=self.md.guid,
+            unzipDirectory=self.unzipdir,
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName="instance",
+        )
+        self.fmu.instantiate(loggingOn=True, logMessage=log, **options)
+        self.time = 0.0
+        self.set(start_values or {})
+        if initialize:
+            self.fmu.enterInitializationMode(startTime=0.0)
+            self.fmu.exitInitializationMode()
+
+    def set(self, values):
+        """Before initialization (an array is set whole, from its start values)."""
+        for name, value in fmi3_start_values(self.path, values).items():
+            if self.types[name] == "Int32":
+                self.fmu.setInt32([self.vr[name]], [int(value)])
+            else:
+                value = [float(x) for x in value] if isinstance(value, list) else [float(value)]
+                self.fmu.setFloat64([self.vr[name]], value)
+
+    def get(self, *names):
+        values = []
+        for name in names:
+            if name in self.elements:
+                array, k = self.elements[name]
+                n = int(self.fmu.getUInt64([self.vr["n_links"]])[0])
+                values.append(self.fmu.getFloat64([self.vr[array]], nValues=n)[k])
+            else:
+                values.append(self.fmu.getFloat64([self.vr[name]])[0])
+        return values
+
+    def step(self, dt):
+        result = self.fmu.doStep(currentCommunicationPoint=self.time, communicationStepSize=dt)
+        self.time += dt
+        return result
+
+    def texts(self, status=None):
+        return " ".join(t for s, t in self.messages if status is None or s == status)
+
+    def close(self):
+        self.fmu.freeInstance()
