@@ -474,7 +474,8 @@ def write_model_fmu(
     """The native FMU of any model behind fmu_model.h at `output` (moved into place only
     when complete): its sources (from runtime/csrc, or `generated` by name), fmu_config.h
     and the model description written from data's variables, a binary per platform, and
-    model.json in its resources."""
+    model.json in its resources. fmi_version=3 (a model with 3 in fmi_versions): fmi3_glue.c
+    with the model's fmi3_arrays.h, builder.fmi3's model description and buildDescription.xml."""
     from . import fmi3
 
     guid = guid_of(data, fmi_version, model)
@@ -494,13 +495,13 @@ def write_model_fmu(
             (Path(tmp) / platform).mkdir()
             libraries[platform] = compile_binary(sources, Path(tmp) / platform, platform, fmi_version, model)
         if fmi_version == 3:
-            (sources / "buildDescription.xml").write_bytes(fmi3.build_description(shipped))
+            (sources / "buildDescription.xml").write_bytes(fmi3.build_description(shipped, model.name))
         staged = Path(tmp) / "staged.fmu"
         with zipfile.ZipFile(staged, "w", zipfile.ZIP_DEFLATED) as archive:
             description = (
                 model_description(data, guid, model)
                 if fmi_version == 2
-                else fmi3.model_description(data, guid, LOG_CATEGORIES)
+                else fmi3.model_description(data, guid, LOG_CATEGORIES, model.name, model.step_size)
             )
             archive.writestr("modelDescription.xml", description)
             for platform, library in libraries.items():  # stored: hosts extract them at every run

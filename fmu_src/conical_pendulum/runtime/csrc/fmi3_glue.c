@@ -11,11 +11,12 @@
  * What this FMU does not have, as its model description says: no clocks and no events (no
  * event indicators, hasEventMode="false", providesEvaluateDiscreteStates="false"), no
  * Scheduled Execution, no configuration modes (no tunable structural parameters), variables of
- * the types Float64 and Int32 only (the others are refused) and the UInt64 structural parameter
- * n_links, the size of every per-link array (fmi3_arrays.h: an array's value reference stands
- * for the model's per-link scalars in link order), no output derivatives, no
- * intermediate update. Early return (fmi3DoStep's earlyReturn, lastSuccessfulTime) and the
- * adjoint derivative are marked EARLY RETURN and ADJOINT below.
+ * the types Float64 and Int32 only (the others are refused) and, for a model with arrays, the
+ * UInt64 structural parameter of their dimension (fmi3_arrays.h, generated for every model: an
+ * array's value reference stands for the model's scalars in order; a model without arrays has
+ * no structural parameter and no UInt64 variable), no output derivatives, no intermediate
+ * update. Early return (fmi3DoStep's earlyReturn, lastSuccessfulTime) and the adjoint
+ * derivative are marked EARLY RETURN and ADJOINT below.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -69,7 +70,7 @@ static const char *const state_names[] = {  /* by bit, as the standard names the
 #define STATES_fmi3Terminate                      STEP_MODE,                    (EVENT_MODE | CONTINUOUS_TIME)
 #define STATES_fmi3GetFloat64                     CS_VALUES,                    ME_VALUES
 #define STATES_fmi3GetInt32                       CS_VALUES,                    ME_VALUES
-#define STATES_fmi3GetN_links                     (CO_SIMULATION_STATES),       (MODEL_EXCHANGE_STATES)  /* a structural parameter: also before initialization */
+#define STATES_fmi3GetDimension                   (CO_SIMULATION_STATES),       (MODEL_EXCHANGE_STATES)  /* a structural parameter: also before initialization */
 #define STATES_fmi3GetOther                       CS_VALUES,                    ME_VALUES  /* Float32, Int8, ..., Binary */
 #define STATES_fmi3SetFloat64                     (BEFORE_INIT | STEP_MODE),    (BEFORE_INIT | EVENT_MODE | CONTINUOUS_TIME)
 #define STATES_fmi3SetInt32                       (BEFORE_INIT | STEP_MODE),    (BEFORE_INIT | EVENT_MODE)
@@ -131,10 +132,9 @@ typedef struct {
     double model[];               /* the model's data, in the instance's allocation */
 } Instance;
 
-/* FMI 3.0's independent variable, time, and the structural parameter n_links: their value
- * references follow every variable's (fmi3_arrays.h, builder/fmi3.py). */
+/* FMI 3.0's independent variable, time: its value reference follows every variable's
+ * (fmi3_arrays.h, builder/fmi3.py). */
 #define VR_TIME ((fmi3ValueReference)CP_VR_TIME)
-#define VR_N_LINKS ((fmi3ValueReference)CP_VR_N_LINKS)
 #define MAX_ELEMENTS 4096  /* of one call's expanded value references (directional derivatives) */
 
 #define ALL_CATEGORIES ((1u << CP_NLOG) - 1)
@@ -361,17 +361,19 @@ static int initialized(const Instance *inst)
 static size_t elements(fmi3ValueReference vr, const unsigned **members)
 {
     *members = NULL;
+#if CP_NARRAY  /* a model without arrays has no tables of them */
     for (int a = 0; a < CP_NARRAY; a++)
         if (cp_array_vr[a] == vr) {
             *members = cp_array_members[a];
-            return CP_N_LINKS;
+            return CP_DIMENSION;
         }
+#endif
     return vr < CP_VR_TIME && cp_array_hidden[vr] ? 0 : 1;
 }
 
 #define ELEMENT(vr, members, e) ((members) ? (members)[e] : (vr))
 
-/* How many values the value references stand for (an array: n_links), or refused: a value
+/* How many values the value references stand for (an array: its dimension), or refused: a value
  * reference that is a hidden array member, or nValues that is not that count. */
 static fmi3Status check_values(Instance *inst, const char *function, const fmi3ValueReference vr[],
                                size_t nvr, const void *values, size_t nValues)
@@ -455,7 +457,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
     return fmi3OK;
 }
 
-/* Int32: no arrays (every per-link quantity is a Float64). */
+/* Int32 and UInt64: no arrays (fmi3_arrays.h's are Float64). */
 static fmi3Status check_scalars(Instance *inst, const char *function, const void *vr, size_t nvr,
                                 const void *values, size_t nValues)
 {
@@ -534,17 +536,19 @@ NO_VARIABLES(fmi3SetInt64, fmi3SetOther, "Int64", const fmi3Int64)
 NO_VARIABLES(fmi3SetBoolean, fmi3SetOther, "Boolean", const fmi3Boolean)
 NO_VARIABLES(fmi3SetString, fmi3SetOther, "String", const fmi3String)
 
-/* UInt64: only the structural parameter n_links, fixed by the build. */
+#ifdef CP_VR_DIMENSION
+/* UInt64: only the structural parameter of the arrays' dimension, fixed by the build
+ * (fmi3_arrays.h: its value reference, value and refusal). */
 fmi3Status fmi3GetUInt64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
                          fmi3UInt64 values[], size_t nValues)
 {
-    Instance *inst = CHECKED_AS(c, "fmi3GetUInt64", fmi3GetN_links);
+    Instance *inst = CHECKED_AS(c, "fmi3GetUInt64", fmi3GetDimension);
     if (!inst) return fmi3Error;
     if (check_scalars(inst, "fmi3GetUInt64", vr, nvr, values, nValues)) return fmi3Error;
     for (size_t k = 0; k < nvr; k++) {
-        if (vr[k] != VR_N_LINKS)
+        if (vr[k] != CP_VR_DIMENSION)
             return REFUSE(inst, "fmi3GetUInt64: value reference %u is not a UInt64 variable", vr[k]);
-        values[k] = CP_N_LINKS;
+        values[k] = CP_DIMENSION;
     }
     return fmi3OK;
 }
@@ -556,14 +560,16 @@ fmi3Status fmi3SetUInt64(fmi3Instance c, const fmi3ValueReference vr[], size_t n
     if (!inst) return fmi3Error;
     if (check_scalars(inst, "fmi3SetUInt64", vr, nvr, values, nValues)) return fmi3Error;
     for (size_t k = 0; k < nvr; k++) {
-        if (vr[k] != VR_N_LINKS)
+        if (vr[k] != CP_VR_DIMENSION)
             return REFUSE(inst, "fmi3SetUInt64: value reference %u is not a UInt64 variable", vr[k]);
-        return REFUSE(inst, "n_links = %llu: the number of links is fixed when the FMU is built "
-                      "(%d); build the FMU of another scene", (unsigned long long)values[k],
-                      CP_N_LINKS);
+        return REFUSE(inst, CP_DIMENSION_REFUSAL, (unsigned long long)values[k]);
     }
     return fmi3OK;
 }
+#else  /* no structural parameter: no UInt64 variable */
+NO_VARIABLES(fmi3GetUInt64, fmi3GetOther, "UInt64", fmi3UInt64)
+NO_VARIABLES(fmi3SetUInt64, fmi3SetOther, "UInt64", const fmi3UInt64)
+#endif
 
 fmi3Status fmi3GetBinary(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
                          size_t valueSizes[], fmi3Binary values[], size_t nValues)
@@ -864,7 +870,7 @@ static fmi3Status derivative(Instance *inst, const char *function, int adjoint,
 
 /* sensitivity = J seed (FMI 3.0, section 2.2.11), J the Jacobian of the unknowns with respect to
  * the knowns at the current values: model_directional_derivative. An array stands for its
- * n_links elements: nSeed and nSensitivity count the values, as nValues does. */
+ * elements: nSeed and nSensitivity count the values, as nValues does. */
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
                                         size_t nUnknowns, const fmi3ValueReference knowns[],
                                         size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
@@ -879,7 +885,7 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference
 /* ADJOINT: sensitivity = seed^T J (FMI 3.0, section 2.2.11), J as for
  * fmi3GetDirectionalDerivative: model_adjoint_derivative, exact to rounding. By complex step
  * there is no reverse sweep: each known costs one complex evaluation, so a row costs what its
- * directional derivatives cost. An array stands for its n_links elements: nSeed counts the
+ * directional derivatives cost. An array stands for its elements: nSeed counts the
  * unknowns' values, nSensitivity the knowns'. Its checks are fmi3GetDirectionalDerivative's. */
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
                                     size_t nUnknowns, const fmi3ValueReference knowns[],
