@@ -1,7 +1,9 @@
-"""The coupled demo's cart as a native FMU: cart_model.c behind the same FMI glue as the pendulum."""
+"""The coupled demo's cart as a native FMU: cart_model.c behind the same FMI glue as the pendulum,
+FMI 2.0 and FMI 3.0 (fmi3_glue.c, the FMI 2.0 cart's behaviour through FMI 3.0's API)."""
 
 import math
 import struct
+import xml.etree.ElementTree as ET
 import zipfile
 
 import fmpy
@@ -17,14 +19,19 @@ from conical_pendulum.builder.compiler import CSRC
 from conical_pendulum.cli import main
 from conical_pendulum.demos.coupled import build_cart_fmu
 from conical_pendulum.demos.monolithic import cart_parameters
-from fmu_helpers import Instance
+from fmu_helpers import Instance, Instance3
 
-ERROR, DISCARD = 3, 2  # fmi2Error, fmi2Discard
+ERROR, DISCARD = 3, 2  # fmi2Error, fmi2Discard (fmi3Error, fmi3Discard the same)
 
 
 @pytest.fixture(scope="module")
 def cart_fmu(tmp_path_factory):
     return build_cart_fmu(tmp_path_factory.mktemp("cart") / "Cart.fmu")
+
+
+@pytest.fixture(scope="module")
+def cart_fmu3(tmp_path_factory):
+    return build_cart_fmu(tmp_path_factory.mktemp("cart3") / "Cart.fmu", fmi_version=3)
 
 
 def test_the_cart_fmu_is_valid_and_says_what_depends_on_what(cart_fmu):
@@ -50,16 +57,24 @@ def test_the_cart_fmu_is_valid_and_says_what_depends_on_what(cart_fmu):
     }
 
 
-def test_the_glue_is_the_pendulums_unchanged(cart_fmu):
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_glue_is_the_pendulums_unchanged(request, version):
     """One more model file, not a copy of the glue: the cart ships runtime/csrc's FMI layer
-    byte for byte, the files the pendulum's native FMU ships."""
-    with zipfile.ZipFile(cart_fmu) as archive:
+    byte for byte, the files the pendulum's native FMU ships; FMI 3.0 adds only what builder.fmi3
+    generates for any model (fmi3_arrays.h, buildDescription.xml)."""
+    path = request.getfixturevalue("cart_fmu" if version == 2 else "cart_fmu3")
+    with zipfile.ZipFile(path) as archive:
         shipped = {name.split("/", 1)[1] for name in archive.namelist() if name.startswith("sources/")}
-        for name in (*native.LAYER_SOURCES[2], "fmi_layer.h", "fmu_model.h", "rules.c", "rules.h"):
+        for name in (*native.LAYER_SOURCES[version], "fmi_layer.h", "fmu_model.h", "rules.c", "rules.h"):
             assert archive.read(f"sources/{name}") == (CSRC / name).read_bytes(), name
-    assert shipped == {*native.glue_sources(2, cart.MODEL), *native.glue_headers(cart.MODEL)}
-    pendulum, cart_sources = native.glue_sources(2), native.glue_sources(2, cart.MODEL)
-    assert pendulum[-2:] == cart_sources[-2:] == ["fmi_layer.c", "fmi2_glue.c"]
+    generated = {"fmi3_arrays.h", "buildDescription.xml"} if version == 3 else set()
+    assert shipped == {
+        *native.glue_sources(version, cart.MODEL),
+        *native.glue_headers(cart.MODEL),
+        *generated,
+    }
+    pendulum, cart_sources = native.glue_sources(version), native.glue_sources(version, cart.MODEL)
+    assert pendulum[-2:] == cart_sources[-2:] == list(native.LAYER_SOURCES[version])
     assert "pendulum_model.c" not in cart_sources and "cart_model.c" not in pendulum
 
 
@@ -182,17 +197,17 @@ def test_model_exchange_in_cvode_is_the_exact_solution(cart_fmu):
     assert np.abs(result["x"] - x).max() < 1e-7
 
 
-@pytest.mark.parametrize(
-    "name, value, message",
-    [
-        ("m_cart", -1.0, "m_cart = -1.0: a mass must be positive"),
-        ("k_cart", -3.0, "k_cart = -3.0: a stiffness cannot be negative"),
-        ("M_x", -2.0, "M_x = -2.0: an apparent mass cannot be negative"),
-        ("F_x", float("nan"), "F_x = nan: must be finite"),
-        ("F_x_order", 2, "F_x_order = 2: choose 0 (held over the step) or 1 (extrapolated linearly)"),
-        ("a", 1.0, "a is a calculated output: it cannot be set"),
-    ],
-)
+BAD_VALUES = [
+    ("m_cart", -1.0, "m_cart = -1.0: a mass must be positive"),
+    ("k_cart", -3.0, "k_cart = -3.0: a stiffness cannot be negative"),
+    ("M_x", -2.0, "M_x = -2.0: an apparent mass cannot be negative"),
+    ("F_x", float("nan"), "F_x = nan: must be finite"),
+    ("F_x_order", 2, "F_x_order = 2: choose 0 (held over the step) or 1 (extrapolated linearly)"),
+    ("a", 1.0, "a is a calculated output: it cannot be set"),
+]
+
+
+@pytest.mark.parametrize("name, value, message", BAD_VALUES)
 def test_a_bad_value_is_an_error_with_the_pythonfmu_carts_words(cart_fmu, name, value, message):
     """runtime/rules.py's words, as the pythonfmu cart said them at its next step; here the
     value is refused where it is set, and the instance goes on."""
@@ -234,40 +249,57 @@ def test_what_the_glue_refuses_it_refuses_for_the_cart_too(cart_fmu):
     fmu.fmu.freeInstance()
 
 
-def test_fmu_state_get_set_and_serialize_replay_bit_for_bit(cart_fmu):
-    fmu = Instance(cart_fmu, start_values={"F_x_order": 1, "M_x": 30.0})
+def run_on(instance):
+    """Five steps of a force set before each (an FMI 2.0 or 3.0 instance): (x, v, a) after them."""
+    for step in range(5):
+        instance.set({"F_x": 10.0 * (instance.time + step) ** 2})
+        instance.step(0.2)
+    return instance.get("x", "v", "a")
 
-    def run_on(instance):
-        for step in range(5):
-            instance.set({"F_x": 10.0 * (instance.time + step) ** 2})
-            instance.step(0.2)
-        return instance.get("x", "v", "a")
 
+def _state(instance, version, function):
+    """fmpy's get, set, serialize, deserialize or free of an FMU state, FMI 2.0's or 3.0's."""
+    if version == 2:
+        return getattr(instance.fmu, {"deserialize": "deSerialize"}.get(function, function) + "FMUstate")
+    return getattr(instance.fmu, function + "FMUState")
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_fmu_state_get_set_and_serialize_replay_bit_for_bit(request, cart_fmu, version):
+    """The replay of a saved, or serialized and restored, FMU state is the first run, and the
+    FMI 2.0 cart's run: the FMI 3.0 cart's state holds all of the model's."""
+    path, make = (cart_fmu, Instance) if version == 2 else (request.getfixturevalue("cart_fmu3"), Instance3)
+    fmu = make(path, start_values={"F_x_order": 1, "M_x": 30.0})
     run_on(fmu)  # the extrapolation carries the last point
-    saved = fmu.fmu.getFMUstate()
-    data = fmu.fmu.serializeFMUstate(saved)
+    saved = _state(fmu, version, "get")()
+    data = _state(fmu, version, "serialize")(saved)
     start_time = fmu.time
     first = run_on(fmu)
-    fmu.fmu.setFMUstate(saved)
+    reference = Instance(cart_fmu, start_values={"F_x_order": 1, "M_x": 30.0})
+    run_on(reference)
+    assert run_on(reference) == first
+    reference.close()
+    _state(fmu, version, "set")(saved)
     fmu.time = start_time
     assert run_on(fmu) == first
-    other = Instance(cart_fmu, name="other")
-    restored = other.fmu.deSerializeFMUstate(data)
-    other.fmu.setFMUstate(restored)
+    other = make(path)
+    restored = _state(other, version, "deserialize")(data)
+    _state(other, version, "set")(restored)
     other.time = start_time
     assert run_on(other) == first
     # bytes with a mass that is no mass: refused, naming it, and nothing taken
     mass = struct.pack("<d", 100.0)
     assert data.count(mass) == 1
     with pytest.raises(FMICallException) as failure:
-        other.fmu.deSerializeFMUstate(data.replace(mass, struct.pack("<d", -1.0)))
+        _state(other, version, "deserialize")(data.replace(mass, struct.pack("<d", -1.0)))
     assert failure.value.status == ERROR
+    function = {2: "fmi2DeSerializeFMUstate", 3: "fmi3DeserializeFMUState"}[version]
     assert any(
-        "fmi2DeSerializeFMUstate: the state's m_cart = -1.0: a mass must be positive" in text
+        f"{function}: the state's m_cart = -1.0: a mass must be positive" in text
         for _, text in other.messages
     ), other.messages[-3:]
-    fmu.fmu.freeFMUstate(saved)
-    other.fmu.freeFMUstate(restored)
+    _state(fmu, version, "free")(saved)
+    _state(other, version, "free")(restored)
     fmu.close()
     other.close()
 
@@ -302,3 +334,117 @@ def test_check_on_the_cart_says_it_is_no_pendulum(cart_fmu, capsys):
         capsys.readouterr().err
         == f"conical-pendulum check: {cart_fmu}: Cart is no pendulum: it has no scene\n"
     )
+
+
+# ---- the FMI 3.0 cart: fmi3_glue.c unchanged, the FMI 2.0 cart's behaviour through FMI 3.0's API ----
+
+START3 = {"M_x": 30.0, "F_x": 40.0}  # an apparent mass and a force
+
+
+def test_the_fmi3_cart_is_valid_with_the_fmi2_carts_variables_and_no_structural_parameter(
+    cart_fmu3, cart_fmu
+):
+    assert validate_fmu(str(cart_fmu3)) == []
+    ours, theirs = (read_model_description(str(path)) for path in (cart_fmu3, cart_fmu))
+    assert ours.fmiVersion == "3.0"
+    assert ours.coSimulation.modelIdentifier == ours.modelExchange.modelIdentifier == "Cart"
+    experiment = ours.defaultExperiment
+    assert (experiment.startTime, experiment.stopTime, experiment.stepSize) == ("0.0", "10.0", "0.01")
+    types = {"Real": "Float64", "Integer": "Int32"}
+
+    def described(v, type_):
+        return v.valueReference, type_, v.causality, v.variability, v.initial, v.start, v.dimensions
+
+    mine = {v.name: described(v, v.type) for v in ours.modelVariables}
+    assert mine.pop("time")[:3] == (len(theirs.modelVariables), "Float64", "independent")
+    # the same scalars and value references: no array, no UInt64 structural parameter
+    assert mine == {v.name: described(v, types[v.type]) for v in theirs.modelVariables}
+    for unknowns in ("outputs", "derivatives", "initialUnknowns"):
+        assert [
+            (u.variable.name, [v.name for v in u.dependencies or []]) for u in getattr(ours, unknowns)
+        ] == [(u.variable.name, [v.name for v in u.dependencies or []]) for u in getattr(theirs, unknowns)]
+    with zipfile.ZipFile(cart_fmu3) as archive:
+        assert "binaries/x86_64-linux/Cart.so" in archive.namelist()
+        build = ET.fromstring(archive.read("sources/buildDescription.xml"))
+    assert build.find("BuildConfiguration").get("modelIdentifier") == "Cart"
+    assert [f.get("name") for f in build.iter("SourceFile")] == native.glue_sources(3, cart.MODEL)
+
+
+def _simulate(path, fmi_type, **options):
+    return fmpy.simulate_fmu(str(path), fmi_type=fmi_type, stop_time=3.0, output_interval=0.05, **options)
+
+
+def test_co_simulation_is_the_fmi2_carts_bit_for_bit_held_and_extrapolated(cart_fmu3, cart_fmu):
+    """fmpy's simulate_fmu on both, an apparent mass and a force that varies (fmpy sets the input
+    at each communication point), F_x_order set as an Int32."""
+    t = np.linspace(0.0, 3.0, 301)
+    signal = np.array(
+        list(zip(t, 50.0 * np.sin(t) + 20.0 * t, np.full_like(t, 30.0))),
+        dtype=[("time", "f8"), ("F_x", "f8"), ("M_x", "f8")],
+    )
+    runs = {}
+    for order in (0, 1):
+        ours, theirs = (
+            _simulate(path, "CoSimulation", start_values={"M_x": 30.0, "F_x_order": order}, input=signal)
+            for path in (cart_fmu3, cart_fmu)
+        )
+        assert ours.dtype.names == theirs.dtype.names == ("time", "x", "v", "a")
+        for name in theirs.dtype.names:
+            assert np.array_equal(ours[name], theirs[name]), (order, name)
+        runs[order] = ours
+    assert not np.array_equal(runs[0]["x"], runs[1]["x"])  # F_x_order was taken
+
+
+def test_model_exchange_with_cvode_agrees_with_the_fmi2_cart(cart_fmu3, cart_fmu):
+    ours, theirs = (
+        _simulate(path, "ModelExchange", solver="CVode", relative_tolerance=1e-10, start_values=START3)
+        for path in (cart_fmu3, cart_fmu)
+    )
+    for name in ("x", "v", "a"):  # the same x' from the same C: within CVode's tolerance
+        np.testing.assert_allclose(ours[name], theirs[name], rtol=1e-10, atol=1e-12, err_msg=name)
+    assert abs(ours["v"]).max() > 0.1  # it moved
+
+
+@pytest.mark.parametrize("name, value, message", BAD_VALUES)
+def test_a_bad_value_is_an_fmi3_error_with_the_same_words(cart_fmu3, name, value, message):
+    fmu = Instance3(cart_fmu3, initialize=False)
+    with pytest.raises(FMICallException) as failure:
+        fmu.set({name: value})
+    assert failure.value.status == ERROR
+    assert message in fmu.texts(ERROR), fmu.messages
+    fmu.fmu.enterInitializationMode(startTime=0.0)
+    fmu.fmu.exitInitializationMode()
+    fmu.step(0.1)
+    assert fmu.get("m_cart", "M_x") == [100.0, 0.0]
+    fmu.close()
+
+
+def test_what_only_the_pendulum_has_is_refused_for_the_fmi3_cart(cart_fmu3):
+    """No arrays and no structural parameter: no UInt64 variable, no configuration mode."""
+    fmu = Instance3(cart_fmu3, initialize=False)
+    with pytest.raises(FMICallException):
+        fmu.fmu.fmi3EnterConfigurationMode(fmu.fmu.component)
+    fmu.fmu.enterInitializationMode(startTime=0.0)
+    fmu.fmu.exitInitializationMode()
+    with pytest.raises(FMICallException):
+        fmu.fmu.getUInt64([len(fmu.records) + 1])  # where the pendulum has n_links
+    assert "fmi3EnterConfigurationMode: this FMU has no tunable structural parameters" in fmu.texts(ERROR)
+    assert "fmi3GetUInt64: value reference 12: this FMU has no UInt64 variables" in fmu.texts(ERROR)
+    assert fmu.get("time", "x") == [0.0, 1.0]
+    fmu.close()
+
+
+def test_fmi3_directional_and_adjoint_derivatives_are_the_fmi2_carts(cart_fmu3, cart_fmu):
+    fmu2, fmu3 = (
+        make(path, start_values=START3) for make, path in ((Instance, cart_fmu), (Instance3, cart_fmu3))
+    )
+    for fmu in (fmu2, fmu3):
+        fmu.step(0.5)
+    vr = fmu3.vr
+    for unknown in ("a", "der(x)", "der(v)", "x"):
+        for known in ("x", "v", "F_x", "M_x"):
+            (expected,) = fmu2.fmu.getDirectionalDerivative([vr[unknown]], [vr[known]], [1.0])
+            assert fmu3.fmu.getDirectionalDerivative([vr[unknown]], [vr[known]], [1.0]) == [expected]
+            assert fmu3.fmu.getAdjointDerivative([vr[unknown]], [vr[known]], [1.0]) == [expected]
+    fmu2.close()
+    fmu3.close()

@@ -7,8 +7,8 @@ force F_x and the apparent mass M_x of what it carries, and it moves by
 Over a communication step the force is held (F_x_order = 0) or extrapolated linearly
 through the last two communication points (1), and the step is solved exactly with the
 matrix exponential (runtime/csrc/cart_model.c): all the error of the coupled demo is the
-coupling's. Its FMU is written by builder.native's code paths, as the pendulum's is, and
-links with the same FMI layer.
+coupling's. Its FMU, FMI 2.0 or 3.0, is written by builder.native's code paths, as the
+pendulum's is, and links with the same FMI layers.
 """
 
 from __future__ import annotations
@@ -134,7 +134,9 @@ def _config(data: dict) -> list[str]:
     ]
 
 
-MODEL = NativeModel(NAME, ("rules.c", "cart_model.c"), ("rules.h",), lambda: list(GROUPS), _config, 0.01)
+MODEL = NativeModel(
+    NAME, ("rules.c", "cart_model.c"), ("rules.h",), lambda: list(GROUPS), _config, 0.01, (2, 3)
+)
 
 
 def cart_data() -> dict:
@@ -147,7 +149,8 @@ def cart_data() -> dict:
     }
 
 
-def build_cart(output: Path, platforms: tuple[str, ...] = ("linux64",)) -> Path:
-    """The cart's native FMI 2.0 FMU (Co-Simulation and Model Exchange) at `output`."""
-    write_model_fmu(MODEL, cart_data(), Path(output), platforms)
+def build_cart(output: Path, platforms: tuple[str, ...] = ("linux64",), fmi_version: int = 2) -> Path:
+    """The cart's native FMU (Co-Simulation and Model Exchange) at `output`: FMI 2.0, or FMI 3.0
+    (fmi_version=3: its variables all scalars, as in FMI 2.0)."""
+    write_model_fmu(MODEL, cart_data(), Path(output), platforms, fmi_version)
     return Path(output)

@@ -50,9 +50,10 @@ DIVERGED = 1000.0  # |cart x| [m] that ends a run as diverged: the truth stays w
 EXCHANGED = ["cart::x", "cart::v", "cart::a", "p::F_pivot_x"] + [f"p::{name}" for name in SCENE.state_names()]
 
 
-def build_cart_fmu(output: Path | str) -> Path:
-    """Cart.fmu: the cart as a native FMU (builder/cart.py, runtime/csrc/cart_model.c)."""
-    return build_cart(Path(output))
+def build_cart_fmu(output: Path | str, fmi_version: int = 2) -> Path:
+    """Cart.fmu: the cart as a native FMU (builder/cart.py, runtime/csrc/cart_model.c), FMI 2.0
+    (what the demo's ecospy runs) or 3.0."""
+    return build_cart(Path(output), fmi_version=fmi_version)
 
 
 def cosimulate(
