@@ -6,17 +6,17 @@ tests those at the model level).
 An array variable (alpha, der(alpha), bob_x, ...) stands for its n_links values, link by link."""
 
 import math
-import re
 from ctypes import byref, c_double
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description, simulate_fmu
+from fmpy import read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi3 import FMU3Model, FMU3Slave, fmi3Boolean, fmi3Float64
+from fmpy.fmi3 import fmi3Boolean, fmi3Float64
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.builder.fmu import build_fmu
+from fmu_helpers import Instance3
 
 OK, DISCARD, ERROR = 0, 2, 3
 SCENES = {
@@ -38,35 +38,16 @@ def fmus(tmp_path_factory):
     return get
 
 
-class Fmi3:
-    """One FMI 3.0 instance, initialized; values set before initialization by the FMI 2.0 FMU's
-    scalar names (alpha1: element 1 of the array alpha)."""
+class Fmi3(Instance3):
+    """One FMI 3.0 instance, initialized (in Model Exchange: in continuous-time mode); values set
+    before initialization by the FMI 2.0 FMU's scalar names (alpha1: element 1 of the array alpha)."""
 
     def __init__(self, path, interface="CoSimulation", start=None, early_return_allowed=False):
-        self.md = md = read_model_description(str(path))
-        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        options = {"earlyReturnAllowed": early_return_allowed} if interface == "CoSimulation" else {}
+        super().__init__(path, interface, start_values=start, **options)
+        md = self.md
         self.n_links = int(next(v.start for v in md.modelVariables if v.name == "n_links"))
         self.size = {v.valueReference: self.n_links if v.dimensions else 1 for v in md.modelVariables}
-        self.variables = {v.name: v for v in md.modelVariables}
-        self.messages = []
-
-        def log(environment, status, category, message):
-            self.messages.append((status, message.decode(errors="replace")))
-
-        self._log = log
-        cls = FMU3Slave if interface == "CoSimulation" else FMU3Model
-        self.fmu = cls(
-            guid=md.guid,
-            unzipDirectory=extract(str(path)),
-            modelIdentifier=md.coSimulation.modelIdentifier,
-            instanceName="instance",
-        )
-        options = {"earlyReturnAllowed": early_return_allowed} if interface == "CoSimulation" else {}
-        self.fmu.instantiate(loggingOn=True, logMessage=log, **options)
-        for name, value in (start or {}).items():
-            self.set_start(name, value)
-        self.fmu.enterInitializationMode(startTime=0.0)
-        self.fmu.exitInitializationMode()
         if interface == "ModelExchange":
             self.fmu.enterContinuousTimeMode()
         structure = list(md.derivatives) + list(md.outputs)
@@ -77,24 +58,6 @@ class Fmi3:
         self.listed = {
             (u.variable.valueReference, d.valueReference) for u in structure for d in u.dependencies
         }
-        self.time = 0.0
-
-    def element(self, name):
-        """alpha1 -> (the array alpha's value reference, 1); a scalar -> (its value reference, 0)."""
-        match = re.fullmatch(r"([A-Za-z_]+?)(\d+)", name)
-        if name not in self.vr and match and self.variables.get(match[1], None) is not None:
-            return self.vr[match[1]], int(match[2])
-        return self.vr[name], 0
-
-    def set_start(self, name, value):
-        vr, k = self.element(name)
-        variable = next(v for v in self.md.modelVariables if v.valueReference == vr)
-        if variable.type == "Int32":
-            self.fmu.setInt32([vr], [int(value)])
-            return
-        values = [float(x) for x in str(variable.start).split()] if variable.dimensions else [0.0]
-        values[k] = float(value)
-        self.fmu.setFloat64([vr], values)
 
     def values(self, vrs):
         return np.array(self.fmu.getFloat64(vrs, nValues=sum(self.size[v] for v in vrs)))
@@ -168,12 +131,9 @@ class Fmi3:
         assert not event.value and not terminate.value
         return status, bool(early.value), last.value
 
-    def texts(self, status):
-        return " ".join(text for s, text in self.messages if s == status)
-
     def close(self):
         self.fmu.terminate()
-        self.fmu.freeInstance()
+        super().close()
 
 
 def random_point(fmu, seed):
