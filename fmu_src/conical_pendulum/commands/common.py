@@ -28,6 +28,21 @@ def numbers(text: str) -> list[float]:
         raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
 
 
+def choices(text: str, known, what: str, every: str | None = None) -> list[str]:
+    """The names of a comma-separated list, in order, once each (`every` alone: all that is
+    known); argparse's error naming the unknown ones and what may be chosen."""
+    if every is not None and text == every:
+        return list(known)
+    chosen = list(dict.fromkeys(text.split(",")))
+    unknown = [name for name in chosen if name not in known]
+    if unknown:
+        raise argparse.ArgumentTypeError(
+            f"unknown {what}(s) {', '.join(map(repr, unknown))}; choose from {', '.join(known)}"
+            + (f" or {every}" if every is not None else "")
+        )
+    return chosen
+
+
 def check_steps(option: str, steps: list[float], stop_time: float) -> None:
     """Communication steps (sorted) that each divide the stop time and are multiples of the
     smallest, so every run's points lie on the finest one's."""

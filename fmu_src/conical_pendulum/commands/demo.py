@@ -8,17 +8,11 @@ from pathlib import Path
 
 from ..demos import coupled, ecospy_run
 from ..errors import UserError
-from .common import check_cart_masses, check_steps, numbers, output_folder
+from .common import check_cart_masses, check_steps, choices, numbers, output_folder
 
 
 def schemes(text: str) -> list[str]:
-    chosen = list(dict.fromkeys(text.split(",")))
-    unknown = [name for name in chosen if name not in coupled.SCHEMES]
-    if unknown:
-        raise argparse.ArgumentTypeError(
-            f"unknown scheme(s) {', '.join(map(repr, unknown))}; choose from {', '.join(coupled.SCHEMES)}"
-        )
-    return chosen
+    return choices(text, coupled.SCHEMES, "scheme")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -8,17 +8,11 @@ from pathlib import Path
 
 from ..demos import coupled, ssp, ssp_report, ssp_tools
 from ..errors import UserError
-from .common import check_cart_masses, check_steps, numbers, output_folder
+from .common import check_cart_masses, check_steps, choices, numbers, output_folder
 
 
 def tools(text: str) -> list[str]:
-    chosen = list(ssp_tools.TOOLS) if text == "all" else list(dict.fromkeys(text.split(",")))
-    unknown = [name for name in chosen if name not in ssp_tools.TOOLS]
-    if unknown:
-        raise argparse.ArgumentTypeError(
-            f"unknown tool(s) {', '.join(map(repr, unknown))}; choose from {', '.join(ssp_tools.TOOLS)} or all"
-        )
-    return chosen
+    return choices(text, ssp_tools.TOOLS, "tool", every="all")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
