@@ -23,6 +23,7 @@ libcosim (boost property_tree) match element names with their prefixes, not name
 
 from __future__ import annotations
 
+import functools
 import re
 import shutil
 import zipfile
@@ -218,6 +219,7 @@ def experiment(package: Path) -> tuple[float, float]:
     return float(step), float(stop_time)
 
 
+@functools.cache  # parsed once, not for every file of every package
 def _schema(name: str) -> etree.XMLSchema:
     import fmpy
 
