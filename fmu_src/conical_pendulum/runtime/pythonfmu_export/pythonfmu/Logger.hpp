@@ -2,7 +2,7 @@
 #ifndef PYTHONFMU_LOGGER_HPP
 #define PYTHONFMU_LOGGER_HPP
 
-#include "fmi/fmi2Functions.h"
+#include "fmi2Functions.h" // from fmpy's c-code folder
 
 #include <algorithm>
 #include <string>

@@ -629,10 +629,12 @@ private:
     {
         const auto err = PyErr_Occurred();
         if (err != nullptr) {
-            cleanPyObject();
-
             PyObject *pExcType, *pExcValue, *pExcTraceback;
             PyErr_Fetch(&pExcType, &pExcValue, &pExcTraceback);
+            // conical-pendulum: the messages the call queued reach the host, and the instance's
+            // objects stay: the destructor (fmi2FreeInstance) releases them, once. Released
+            // here as well (cleanPyObject), they were released twice after fmi2Fatal.
+            clearLogBuffer();
 
             std::ostringstream oss;
             oss << "Fatal py exception encountered: ";
@@ -664,23 +666,23 @@ namespace
 {
 
 std::mutex pyStateMutex{};
-std::shared_ptr<PyState> pyState{};
+// conical-pendulum: a plain pointer, which no exit handler destroys. As a static
+// std::shared_ptr it was destroyed by the exit handlers (__cxa_atexit) of a library
+// still loaded at exit, and then reset again by finalizePythonInterpreter (run later,
+// by _dl_fini): the PyState's 128-byte block was released twice, corrupting the heap.
+// Only finalizePythonInterpreter releases it now, once, whether the library is
+// unloaded (dlclose) or the process exits with it loaded.
+PyState* pyState = nullptr;
 
 } // namespace
 
 std::unique_ptr<SlaveInstance> pythonfmu::createInstance(fmu_data data)
 {
     {
-        auto const ensurePyStateAlive = [&]() {
-            auto const lock = std::lock_guard{pyStateMutex};
-            if (nullptr == pyState) pyState = std::make_shared<PyState>();
-        };
-
-        ensurePyStateAlive();
-        auto c = std::make_unique<PySlaveInstance>(data);
-        data.pyState = pyState;
-        return c;
+        auto const lock = std::lock_guard{pyStateMutex};
+        if (nullptr == pyState) pyState = new PyState();
     }
+    return std::make_unique<PySlaveInstance>(data);
 }
 
 
@@ -692,6 +694,8 @@ extern "C" {
 // Thus, use DllMain on Windows and __attribute__((destructor)) on Linux for signaling to the PyState about de-initialization.
 void finalizePythonInterpreter()
 {
+    auto const lock = std::lock_guard{pyStateMutex};
+    delete pyState;
     pyState = nullptr;
 }
 }

@@ -1,7 +1,7 @@
 
 #include "Logger.hpp"
 #include "SlaveInstance.hpp"
-#include "fmi/fmi2Functions.h"
+#include "fmi2Functions.h" // from fmpy's c-code folder
 #include "fmu_except.hpp"
 
 #include <exception>
