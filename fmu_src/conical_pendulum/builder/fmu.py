@@ -26,6 +26,7 @@ from ..scene import Scene
 from . import native
 from .compiler import CoreBuild, build_core
 from .model_description import complete, model_description_text
+from .pythonfmu_export import export_library
 from .variables import variables
 
 RUNTIME = Path(__file__).parents[1] / "runtime"
@@ -193,7 +194,7 @@ def package(
             for name in set(sys.modules) - saved_modules:
                 if name == entry_name or name.split(".")[0] == runtime_name:
                     del sys.modules[name]
-        complete(staged, described)
+        complete(staged, described, export_library())
         os.replace(staged, output)
     return entry_name
 

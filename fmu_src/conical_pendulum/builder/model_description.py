@@ -9,8 +9,9 @@ from pathlib import Path
 from ..scene import Scene
 
 
-def complete(fmu: Path, described: list[dict]) -> None:
-    """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only;
+def complete(fmu: Path, described: list[dict], library: Path) -> None:
+    """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only,
+    its binary `library` (pythonfmu's export library as built here, builder.pythonfmu_export);
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
     `described`: the FMU's variables as builder.variables describes them (as dicts, in
@@ -32,6 +33,10 @@ def complete(fmu: Path, described: list[dict]) -> None:
             for info in archive.infolist()
             if not info.filename.startswith("binaries/") or info.filename.startswith(platform)
         }
+    binaries = [name for name in entries if name.startswith(platform)]
+    if len(binaries) != 1:
+        raise RuntimeError(f"pythonfmu packed {binaries or 'no binary'} for {platform}, not one library")
+    entries[binaries[0]] = library.read_bytes()
     root = ET.fromstring(entries["modelDescription.xml"])
     variables = root.find("ModelVariables").findall("ScalarVariable")
     structure = root.find("ModelStructure")

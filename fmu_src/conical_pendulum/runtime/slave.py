@@ -9,7 +9,6 @@ entry module (runtime/entry.py). At run time it needs numpy and the compiled cor
 nothing else.
 """
 
-import ctypes
 import functools
 import importlib.machinery
 import importlib.util
@@ -64,14 +63,8 @@ def _load_core(resources, core):
 
 
 def _fmi_call(method):
-    """An FMI entry point whose exceptions the host survives.
-
-    pythonfmu 0.7 turns an exception into fmi2Fatal and releases the Python instance,
-    its class and its log queue once right away and once more in fmi2FreeInstance (the
-    queue left dangling crashed later garbage collections). Taking one extra reference
-    to each before the exception leaves keeps the host's memory intact when it frees
-    the instance, as FMI asks it to.
-    """
+    """An FMI entry point whose failures the host's logger hears of: pythonfmu turns the
+    exception into fmi2Fatal, and passes on only the messages logged before it."""
 
     @functools.wraps(method)
     def call(self, *args):
@@ -80,8 +73,6 @@ def _fmi_call(method):
         except BaseException as exc:
             if not isinstance(exc, Refused):  # refusals are logged where they are made
                 self.log(f"{method.__name__}: {exc}", Fmi2Status.error)
-            for obj in (self, type(self), self.log_queue):
-                ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
             raise
 
     return call
@@ -332,8 +323,8 @@ class ConicalPendulum(Fmi2Slave):
     def _fmu_state_from_bytes(state: bytes) -> dict:
         """The state in pythonfmu's bytes (JSON); bytes that are none, refused when set.
 
-        Not raised here: pythonfmu 0.7 then releases the instance, its class and its log
-        queue at once, and a static method cannot hold them for it (see _fmi_call)."""
+        Not raised here: a static method has no logger to say why, so the refusal comes
+        at fmi2SetFMUstate, naming it."""
         try:
             return Fmi2Slave._fmu_state_from_bytes(state)
         except ValueError as exc:  # not UTF-8, not JSON
