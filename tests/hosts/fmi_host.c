@@ -6,7 +6,10 @@
  * Runs one instance per "--" group (side by side, stepped in turn), each with its Real
  * start values set by value reference, CYCLES times over (instantiate, simulate, free),
  * and prints the last cycle as CSV: time, then the OUT_VRS (comma-separated value
- * references) of each instance. Exit status 1 on any FMI status other than fmi2OK.
+ * references) of each instance. Exit status 1 on any FMI status other than fmi2OK, which
+ * leaves the instance and the library as they are (no free, no unload). The resource
+ * location passed to fmi2Instantiate is $FMI_RESOURCE_LOCATION, empty if unset (the
+ * native FMU needs none; the pythonfmu FMU finds its slave there).
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -80,6 +83,7 @@ int main(int argc, char **argv)
     }
     if (!n_instances) n_instances = 1;
 
+    const char *resources = getenv("FMI_RESOURCE_LOCATION");
     fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
     const long steps = (long)(stop / step + 0.5);
     for (int cycle = 0; cycle < cycles; cycle++) {
@@ -88,7 +92,8 @@ int main(int argc, char **argv)
         for (int i = 0; i < n_instances; i++) {
             char name[16];
             snprintf(name, sizeof name, "host%d", i);
-            c[i] = Instantiate(name, fmi2CoSimulation, guid, "", &callbacks, fmi2False, fmi2False);
+            c[i] = Instantiate(name, fmi2CoSimulation, guid, resources ? resources : "", &callbacks,
+                               fmi2False, fmi2False);
             if (!c[i]) { fprintf(stderr, "fmi2Instantiate failed\n"); return 1; }
             CHECK(SetReal(c[i], set_vr[i], n_sets[i], set_value[i]));
             CHECK(SetupExperiment(c[i], fmi2False, 0.0, 0.0, fmi2True, stop));

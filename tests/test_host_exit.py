@@ -1,0 +1,157 @@
+"""The pythonfmu FMU never takes its host down at exit, whatever it refused.
+
+pythonfmu 0.7.0's prebuilt export library released its interpreter state twice in a
+process that exits with the library still loaded (fmpy keeps it loaded after a failed
+call; a C host's dlclose could not unload it), and an instance's objects twice after
+fmi2Fatal: hosts died at exit with a corrupted heap. The FMU now carries that library
+built from pythonfmu's sources with both fixed (builder/pythonfmu_export.py,
+docs/pythonfmu.md). These tests run hosts as they failed: many processes refusing values
+of every kind, a few of them under valgrind, and a C host with libpython preloaded.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import sysconfig
+import zipfile
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+from fmpy import read_model_description
+
+from conical_pendulum.builder.native import fmi_headers
+from refusing_host import REFUSALS
+from required_tools import require_tool
+
+HOST = Path(__file__).with_name("refusing_host.py")
+C_HOST = Path(__file__).parent / "hosts" / "fmi_host.c"
+PROCESSES = 40
+INVALID = re.compile(r"^==\d+== (Invalid (read|write|free)|Mismatched free)", re.M)
+
+
+def refusing(fmu: Path, kinds: list[str], prefix: tuple[str, ...] = (), env=None, timeout=300):
+    return subprocess.run(
+        [*prefix, sys.executable, str(HOST), str(fmu), *kinds],
+        check=False,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=timeout,
+    )
+
+
+def how_it_ended(run: subprocess.CompletedProcess) -> str:
+    if run.returncode < 0:
+        return f"killed by {signal.Signals(-run.returncode).name}: {run.stderr[-800:]}"
+    return f"exit status {run.returncode}: {run.stderr[-800:]}"
+
+
+def test_forty_processes_refusing_every_kind_exit_normally(seed_fmu):
+    """Each process has the FMU refuse each kind of value twice (in an order of its own)
+    and then returns from its script: every one prints its last line and exits 0."""
+    kinds = list(REFUSALS) * 2
+
+    def one(k: int):
+        return refusing(seed_fmu, kinds[k % len(kinds) :] + kinds[: k % len(kinds)])
+
+    with ThreadPoolExecutor(4) as pool:
+        runs = list(pool.map(one, range(PROCESSES)))
+    failed = [how_it_ended(run) for run in runs if run.returncode != 0]
+    assert failed == [], f"{len(failed)} of {PROCESSES} processes: {failed[0]}"
+    assert {run.stdout for run in runs} == {f"refused {len(kinds)}\n"}
+
+
+def invalid_accesses(valgrind_log: str) -> list[str]:
+    """valgrind's invalid reads, writes and frees, each with its stack; but ld.so's own
+    (is_dst: strncmp reading whole words past an rpath string while it loads a library)."""
+    blocks = re.split(r"^==\d+== *$", valgrind_log, flags=re.M)  # an error, then a blank line
+    return [block.strip() for block in blocks if INVALID.search(block) and "is_dst" not in block]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kinds", [["nan", "state", "negative_length"], ["bad_setting", "inf", "nan"]])
+def test_under_valgrind_no_invalid_access_at_exit(seed_fmu, kinds):
+    """Before the fix: one invalid read in pythonfmu's finalizePythonInterpreter at exit
+    for every copy of the library fmpy had loaded, of a block the exit handlers had freed."""
+    require_tool("valgrind", None, "Debian's valgrind (.ci/run installs it)")
+    run = refusing(
+        seed_fmu,
+        kinds,
+        prefix=("valgrind", "--quiet"),
+        env={**os.environ, "PYTHONMALLOC": "malloc"},
+        timeout=1800,
+    )
+    assert run.returncode == 0, how_it_ended(run)
+    assert run.stdout == f"refused {len(kinds)}\n"
+    assert invalid_accesses(run.stderr) == []
+
+
+@pytest.fixture(scope="module")
+def c_host(tmp_path_factory):
+    """tests/hosts/fmi_host.c: a host that is a plain C program."""
+    program = tmp_path_factory.mktemp("c_host") / "fmi_host"
+    subprocess.run(
+        [
+            "cc",
+            "-std=c99",
+            "-O1",
+            "-Wall",
+            "-Werror",
+            f"-I{fmi_headers()}",
+            str(C_HOST),
+            "-o",
+            str(program),
+            "-ldl",
+        ],
+        check=True,
+    )
+    return program
+
+
+@pytest.mark.parametrize("start", [{}, {"l0": "-1"}, {"g": "nan"}], ids=["runs", "negative_length", "nan"])
+def test_a_c_host_with_libpython_preloaded_exits_normally(seed_fmu, c_host, tmp_path, start):
+    """A host that is no Python process (the FMU Compliance Checker's case): libpython
+    preloaded, the FMU's slave finding numpy on PYTHONPATH. The prebuilt library aborted
+    every such process at exit, a good run included (SIGABRT in 40 of 40)."""
+    libdir, library = sysconfig.get_config_var("LIBDIR"), sysconfig.get_config_var("LDLIBRARY")
+    libpython = Path(libdir) / library
+    if not libpython.exists() or not library.endswith(".so"):
+        pytest.skip(f"this Python has no shared libpython ({libpython})")
+    md = read_model_description(str(seed_fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    with zipfile.ZipFile(seed_fmu) as archive:
+        archive.extractall(tmp_path)
+    site_packages = [p for p in sys.path if p.endswith("site-packages")]
+    env = {
+        "LD_PRELOAD": str(libpython),
+        "PYTHONPATH": os.pathsep.join(site_packages),
+        "FMI_RESOURCE_LOCATION": (tmp_path / "resources").as_uri(),
+    }
+    for _ in range(5):
+        run = subprocess.run(
+            [
+                str(c_host),
+                str(tmp_path / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"),
+                md.guid,
+                "0.1",
+                "0.05",
+                "1",
+                "0",
+                *(["--", *(f"{vr[name]}={value}" for name, value in start.items())] if start else []),
+            ],
+            check=False,
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=300,
+        )
+        assert run.returncode == (1 if start else 0), how_it_ended(run)
+        if start:
+            assert "failed: SetReal" in run.stderr
+        else:
+            assert run.stdout.splitlines()[-1].startswith("0.1")
