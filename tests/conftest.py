@@ -1,7 +1,11 @@
+import subprocess
+from pathlib import Path
+
 import pytest
 
 from conical_pendulum import Scene
 from conical_pendulum.builder.fmu import build_fmu
+from conical_pendulum.builder.native import fmi_headers
 
 
 @pytest.fixture(scope="session")
@@ -38,3 +42,26 @@ def chain_fmu(fmu_dir):
 def coupled_fmu(fmu_dir):
     """The seed chain hanging from a moving support: a_pivot inputs, F_pivot outputs."""
     return build_fmu(Scene.uniform(3, coupling=True), fmu_dir / "Coupled.fmu").path
+
+
+@pytest.fixture(scope="session")
+def c_host(tmp_path_factory):
+    """tests/hosts/fmi_host.c compiled: a host that is a plain C program."""
+    program = tmp_path_factory.mktemp("c_host") / "fmi_host"
+    source = Path(__file__).parent / "hosts" / "fmi_host.c"
+    subprocess.run(
+        [
+            "cc",
+            "-std=c99",
+            "-O1",
+            "-Wall",
+            "-Werror",
+            f"-I{fmi_headers()}",
+            str(source),
+            "-o",
+            str(program),
+            "-ldl",
+        ],
+        check=True,
+    )
+    return program

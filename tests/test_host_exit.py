@@ -24,12 +24,10 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from conical_pendulum.builder.native import fmi_headers
 from refusing_host import REFUSALS
 from required_tools import require_tool
 
 HOST = Path(__file__).with_name("refusing_host.py")
-C_HOST = Path(__file__).parent / "hosts" / "fmi_host.c"
 PROCESSES = 40
 INVALID = re.compile(r"^==\d+== (Invalid (read|write|free)|Mismatched free)", re.M)
 
@@ -89,28 +87,6 @@ def test_under_valgrind_no_invalid_access_at_exit(seed_fmu, kinds):
     assert run.returncode == 0, how_it_ended(run)
     assert run.stdout == f"refused {len(kinds)}\n"
     assert invalid_accesses(run.stderr) == []
-
-
-@pytest.fixture(scope="module")
-def c_host(tmp_path_factory):
-    """tests/hosts/fmi_host.c: a host that is a plain C program."""
-    program = tmp_path_factory.mktemp("c_host") / "fmi_host"
-    subprocess.run(
-        [
-            "cc",
-            "-std=c99",
-            "-O1",
-            "-Wall",
-            "-Werror",
-            f"-I{fmi_headers()}",
-            str(C_HOST),
-            "-o",
-            str(program),
-            "-ldl",
-        ],
-        check=True,
-    )
-    return program
 
 
 @pytest.mark.parametrize("start", [{}, {"l0": "-1"}, {"g": "nan"}], ids=["runs", "negative_length", "nan"])

@@ -54,28 +54,6 @@ def native(fmus):
     return fmus("seed")[0]
 
 
-@pytest.fixture(scope="module")
-def host(tmp_path_factory):
-    """tests/hosts/fmi_host.c compiled: a host that is a plain C program."""
-    program = tmp_path_factory.mktemp("host") / "fmi_host"
-    subprocess.run(
-        [
-            "cc",
-            "-std=c99",
-            "-O1",
-            "-Wall",
-            "-Werror",
-            f"-I{fmi_headers()}",
-            str(HOST_SOURCE),
-            "-o",
-            str(program),
-            "-ldl",
-        ],
-        check=True,
-    )
-    return program
-
-
 def unzipped(path, folder):
     with zipfile.ZipFile(path) as archive:
         archive.extractall(folder)
@@ -230,13 +208,13 @@ def test_the_fmi_layer_knows_the_model_only_through_the_contract(native):
     assert "fmi2" not in model
 
 
-def test_a_c_host_runs_it_with_a_clean_environment(native, host, tmp_path):
+def test_a_c_host_runs_it_with_a_clean_environment(native, c_host, tmp_path):
     """dlopen and the FMI calls from a C program: no Python, no preload, no paths."""
     md = read_model_description(str(native))
     names = ["alpha0", "beta2", "bob2_x", "energy"]
     run = subprocess.run(
         [
-            str(host),
+            str(c_host),
             str(library(native, tmp_path)),
             md.guid,
             "10",
@@ -258,12 +236,12 @@ def test_a_c_host_runs_it_with_a_clean_environment(native, host, tmp_path):
         np.testing.assert_array_equal(rows[:, k], ours[name], err_msg=name)
 
 
-def test_two_instances_side_by_side_keep_their_own_parameters(native, host, tmp_path):
+def test_two_instances_side_by_side_keep_their_own_parameters(native, c_host, tmp_path):
     md = read_model_description(str(native))
     l0, alpha0 = vrs(native, ["l0", "alpha0"])
     run = subprocess.run(
         [
-            str(host),
+            str(c_host),
             str(library(native, tmp_path)),
             md.guid,
             "3",
@@ -332,7 +310,7 @@ def test_ecos_command_line_engine_runs_it_with_a_clean_environment(native, tmp_p
         )
 
 
-def test_a_thousand_cycles_under_valgrind(native, host, tmp_path):
+def test_a_thousand_cycles_under_valgrind(native, c_host, tmp_path):
     require_tool("valgrind", None, "Debian's valgrind (.ci/run installs it)")
     md = read_model_description(str(native))
     run = subprocess.run(
@@ -342,7 +320,7 @@ def test_a_thousand_cycles_under_valgrind(native, host, tmp_path):
             "--leak-check=full",
             "--errors-for-leak-kinds=definite,indirect,possible",
             "--quiet",
-            str(host),
+            str(c_host),
             str(library(native, tmp_path)),
             md.guid,
             "1",
@@ -456,7 +434,7 @@ def test_a_failed_step_is_discarded_with_the_diagnosis_and_reset_goes_on(tmp_pat
     fmu.close()
 
 
-def test_the_windows_binary_runs_under_wine(tmp_path, host):
+def test_the_windows_binary_runs_under_wine(tmp_path, c_host):
     """binaries/win64 cross-compiled with Debian's mingw-w64, run by the same C host built
     for Windows, under Debian's wine64; it agrees with the Linux binary."""
     compiler = require_tool(
@@ -507,7 +485,7 @@ def test_the_windows_binary_runs_under_wine(tmp_path, host):
     )
     assert windows.returncode == 0, windows.stderr[-2000:]
     linux = subprocess.run(
-        [str(host), str(folder / "binaries" / "linux64" / "ConicalPendulum.so"), *args],
+        [str(c_host), str(folder / "binaries" / "linux64" / "ConicalPendulum.so"), *args],
         capture_output=True,
         text=True,
         env={},
