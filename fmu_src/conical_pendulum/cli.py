@@ -25,7 +25,7 @@ import sys
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 
-from .errors import UserError
+from .errors import UserError, needs
 
 PROG = "conical-pendulum"
 
@@ -199,7 +199,7 @@ def _load(name: str, parser: Parser) -> None:
     except ModuleNotFoundError as exc:
         if not command.extra:
             raise
-        raise UsageError(f'needs {exc.name}: pip install -e ".[{command.extra}]"', parser.prog) from None
+        raise UsageError(needs(exc.name, command.extra), parser.prog) from None
     module.add_arguments(parser)
     parser.set_defaults(run=module.run, parser=parser)
 
