@@ -21,7 +21,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "After the build, unless --no-check, the FMU runs with fmpy (10 s, an output every 1/60 s,\n"
         "DOP853 at 1e-12) against the native scipy integration of the same scene; the run goes to\n"
         "a CSV, a plot and an animation named after the FMU (dist/ConicalPendulum.csv, .png, .gif).\n"
-        f"Exit status 1 when the angles disagree by more than the check's bound ({CHECK_BOUND}).\n"
+        f"Exit status 1 when the angles disagree by more than the check's bound:\n{CHECK_BOUND}.\n"
         "\nEach kind of FMU has its own default name, so one build does not overwrite another's:\n"
         + "\n".join(f"  {flavour:<22} {path}" for flavour, path in DEFAULT_OUTPUTS.items())
     )

@@ -13,7 +13,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "\n\nThe scene comes from the FMU (the one it was built from, in its resources). The FMU\n"
         "runs with fmpy, its DOP853 at --rtol; the native reference is scipy's DOP853 on the same\n"
         "output grid. Prints every output's largest difference and the angles' bound, and exits\n"
-        f"with status 1 when the angles disagree by more than it: {CHECK_BOUND}."
+        f"with status 1 when the angles disagree by more than it:\n{CHECK_BOUND}."
     )
     parser.add_argument("fmu", type=Path, metavar="FMU", help="an FMU built by conical-pendulum build")
     parser.add_argument(

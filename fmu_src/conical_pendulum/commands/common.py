@@ -14,8 +14,8 @@ from ..errors import UserError
 
 # the check's rule, for the commands' help (analysis/compare.py measures the bound)
 CHECK_BOUND = (
-    f"{comparison.SAFETY:g} x the reference's own error\nplus DOP853's at the FMU's rtol, "
-    f"measured with references at rtol {' and '.join(f'{r:g}' for r in comparison.REFERENCE_RTOL)}"
+    f"{comparison.SAFETY:g} x (the reference's own error + DOP853's at the FMU's rtol), measured\n"
+    f"with references at rtol {' and '.join(f'{r:g}' for r in comparison.REFERENCE_RTOL)} (docs/fmu.md#the-check)"
 )
 
 

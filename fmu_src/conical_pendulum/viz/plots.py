@@ -1,6 +1,6 @@
 """Plots and an animation of simulation results, with matplotlib.
 
-    conical-pendulum show dist/results.csv --plot dist/pendulum.png --gif dist/pendulum.gif
+    conical-pendulum show dist/ConicalPendulum.csv --plot seed.png --gif seed.gif
 
 The CSV is fmpy's (`fmpy.util.write_csv`): a `time` column and one per variable. Links
 are drawn from their mass-centre positions (`link<i>_x/y/z`, the midpoint of each link),
