@@ -169,3 +169,17 @@ def test_the_animation_shows_the_chain_across_its_plane_with_readable_ticks(n):
         boxes = [label.get_window_extent() for label in axis.get_ticklabels() if label.get_text()]
         assert not any(a.overlaps(b) for a, b in itertools.combinations(boxes, 2))
     plt.close(fig)
+
+
+def test_angles_that_overlap_in_pairs_say_so():
+    """The seed's alpha_i and beta_i stay within half a degree: the title says so, where
+    curves that overlap in pairs would otherwise look like half of them missing."""
+    import matplotlib.pyplot as plt
+
+    from conical_pendulum.viz import plots
+
+    run = made_up_run(3)
+    assert plots.figure(run).axes[0].get_title() == "joint angles"  # alpha0 turns round, beta0 does not
+    run["alpha0"] = run["beta0"] - 0.01
+    assert plots.figure(run).axes[0].get_title() == "joint angles (each beta within 0.57 deg of its alpha)"
+    plt.close("all")

@@ -25,7 +25,7 @@ import sys
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 
-from .errors import UserError, needs
+from .errors import DISTRIBUTION, UserError, needs
 
 PROG = "conical-pendulum"
 
@@ -206,6 +206,6 @@ def _load(name: str, parser: Parser) -> None:
 
 def _version() -> str:
     try:
-        return version("conical-pendulum-fmu")
+        return version(DISTRIBUTION)
     except PackageNotFoundError:
         return "(not installed)"

@@ -179,7 +179,20 @@ def figure(results: dict):
         for name, style in ((f"alpha{i}", "-"), (f"beta{i}", "--")):
             if name in results:
                 angles.plot(*wrapped(t, results[name]), style, color=colour, lw=width)
-    angles.set(xlabel="time [s]", ylabel="angle [deg], wrapped to [-180, 180)", title="joint angles")
+    apart = max(
+        (
+            np.abs((np.degrees(results[f"beta{i}"] - results[f"alpha{i}"]) + 180.0) % 360.0 - 180.0).max()
+            for i in links
+            if f"beta{i}" in results
+        ),
+        default=np.inf,
+    )
+    angles.set(
+        xlabel="time [s]",
+        ylabel="angle [deg], wrapped to [-180, 180)",
+        # curves that overlap in pairs say why: the seed's links stay near one vertical plane
+        title="joint angles" + (f" (each beta within {apart:.2g} deg of its alpha)" if apart < 2.0 else ""),
+    )
     _link_key(fig, angles, colours, styles=True)
     if _chain_outputs(results) is None:
         for ax in (side, above):
