@@ -1,6 +1,7 @@
 """Build dist/ConicalPendulum.fmu for a scene, then run it with fmpy against the native integrator.
 
     python build_fmu.py                       # the seed scene: 3 links with bobs
+    python build_fmu.py --native              # dist/ConicalPendulum_native.fmu (--fmi 3: _fmi3.fmu)
     python build_fmu.py --links 5 --no-bobs --output dist/Chain5.fmu
     python build_fmu.py --scene scenes/seed.toml
     python build_fmu.py --coupling --output dist/Coupled.fmu   # a moving support: a_pivot in, F_pivot out

@@ -5,7 +5,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import fmpy
 import pytest
+
+from conical_pendulum.cli import main
+from conical_pendulum.commands import build as build_command
 
 ROOT = Path(__file__).resolve().parent.parent
 # the same code behind two names; messages start with the name
@@ -77,11 +81,43 @@ def test_a_scene_without_the_outputs_a_picture_needs_still_builds(tmp_path, buil
     assert run.returncode == 0, run.stdout + run.stderr
     lines = run.stdout.splitlines()
     assert lines[-3].endswith("rad: OK")
-    assert lines[-2] == f"wrote {tmp_path / 'results.csv'} and {tmp_path / 'pendulum.png'}"
+    assert lines[-2] == f"wrote {tmp_path / 'NoPoses.csv'} and {tmp_path / 'NoPoses.png'}"
     assert lines[-1] == (
         "left out the paths and the animation: the results have neither link poses "
         "(link<i>_x/y/z, the scene's output 'poses') nor a bob on every link (bob<i>_x/y/z); "
         "the energy drift: the results have no energy output"
     )
-    assert (tmp_path / "pendulum.png").stat().st_size > 10_000 and not (tmp_path / "pendulum.gif").exists()
+    assert (tmp_path / "NoPoses.png").stat().st_size > 10_000 and not (tmp_path / "NoPoses.gif").exists()
     assert "Traceback" not in run.stderr
+
+
+def test_each_kind_of_fmu_has_its_own_default_name(tmp_path, monkeypatch, capsys):
+    """The README's builds in its order (pythonfmu, --native, --native --fmi 3) leave three
+    FMUs, and its fmpy snippet still runs the first: no build overwrites another's."""
+    monkeypatch.chdir(tmp_path)
+    for flavour in ([], ["--native"], ["--native", "--fmi", "3"]):
+        assert main(["build", *flavour, "--no-check"]) == 0, capsys.readouterr().err
+    versions = {}
+    for name in ("ConicalPendulum.fmu", "ConicalPendulum_native.fmu", "ConicalPendulum_fmi3.fmu"):
+        description = fmpy.read_model_description(str(tmp_path / "dist" / name))
+        versions[name] = (description.fmiVersion, description.generationTool.split()[0])
+    assert versions["ConicalPendulum.fmu"][0] == "2.0" and versions["ConicalPendulum_native.fmu"][0] == "2.0"
+    assert versions["ConicalPendulum_fmi3.fmu"][0] == "3.0"
+    assert (
+        versions["ConicalPendulum.fmu"][1] != versions["ConicalPendulum_native.fmu"][1]
+    )  # pythonfmu, native
+    result = fmpy.simulate_fmu(
+        "dist/ConicalPendulum.fmu",
+        stop_time=0.5,
+        output_interval=1 / 60,
+        start_values={"l0": 8.0, "alpha0": 0.5, "solver": 2, "rtol": 1e-10},
+    )
+    assert result["alpha0"][0] == 0.5
+
+
+def test_the_run_is_named_after_its_fmu():
+    assert build_command.run_files(Path("dist/ConicalPendulum_native.fmu")) == (
+        Path("dist/ConicalPendulum_native.csv"),
+        Path("dist/ConicalPendulum_native.png"),
+        Path("dist/ConicalPendulum_native.gif"),
+    )

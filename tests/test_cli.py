@@ -9,11 +9,14 @@ import signal
 import subprocess
 import sys
 import urllib.request
+import zipfile
 from pathlib import Path
 
 import pytest
 
+from conical_pendulum import errors
 from conical_pendulum.cli import COMMANDS, main, run_command
+from conical_pendulum.errors import install_command
 
 COMMAND = str(Path(sys.executable).with_name("conical-pendulum"))  # the installed console script
 NAMES = ["build", "check", "show", "page", "sweep", "demo", "system"]
@@ -72,19 +75,14 @@ def test_each_command_explains_its_options(name, options):
 
 @pytest.mark.slow
 def test_build_checks_and_draws_the_run(tmp_path):
-    """Without --no-check: the fmpy run against the native reference, then results.csv,
-    pendulum.png and pendulum.gif next to the FMU (about 25 s, most of it the GIF)."""
+    """Without --no-check: the fmpy run against the native reference, then its CSV, plot and
+    animation named after the FMU (about 25 s, most of it the GIF)."""
     run = cli("build", "--links", "1", "--output", tmp_path / "One.fmu", timeout=600)
     assert run.returncode == 0, run.stderr
     assert f"built {tmp_path / 'One.fmu'}" in run.stdout and "1 links" in run.stdout
     assert "angles agree to" in run.stdout and run.stdout.count(": OK") == 1
-    assert (
-        f"wrote {tmp_path / 'results.csv'}, {tmp_path / 'pendulum.png'} and {tmp_path / 'pendulum.gif'}"
-        in run.stdout
-    )
-    assert all(
-        (tmp_path / name).stat().st_size > 10_000 for name in ("results.csv", "pendulum.png", "pendulum.gif")
-    )
+    assert f"wrote {tmp_path / 'One.csv'}, {tmp_path / 'One.png'} and {tmp_path / 'One.gif'}" in run.stdout
+    assert all((tmp_path / name).stat().st_size > 10_000 for name in ("One.csv", "One.png", "One.gif"))
 
 
 def test_check_passes_on_the_seed_fmu(seed_fmu):
@@ -97,11 +95,25 @@ def test_check_passes_on_the_seed_fmu(seed_fmu):
     assert float(agree.split()[3]) < 1e-10
 
 
-def test_check_fails_when_the_fmu_is_run_loosely(seed_fmu):
-    """rtol 1e-3 with an output a second: the angles are off by far more than 1e-8."""
-    run = cli("check", seed_fmu, "--rtol", "1e-3", "--interval", "1")
+def test_check_fails_an_fmu_that_runs_another_parameter_value(seed_fmu, tmp_path):
+    """The seed FMU with its first link's start value 1e-9 longer (relatively) than its scene
+    says: 6e-10 rad off, which a fixed 1e-8 rad let through; the measured bound does not."""
+    wrong = tmp_path / "Wrong.fmu"
+    with zipfile.ZipFile(seed_fmu) as source, zipfile.ZipFile(wrong, "w") as target:
+        for item in source.infolist():
+            data = source.read(item)
+            if item.filename == "resources/model.json":
+                model = json.loads(data)
+                l0 = next(v for v in model["variables"] if v["name"] == "l0")
+                l0["start"] *= 1 + 1e-9
+                data = json.dumps(model)
+            target.writestr(item, data)
+    run = cli("check", wrong)
     assert run.returncode == 1, run.stderr
-    assert run.stdout.strip().endswith("rad: FAILED")
+    lines = run.stdout.strip().splitlines()
+    assert lines[-2].startswith("the bound: ") and "DOP853's error at the FMU's rtol 1e-12" in lines[-2]
+    assert lines[-1].startswith("angles agree to ") and lines[-1].endswith(" rad: FAILED")
+    assert float(lines[-1].split()[3]) > 10 * float(lines[-1].split()[-3])
 
 
 def test_page_writes_the_pydy_page(seed_fmu, tmp_path):
@@ -170,7 +182,7 @@ def test_page_serves_until_interrupted(seed_fmu, tmp_path):
         ([], "conical-pendulum: the following arguments are required: COMMAND"),
         (
             ["check", "missing.fmu"],
-            "conical-pendulum check: missing.fmu: not an FMU built by conical_pendulum",
+            "conical-pendulum check: missing.fmu: No such file or directory",
         ),
         (
             ["check", "FMU", "--stop-time", "-1"],
@@ -210,6 +222,15 @@ def test_page_serves_until_interrupted(seed_fmu, tmp_path):
         ),
         (["sweep", "FMU"], "conical-pendulum sweep: one of the arguments --grid --random is required"),
         (["demo", "--steps", "0.1,x"], "conical-pendulum demo: argument --steps: expected numbers"),
+        # the rule a step breaks, not every rule
+        (
+            ["demo", "--steps", "0.3"],
+            "conical-pendulum demo: --steps: 0.3 does not divide --stop-time 10 (10 / 0.3",
+        ),
+        (["demo", "--steps", "0.1,0.25"], "--steps: 0.25 is not a multiple of the smallest step 0.1"),
+        (["demo", "--steps", "0,0.1"], "conical-pendulum demo: --steps: 0 must be a positive number"),
+        (["check", "."], "conical-pendulum check: .: Is a directory"),
+        (["check", "RESULTS"], "results.csv: not an FMU built by conical_pendulum"),
         (
             ["system", "--run", "ecos,omsimulator"],
             "conical-pendulum system: argument --run: unknown tool(s) 'omsimulator'; "
@@ -217,7 +238,7 @@ def test_page_serves_until_interrupted(seed_fmu, tmp_path):
         ),
         (
             ["system", "--step", "0.3", "--stop-time", "1"],
-            "conical-pendulum system: --step: 0.3 must be positive, divide --stop-time 1",
+            "conical-pendulum system: --step: 0.3 does not divide --stop-time 1 (1 / 0.3 = 3.333)",
         ),
         (
             ["system", "--cart-mass", "5,-1"],
@@ -267,14 +288,9 @@ def hide(monkeypatch, *packages):
 @pytest.mark.parametrize(
     "name, args, hidden, message",
     [
-        ("page", ["FMU", "--out", "OUT"], "pydy", 'needs pydy: pip install pydy (or -e ".[test]")'),
-        (
-            "sweep",
-            ["FMU", "--grid", "l0=5,6", "--out", "OUT/s.parquet"],
-            "dask",
-            'needs dask: pip install -e ".[sweep]"',
-        ),
-        ("demo", ["--out", "OUT"], "ecospy", 'needs ecospy: pip install -e ".[cosim]"'),
+        ("page", ["FMU", "--out", "OUT"], "pydy", "needs pydy: INSTALL test (or pip install pydy)"),
+        ("sweep", ["FMU", "--grid", "l0=5,6", "--out", "OUT/s.parquet"], "dask", "needs dask: INSTALL sweep"),
+        ("demo", ["--out", "OUT"], "ecospy", "needs ecospy: INSTALL cosim"),
     ],
 )
 def test_a_missing_optional_package_is_one_line_saying_what_to_install(
@@ -291,8 +307,64 @@ def test_a_missing_optional_package_is_one_line_saying_what_to_install(
     status, out, err = run_main(
         capsys, name, *[{"FMU": seed_fmu}.get(a, a.replace("OUT", str(tmp_path / "out"))) for a in args]
     )
-    assert status == 2 and one_line(err, name) == message
+    extra = message.split("INSTALL ")[1].split()[0]
+    assert status == 2 and one_line(err, name) == message.replace(f"INSTALL {extra}", install_command(extra))
     assert not out and not list(tmp_path.iterdir())  # found before any work
+
+
+class Installed:
+    """importlib.metadata's distribution, as pip leaves it: `direct_url` is PEP 610's record
+    (None for a wheel from an index)."""
+
+    def __init__(self, direct_url):
+        self.direct_url = direct_url
+
+    def read_text(self, name):
+        return None if self.direct_url is None else json.dumps(self.direct_url)
+
+
+@pytest.mark.parametrize(
+    "direct_url, inside, hint",
+    [
+        (None, False, 'pip install "conical-pendulum-fmu[sweep]"'),  # from PyPI
+        (
+            {"url": "SOURCE", "dir_info": {}},
+            False,
+            'pip install "conical-pendulum-fmu[sweep]"',
+        ),  # pip install .
+        ({"url": "SOURCE", "dir_info": {"editable": True}}, True, 'pip install -e ".[sweep]"'),
+        ({"url": "SOURCE", "dir_info": {"editable": True}}, False, 'pip install -e "SOURCE[sweep]"'),
+    ],
+    ids=["wheel", "from-a-folder", "editable-here", "editable-elsewhere"],
+)
+def test_the_install_hint_fits_how_the_package_was_installed(monkeypatch, tmp_path, direct_url, inside, hint):
+    source = tmp_path / "checkout"
+    source.mkdir()
+    if direct_url is not None:
+        direct_url = {**direct_url, "url": source.as_uri()}
+    monkeypatch.setattr(errors, "distribution", lambda name: Installed(direct_url))
+    monkeypatch.chdir(source if inside else tmp_path)
+    assert install_command("sweep") == hint.replace("SOURCE", str(source))
+
+
+def test_a_missing_extra_of_an_installed_wheel_names_the_package(monkeypatch, capsys, tmp_path):
+    monkeypatch.setattr(errors, "distribution", lambda name: Installed(None))
+    hide(monkeypatch, "ecospy")
+    status, out, err = run_main(capsys, "demo", "--out", tmp_path / "out")
+    assert status == 2 and one_line(err, "demo") == 'needs ecospy: pip install "conical-pendulum-fmu[cosim]"'
+    assert not out and not list(tmp_path.iterdir())
+
+
+def test_system_says_what_its_runs_leave_and_where(tmp_path):
+    from conical_pendulum.commands.system import scratch_note
+
+    work = tmp_path / "work" / "p_100kg_0.01s"
+    work.mkdir(parents=True)
+    (work / "ecos-explicit.csv").write_bytes(b"x" * 3_000_000)
+    assert scratch_note(tmp_path / "work") == (
+        "left 3 MB of the tools' scratch files (each one's unpacked packages, outputs and logs) "
+        f"in {tmp_path / 'work'}: delete the folder when done"
+    )
 
 
 def test_demo_without_tbb_says_what_to_install(monkeypatch, capsys, tmp_path):
@@ -306,7 +378,7 @@ def test_demo_without_tbb_says_what_to_install(monkeypatch, capsys, tmp_path):
     )
     monkeypatch.setattr(ecospy_run, "TBB", str(tmp_path / "libtbb.so.12"))
     status, _, err = run_main(capsys, "demo", "--out", tmp_path / "out")
-    assert status == 2 and one_line(err, "demo") == 'needs tbb: pip install -e ".[cosim]"'
+    assert status == 2 and one_line(err, "demo") == f"needs tbb: {install_command('cosim')}"
     assert not list(tmp_path.iterdir())
 
 
@@ -317,7 +389,7 @@ def test_system_without_libcosimpy_says_what_to_install_before_building(monkeypa
     status, _, err = run_main(capsys, "system", "--out", tmp_path / "out", "--run", "ecos,libcosim")
     assert (
         status == 2
-        and one_line(err, "system") == '--run libcosim: needs libcosimpy: pip install -e ".[cosim]"'
+        and one_line(err, "system") == f"--run libcosim: needs libcosimpy: {install_command('cosim')}"
     )
     assert not list(tmp_path.iterdir())
 

@@ -55,8 +55,11 @@ def test_the_demo_command_converges_at_first_order_in_both_schemes(tmp_path):
     "argv, message",
     [
         (["--steps", "0.1,x"], "--steps: expected numbers"),
-        (["--steps", "0.3", "--stop-time", "1"], "must be positive, divide --stop-time"),
-        (["--steps", "0.1,0.15"], "multiple of the smallest"),
+        (
+            ["--steps", "0.3", "--stop-time", "1"],
+            "--steps: 0.3 does not divide --stop-time 1 (1 / 0.3 = 3.333)",
+        ),
+        (["--steps", "0.2,0.5"], "--steps: 0.5 is not a multiple of the smallest step 0.2"),
         (["--cart-mass", "-1"], "--cart-mass: must be a positive number of kg, got -1.0"),
         (["--cart-mass", "5,nan"], "--cart-mass: must be a positive number of kg, got nan"),
         (

@@ -25,7 +25,7 @@ import sys
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 
-from .errors import UserError
+from .errors import DISTRIBUTION, UserError, needs
 
 PROG = "conical-pendulum"
 
@@ -70,7 +70,7 @@ COMMANDS = {
     ),
     "show": Command(
         "plot and animate an fmpy results CSV",
-        ("conical-pendulum show dist/results.csv --plot out.png --gif out.gif --fps 30",),
+        ("conical-pendulum show dist/ConicalPendulum.csv --plot out.png --gif out.gif --fps 30",),
         "conical_pendulum.commands.show",
     ),
     "page": Command(
@@ -169,7 +169,7 @@ def _parser(prog: str, chosen: str | None) -> Parser:
         description="An n-link conical pendulum as an FMI 2.0 co-simulation FMU: build it, check it\n"
         "against the native reference, look at its runs, sweep it, co-simulate it.",
         epilog="Start with 'conical-pendulum build': it writes dist/ConicalPendulum.fmu (the seed scene),\n"
-        "checks it and draws its run in dist/pendulum.png and dist/pendulum.gif.\n"
+        "checks it and draws its run in dist/ConicalPendulum.png and dist/ConicalPendulum.gif.\n"
         f"'{prog} COMMAND --help' explains a command's options.\n"
         "Exit status: 0 on success, 1 when a check, some runs or a co-simulation failed, 2 for\n"
         "bad options, a bad file or a missing package (one line on stderr), 130 on Ctrl-C.",
@@ -199,13 +199,13 @@ def _load(name: str, parser: Parser) -> None:
     except ModuleNotFoundError as exc:
         if not command.extra:
             raise
-        raise UsageError(f'needs {exc.name}: pip install -e ".[{command.extra}]"', parser.prog) from None
+        raise UsageError(needs(exc.name, command.extra), parser.prog) from None
     module.add_arguments(parser)
     parser.set_defaults(run=module.run, parser=parser)
 
 
 def _version() -> str:
     try:
-        return version("conical-pendulum-fmu")
+        return version(DISTRIBUTION)
     except PackageNotFoundError:
         return "(not installed)"

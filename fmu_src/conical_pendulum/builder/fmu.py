@@ -204,7 +204,9 @@ def fmu_scene(path: Path | str) -> Scene:
     try:
         with zipfile.ZipFile(path) as archive:
             data = json.loads(archive.read(f"resources/{MODEL_FILE}"))
-    except (OSError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
+    except OSError as exc:  # no such file, a folder, no permission: that first, not what it is not
+        raise ValueError(f"{path}: {exc.strerror or exc}") from None
+    except (KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: not an FMU built by conical_pendulum ({exc})") from None
     if "scene" not in data:  # the coupled demo's cart: built here, but no pendulum
         raise ValueError(f"{path}: {data.get('model', 'this FMU')} is no pendulum: it has no scene")

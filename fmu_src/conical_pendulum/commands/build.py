@@ -12,7 +12,7 @@ from ..builder import fmu as fmus
 from ..errors import UserError
 from ..scene import KINEMATICS, MAX_LINKS, Scene, SceneError, load_scene
 from ..viz import plots
-from .common import compare
+from .common import CHECK_BOUND, compare
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -20,8 +20,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "\n\nWithout --scene, the options describe a uniform chain (3 links with bobs by default).\n"
         "After the build, unless --no-check, the FMU runs with fmpy (10 s, an output every 1/60 s,\n"
         "DOP853 at 1e-12) against the native scipy integration of the same scene; the run goes to\n"
-        "results.csv, pendulum.png and pendulum.gif next to the FMU. Exit status 1 when the\n"
-        "angles disagree by more than 1e-8 rad."
+        "a CSV, a plot and an animation named after the FMU (dist/ConicalPendulum.csv, .png, .gif).\n"
+        f"Exit status 1 when the angles disagree by more than the check's bound:\n{CHECK_BOUND}.\n"
+        "\nEach kind of FMU has its own default name, so one build does not overwrite another's:\n"
+        + "\n".join(f"  {flavour:<22} {path}" for flavour, path in DEFAULT_OUTPUTS.items())
     )
     scene = parser.add_argument_group("the scene")
     scene.add_argument(
@@ -47,9 +49,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--output",
         type=Path,
-        default=Path("dist/ConicalPendulum.fmu"),
         metavar="PATH",
-        help="the FMU to write, ending in .fmu (dist/ConicalPendulum.fmu)",
+        help="the FMU to write, ending in .fmu (by kind of FMU, as listed above; "
+        "dist/ConicalPendulum.fmu for the default pythonfmu FMU)",
     )
     parser.add_argument(
         "--native",
@@ -73,6 +75,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="only build; skip the fmpy run against the native integrator, its plot and its animation",
     )
+
+
+DEFAULT_OUTPUTS = {  # one name per kind of FMU: the README's builds, in turn, leave all three
+    "pythonfmu (default)": Path("dist/ConicalPendulum.fmu"),
+    "--native": Path("dist/ConicalPendulum_native.fmu"),
+    "--native --fmi 3": Path("dist/ConicalPendulum_fmi3.fmu"),
+}
+
+
+def default_output(native: bool, fmi: int) -> Path:
+    """Where a build writes without --output: a name that says the kind of FMU."""
+    return DEFAULT_OUTPUTS[
+        "pythonfmu (default)" if not native else "--native" if fmi == 2 else "--native --fmi 3"
+    ]
+
+
+def run_files(fmu: Path) -> tuple[Path, Path, Path]:
+    """The CSV, plot and animation of an FMU's checked run: named after the FMU, next to it."""
+    return fmu.with_suffix(".csv"), fmu.with_suffix(".png"), fmu.with_suffix(".gif")
 
 
 def choose_scene(args) -> Scene:
@@ -110,10 +131,11 @@ def run(args) -> int:
         raise UserError("--win64: only the native FMU carries a Windows binary; add --native")
     if args.fmi == 3 and not args.native:
         raise UserError("--fmi 3: only the native FMU is FMI 3.0; add --native")
+    output = args.output or default_output(args.native, args.fmi)
     try:
         build = fmus.build_fmu(
             scene,
-            args.output,
+            output,
             backend="native" if args.native else "pythonfmu",
             platforms=("linux64", "win64") if args.win64 else ("linux64",),
             fmi_version=args.fmi,
@@ -133,19 +155,20 @@ def run(args) -> int:
     if args.no_check:
         return 0
     comparison, ok = compare(build.path, scene)
-    draw(comparison.result, args.output.parent)
+    draw(comparison.result, build.path)
     return 0 if ok else 1
 
 
-def draw(result, folder: Path) -> None:
-    """The run as CSV, a plot and an animation, next to the FMU: as much of them as the
-    scene's outputs allow, and one line saying what was left out and why."""
-    csv, png, gif = folder / "results.csv", folder / "pendulum.png", folder / "pendulum.gif"
+def draw(result, fmu: Path) -> None:
+    """The run as CSV, a plot and an animation named after the FMU (run_files): as much of
+    them as the scene's outputs allow, and one line saying what was left out and why."""
+    csv, png, gif = run_files(fmu)
     write_csv(str(csv), result)
     results = plots.load_results(csv)
     lacking = plots.missing(results)
     plots.plot(results, png)
     if "the animation" in lacking:
+        gif.unlink(missing_ok=True)  # an earlier build's, of another scene: not this run
         print(f"wrote {csv} and {png}")
     else:
         seconds = plots.animate(results, gif)

@@ -5,15 +5,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import compare, fmu_scene, positive
+from .common import CHECK_BOUND, compare, fmu_scene, positive
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description += (
         "\n\nThe scene comes from the FMU (the one it was built from, in its resources). The FMU\n"
-        "runs with fmpy, its DOP853 at --rtol; the native reference is scipy's DOP853 at 1e-12 (or\n"
-        "--rtol if tighter) on the same output grid. Prints every output's largest difference.\n"
-        "Exit status 1 when the angles disagree by more than 1e-8 rad."
+        "runs with fmpy, its DOP853 at --rtol; the native reference is scipy's DOP853 on the same\n"
+        "output grid. Prints every output's largest difference and the angles' bound, and exits\n"
+        f"with status 1 when the angles disagree by more than it:\n{CHECK_BOUND}."
     )
     parser.add_argument("fmu", type=Path, metavar="FMU", help="an FMU built by conical-pendulum build")
     parser.add_argument(

@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 
 from ..demos import coupled, ecospy_run
-from ..errors import UserError
+from ..errors import UserError, needs
 from .common import check_cart_masses, check_steps, choices, numbers, output_folder
 
 
@@ -67,7 +67,7 @@ def run(args) -> int:
     check_cart_masses(args.cart_mass)
     lacking = ecospy_run.missing()
     if lacking:  # before the builds and the reference, which take a while
-        raise UserError(f'needs {lacking}: pip install -e ".[cosim]"')
+        raise UserError(needs(lacking, "cosim"))
     output_folder(args.out)
     try:
         errors = coupled.demo(args.out, args.steps, args.stop_time, args.cart_mass, args.scheme)

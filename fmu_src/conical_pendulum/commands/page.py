@@ -12,7 +12,7 @@ from fmpy import read_model_description
 from fmpy.simulation import settable_in_initialization_mode, settable_in_instantiated
 
 from ..analysis import fmpy_runs
-from ..errors import UserError
+from ..errors import UserError, needs
 from ..viz.pydy_page import write_pydy_page
 from .common import fmu_scene, positive
 
@@ -84,7 +84,7 @@ def run(args) -> int:
     try:
         import pydy  # noqa: F401 - before any work; write_pydy_page imports it when it runs
     except ModuleNotFoundError as exc:
-        raise UserError(f'needs {exc.name}: pip install pydy (or -e ".[test]")') from None
+        raise UserError(f"{needs(exc.name, 'test')} (or pip install pydy)") from None
     if args.out.exists() and not args.out.is_dir():
         raise UserError(f"--out {args.out}: not a directory")
     scene = fmu_scene(args.fmu)

@@ -14,7 +14,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "results",
         type=Path,
         metavar="RESULTS.csv",
-        help="fmpy results CSV (fmpy.util.write_csv), e.g. build's dist/results.csv",
+        help="fmpy results CSV (fmpy.util.write_csv), e.g. build's dist/ConicalPendulum.csv",
     )
     parser.add_argument("--plot", type=Path, metavar="PNG", help="PNG of angles, paths from above and energy")
     parser.add_argument("--gif", type=Path, metavar="GIF", help="animated GIF of the chain in 3D")

@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 
 from ..demos import coupled, ssp, ssp_report, ssp_tools
-from ..errors import UserError
+from ..errors import UserError, needs
 from .common import check_cart_masses, check_steps, choices, numbers, output_folder
 
 
@@ -67,7 +67,7 @@ def run(args) -> int:
     for tool in args.tools:
         lacking = ssp_tools.missing(tool)
         if lacking:  # before the builds, which take a while
-            raise UserError(f'--run {tool}: needs {lacking}: pip install -e ".[cosim]"')
+            raise UserError(f"--run {tool}: {needs(lacking, 'cosim')}")
     output_folder(args.out)
     from ..builder.fmu import build_fmu
 
@@ -94,4 +94,14 @@ def run(args) -> int:
             f"ecospy from the package against today's demo, {scheme}, cart {mass:g} kg: {difference:.3g} at most"
         )
     print(f"wrote {args.out / 'ssp_runs.csv'} and {args.out / 'ssp_runs.png'}")
+    print(scratch_note(args.out / ssp_report.WORK))
     return 0
+
+
+def scratch_note(work: Path) -> str:
+    """What the runs leave behind, and where: kept to look into, a line says how much."""
+    size = sum(f.stat().st_size for f in work.rglob("*") if f.is_file())
+    return (
+        f"left {size / 1e6:.0f} MB of the tools' scratch files (each one's unpacked packages, outputs "
+        f"and logs) in {work}: delete the folder when done"
+    )

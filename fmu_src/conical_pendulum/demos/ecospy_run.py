@@ -37,6 +37,7 @@ import json
 import os
 import sys
 
+from ..errors import needs
 from . import isolated
 
 MODULE = "conical_pendulum.demos.ecospy_run"  # run as python -m MODULE, also when this is __main__
@@ -109,7 +110,7 @@ def cosimulate(job: dict, timeout: float = 1800.0) -> list[dict]:
     RuntimeError when ecospy fails."""
     run = isolated.call(MODULE, check_job(job), timeout, "ecospy")
     if run.returncode != 0 and ("No module named 'ecospy'" in run.stderr or "libtbb" in run.stderr):
-        raise RuntimeError('ecospy co-simulation needs ecospy and tbb: pip install -e ".[cosim]"')
+        raise RuntimeError(f"ecospy co-simulation {needs('ecospy and tbb', 'cosim')}")
     return isolated.answer(run, "ecospy")["runs"]
 
 

@@ -19,6 +19,8 @@ import numpy as np
 from . import coupled, ssp, ssp_tools
 from .monolithic import cart_parameters
 
+WORK = "work"  # under the output folder: each tool's unpacked packages, outputs and logs, per package
+
 
 @dataclass
 class ToolResult:
@@ -73,7 +75,7 @@ def compare(
                 runs = {}
                 for step in steps:
                     package = package_path(out, mass, step)
-                    runs[step] = ssp_tools.run(tool, package, scheme, out / "work" / package.stem)
+                    runs[step] = ssp_tools.run(tool, package, scheme, out / WORK / package.stem)
                 ran = {step: run.as_run() for step, run in runs.items() if not run.refused}
                 errors = {e.step: e for e in coupled.coupling_errors(ran, truth, scheme, mass)} if ran else {}
                 for step, run in runs.items():

@@ -1,6 +1,6 @@
 """Plots and an animation of simulation results, with matplotlib.
 
-    conical-pendulum show dist/results.csv --plot dist/pendulum.png --gif dist/pendulum.gif
+    conical-pendulum show dist/ConicalPendulum.csv --plot seed.png --gif seed.gif
 
 The CSV is fmpy's (`fmpy.util.write_csv`): a `time` column and one per variable. Links
 are drawn from their mass-centre positions (`link<i>_x/y/z`, the midpoint of each link),
@@ -85,44 +85,207 @@ def joints(results: dict) -> np.ndarray:
     return points[:, :, [0, 2, 1]]  # inertial Y is up: draw it as the plot's z
 
 
+LEGEND_LINKS = 6  # up to this many links, a legend beside the axes; beyond, a colour scale
+SNAPSHOTS = 5  # chains drawn faintly in the side view, evenly over the run
+
+
+def _link_names(results: dict) -> list[int]:
+    """The links' numbers in order (0 at the pivot), from the alpha<i> columns: never sorted as text."""
+    return sorted(int(name[5:]) for name in results if name.startswith("alpha") and name[5:].isdigit())
+
+
+def _colours(n: int):
+    """A colour per link: distinct ones for a legend, or a scale from the pivot to the tip."""
+    import matplotlib
+
+    if n <= LEGEND_LINKS:
+        return [matplotlib.colormaps["tab10"](i) for i in range(n)]
+    scale = matplotlib.colormaps["viridis"]
+    return [scale(i / (n - 1)) for i in range(n)]
+
+
+def wrapped(t: np.ndarray, angle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Times and the angle in degrees wrapped to [-180, 180), with a NaN where it wraps, so
+    that a link turning round draws no line across the axes (nor runs them to -800)."""
+    degrees = (np.degrees(angle) + 180.0) % 360.0 - 180.0
+    breaks = np.flatnonzero(np.abs(np.diff(degrees)) > 180.0) + 1
+    return np.insert(np.asarray(t, dtype=float), breaks, np.nan), np.insert(degrees, breaks, np.nan)
+
+
+def swing_plane(points: np.ndarray) -> np.ndarray:
+    """The horizontal unit vector (plot x, y) along which the joints move most (principal
+    axis of their horizontal positions): the seed swings in one vertical plane, which seen
+    from above is a line, so the plot looks at that plane side-on and across it."""
+    horizontal = points[:, 1:, :2].reshape(-1, 2)
+    horizontal = horizontal - horizontal.mean(axis=0)
+    if not np.any(horizontal):
+        return np.array([1.0, 0.0])
+    _, _, axes = np.linalg.svd(horizontal, full_matrices=False)
+    along = axes[0]
+    return along if along[np.argmax(np.abs(along))] > 0 else -along
+
+
+def _link_key(fig, axes, colours, styles: bool) -> None:
+    """Which colour is which link: a legend outside `axes` (few links) or a colour scale
+    beside the whole figure (many)."""
+    import matplotlib
+    from matplotlib.lines import Line2D
+
+    n = len(colours)
+    if n <= LEGEND_LINKS:
+        handles = [Line2D([], [], color=c, label=f"link {i}") for i, c in enumerate(colours)]
+        if styles:
+            handles += [
+                Line2D([], [], color="0.3", label="alpha (solid)"),
+                Line2D([], [], color="0.3", linestyle="--", label="beta (dashed)"),
+            ]
+        axes.legend(
+            handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0
+        )
+    else:
+        scale = matplotlib.cm.ScalarMappable(
+            norm=matplotlib.colors.Normalize(-0.5, n - 0.5), cmap=matplotlib.colormaps["viridis"]
+        )
+        bar = fig.colorbar(scale, ax=fig.axes, pad=0.01, shrink=0.6, aspect=30)
+        bar.set_label("link (0 at the pivot)" + ("; alpha solid, beta dashed" if styles else ""))
+
+
 def plot(results: dict, path) -> None:
-    """Angles, paths from above and energy drift; a panel the results cannot give (missing())
-    says so instead."""
+    """The figure (figure()) as a PNG."""
+    import matplotlib.pyplot as plt
+
+    fig = figure(results)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def figure(results: dict):
+    """Joint angles (wrapped to +-180 degrees), the chain side-on in its plane of swing with
+    its joints' paths, the paths seen from above across that plane, and the energy drift;
+    links told apart by a legend beside the axes or, beyond LEGEND_LINKS, a colour scale.
+    A panel the results cannot give (missing()) says so instead."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     t = results["time"]
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
-    for name in sorted(k for k in results if k.rstrip("0123456789") in ("alpha", "beta")):
-        axes[0].plot(t, np.degrees(results[name]), label=name)
-    axes[0].set(xlabel="time [s]", ylabel="angle [deg]", title="joint angles")
-    axes[0].legend(fontsize=7, ncol=2)
+    links = _link_names(results)
+    colours = _colours(len(links))
+    fig, axes = plt.subplots(2, 2, figsize=(13, 8.5), layout="constrained")
+    (angles, side), (above, drift) = axes
+    width = 1.2 if len(links) <= 10 else 0.7
+    for i, colour in zip(links, colours):
+        for name, style in ((f"alpha{i}", "-"), (f"beta{i}", "--")):
+            if name in results:
+                angles.plot(*wrapped(t, results[name]), style, color=colour, lw=width)
+    apart = max(
+        (
+            np.abs((np.degrees(results[f"beta{i}"] - results[f"alpha{i}"]) + 180.0) % 360.0 - 180.0).max()
+            for i in links
+            if f"beta{i}" in results
+        ),
+        default=np.inf,
+    )
+    angles.set(
+        xlabel="time [s]",
+        ylabel="angle [deg], wrapped to [-180, 180)",
+        # curves that overlap in pairs say why: the seed's links stay near one vertical plane
+        title="joint angles" + (f" (each beta within {apart:.2g} deg of its alpha)" if apart < 2.0 else ""),
+    )
+    _link_key(fig, angles, colours, styles=True)
     if _chain_outputs(results) is None:
-        axes[1].set_axis_off()
-        axes[1].text(0.5, 0.5, "no link poses or bobs on every link", ha="center")
+        for ax in (side, above):
+            ax.set_axis_off()
+            ax.text(0.5, 0.5, "no link poses or bobs on every link", ha="center", transform=ax.transAxes)
     else:
         points = joints(results)
-        for i in range(1, points.shape[1]):
-            axes[1].plot(points[:, i, 0], points[:, i, 1], label=f"end of link {i - 1}")
-        axes[1].set(xlabel="x [m]", ylabel="z [m]", title="paths seen from above")
-        axes[1].set_aspect("equal", adjustable="datalim")
-        axes[1].legend(fontsize=7)
+        along = swing_plane(points)
+        across = np.array([-along[1], along[0]])
+        s, c, height = points[..., :2] @ along, points[..., :2] @ across, points[..., 2]
+        for i, colour in enumerate(colours):
+            side.plot(s[:, i + 1], height[:, i + 1], color=colour, lw=width, alpha=0.7)
+            above.plot(s[:, i + 1], c[:, i + 1], color=colour, lw=width)
+        for k in np.linspace(0, len(t) - 1, SNAPSHOTS).round().astype(int):  # over the paths
+            side.plot(s[k], height[k], "-", color="black", lw=1.0, alpha=0.6)
+        side.plot([0], [0], "ks", markersize=5)
+        side.set(
+            xlabel="along the plane of swing [m]",
+            ylabel="height [m]",
+            title=f"side-on: the joints' paths, and the chain at {SNAPSHOTS} times",
+        )
+        side.set_aspect("equal", adjustable="datalim")
+        spread = np.ptp(c[:, 1:]), np.ptp(s[:, 1:])
+        stretched = spread[0] < spread[1] / 5  # a (nearly) planar swing: across it drawn larger
+        above.set(
+            xlabel="along the plane of swing [m]",
+            ylabel="across it [m]",
+            title="from above" + (", across the plane stretched" if stretched else ""),
+        )
+        if not stretched:
+            above.set_aspect("equal", adjustable="datalim")
     if "energy" in results:
         energy = results["energy"]
-        axes[2].plot(t, (energy - energy[0]) / abs(energy[0]))
-        axes[2].set(xlabel="time [s]", ylabel="(E - E0) / |E0|", title="energy drift")
+        drift.plot(t, (energy - energy[0]) / abs(energy[0]))
+        drift.set(xlabel="time [s]", ylabel="(E - E0) / |E0|", title="energy drift")
     else:
-        axes[2].set_axis_off()
-        axes[2].text(0.5, 0.5, "no energy output", ha="center")
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+        drift.set_axis_off()
+        drift.text(0.5, 0.5, "no energy output", ha="center", transform=drift.transAxes)
+    return fig
+
+
+def chain_figure(points: np.ndarray, size: float = 5.0):
+    """The animation's 3D axes for joints `points` (time, joint, xyz): (figure, axes, (the
+    chain's line, its joints' markers, the tip's trail)), all empty."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
+
+    n = points.shape[1] - 1
+    low, high = points[..., 2].min(), max(points[..., 2].max(), 0.0)
+    margin = 0.05 * (high - low) or 1.0
+    # true proportions, the box no narrower than 0.7 of its height: a hanging chain fills the frame
+    horizontal = max(np.abs(points[..., :2]).max() * 1.05, 0.35 * (high - low + 2 * margin)) or 1.0
+    fig = plt.figure(figsize=(size, size))
+    fig.subplots_adjust(left=0, right=1, bottom=0, top=1)
+    ax = fig.add_subplot(projection="3d")
+    ax.set(
+        xlim=(-horizontal, horizontal),
+        ylim=(-horizontal, horizontal),
+        zlim=(low - margin, high + margin),
+        xlabel="x [m]",
+        ylabel="z [m]",
+        zlabel="y (up) [m]",
+    )
+    ax.set_box_aspect((2 * horizontal, 2 * horizontal, high - low + 2 * margin), zoom=0.85)
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(4))
+    ax.tick_params(labelsize=7)
+    across = swing_plane(points) @ np.array([[0.0, 1.0], [-1.0, 0.0]])  # turned a quarter
+    ax.view_init(elev=15, azim=np.degrees(np.arctan2(across[1], across[0])))
+    ax.plot([0], [0], [0], "ks", markersize=6)
+    (line,) = ax.plot([], [], [], "-", color="0.15", linewidth=2 if n <= 30 else 1.2)
+    (bobs,) = ax.plot(
+        [],
+        [],
+        [],
+        "o",
+        color="tab:red",
+        alpha=0.8,
+        markersize=float(np.clip(24 / n, 1.0, 6.0)),
+        markeredgewidth=0,
+    )
+    (trail,) = ax.plot([], [], [], "-", color="tab:blue", linewidth=1.0, alpha=0.8)
+    return fig, ax, (line, bobs, trail)
 
 
 def animate(results: dict, path, fps: float = 30.0, size: float = 5.0) -> float:
-    """A GIF of the chain from above and aside, at about `fps` frames per simulated second.
+    """A GIF of the chain in 3D, seen slightly from above and across its plane of swing
+    (swing_plane), at about `fps` frames per simulated second: the chain a dark line, its
+    joints' markers shrinking with the number of links so they never hide it, the tip's
+    last two seconds as a trail, the box in the chain's true proportions.
 
     Returns the seconds it took; prints a progress bar to stderr. UserError when the
     results cannot draw the chain (missing()).
@@ -138,22 +301,7 @@ def animate(results: dict, path, fps: float = 30.0, size: float = 5.0) -> float:
     t = results["time"]
     duration = t[-1] - t[0]
     frames = np.unique(np.searchsorted(t, np.arange(t[0], t[-1] + 1e-12, 1.0 / fps)).clip(0, len(t) - 1))
-    reach = np.abs(points).max() * 1.05 or 1.0
-    fig = plt.figure(figsize=(size, size))
-    ax = fig.add_subplot(projection="3d")
-    ax.set(
-        xlim=(-reach, reach),
-        ylim=(-reach, reach),
-        zlim=(-reach, 0.25 * reach),
-        xlabel="x [m]",
-        ylabel="z [m]",
-        zlabel="y (up) [m]",
-    )
-    ax.view_init(elev=10, azim=-60)
-    ax.plot([0], [0], [0], "ks", markersize=6)
-    (line,) = ax.plot([], [], [], "-", color="tab:red", linewidth=3)
-    (bobs,) = ax.plot([], [], [], "o", color="tab:blue", markersize=8)
-    (trail,) = ax.plot([], [], [], "-", color="tab:blue", linewidth=0.8, alpha=0.5)
+    fig, ax, (line, bobs, trail) = chain_figure(points, size)
     label = ax.text2D(0.02, 0.95, "", transform=ax.transAxes)
 
     def draw(k):
