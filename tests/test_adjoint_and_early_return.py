@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 from conical_pendulum import Link, Scene
-from conical_pendulum.builder.fmu import build_fmu
 from model_host import MODEL_DISCARD, MODEL_OK, MODEL_REFUSED, Model, compile_model
 
 SCENES = {
@@ -26,13 +25,13 @@ SCENES = {
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
+def built(built_fmu, tmp_path_factory):
     """(FMU, model library) of a scene, built once."""
     folder, made = tmp_path_factory.mktemp("contract"), {}
 
     def get(name):
         if name not in made:
-            fmu = build_fmu(SCENES[name], folder / f"{name}.fmu", backend="native").path
+            fmu = built_fmu(SCENES[name], backend="native")
             made[name] = fmu, compile_model(fmu, folder / name)
         return made[name]
 

@@ -12,7 +12,6 @@ from fmpy.fmi2 import FMU2Model
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 from conical_pendulum.builder.compiler import load_core
-from conical_pendulum.builder.fmu import build_fmu
 from fmu_helpers import Instance
 
 SCENES = {
@@ -24,15 +23,8 @@ SEEDS = range(5)
 
 
 @pytest.fixture(scope="module")
-def native(tmp_path_factory):
-    folder, built = tmp_path_factory.mktemp("directional"), {}
-
-    def get(name):
-        if name not in built:
-            built[name] = build_fmu(SCENES[name], folder / f"{name}.fmu", backend="native").path
-        return built[name]
-
-    return get
+def native(built_fmu):
+    return lambda name: built_fmu(SCENES[name], backend="native")
 
 
 def doubles(values):
@@ -277,10 +269,10 @@ def test_bad_references_are_errors_naming_them_and_the_instance_goes_on(native, 
     ) == [0.0, 2.0, 0.0]
 
 
-def test_a_singular_mass_matrix_is_discarded_with_the_diagnosis_never_nan(tmp_path):
+def test_a_singular_mass_matrix_is_discarded_with_the_diagnosis_never_nan(built_fmu):
     """The singular joint of test_native: a massless link along its parent's x axis."""
     scene = Scene(links=(Link(), Link(has_mass=False)))
-    path = build_fmu(scene, tmp_path / "Singular.fmu", backend="native").path
+    path = built_fmu(scene, backend="native")
     model = Model(path, scene)
     x = np.zeros(len(scene.state_names()))
     x[scene.state_names().index("alpha1")] = np.pi / 2

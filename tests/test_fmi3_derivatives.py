@@ -15,7 +15,6 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import fmi3Boolean, fmi3Float64
 
 from conical_pendulum import Link, Scene
-from conical_pendulum.builder.fmu import build_fmu
 from fmu_helpers import Instance3
 
 OK, DISCARD, ERROR = 0, 2, 3
@@ -27,15 +26,8 @@ STATE_ARRAYS = ("alpha", "beta", "omega", "delta")
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    folder, made = tmp_path_factory.mktemp("fmi3_derivatives"), {}
-
-    def get(name):
-        if name not in made:
-            made[name] = build_fmu(SCENES[name], folder / f"{name}.fmu", backend="native", fmi_version=3).path
-        return made[name]
-
-    return get
+def fmus(built_fmu):
+    return lambda name: built_fmu(SCENES[name], backend="native", fmi_version=3)
 
 
 class Fmi3(Instance3):
