@@ -85,6 +85,21 @@ def built_cart(fmu_cache):
 
 
 @pytest.fixture(scope="session")
+def c_host(tmp_path_factory):
+    """tests/hosts' C host for an FMI version (2 or 3), compiled for Linux on first use."""
+    from c_hosts import compile_host
+
+    folder, made = tmp_path_factory.mktemp("c_hosts"), {}
+
+    def get(fmi_version):
+        if fmi_version not in made:
+            made[fmi_version] = compile_host(fmi_version, "cc", folder / f"fmi{fmi_version}_host", "-ldl")
+        return made[fmi_version]
+
+    return get
+
+
+@pytest.fixture(scope="session")
 def fmu_dir(tmp_path_factory):
     """A folder for FMUs a test builds for what it checks of the builder."""
     return tmp_path_factory.mktemp("fmus")
