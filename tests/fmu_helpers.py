@@ -1,5 +1,6 @@
 """Driving an FMU through fmpy's low-level API (FMI 2.0: Instance, FMI 3.0: Instance3), with its log
-messages collected."""
+messages collected; both answer initialize, texts and the FMU state calls alike, so that one test
+body runs on either (INSTANCES by FMI version)."""
 
 from __future__ import annotations
 
@@ -59,9 +60,12 @@ class Instance:
         self.time = 0.0
         self.set(start_values or {})
         if initialize:
-            self.fmu.setupExperiment(startTime=0.0)
-            self.fmu.enterInitializationMode()
-            self.fmu.exitInitializationMode()
+            self.initialize()
+
+    def initialize(self):
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        self.fmu.exitInitializationMode()
 
     def set(self, values):
         for name, value in values.items():
@@ -76,6 +80,24 @@ class Instance:
     def step(self, dt):
         self.fmu.doStep(currentCommunicationPoint=self.time, communicationStepSize=dt)
         self.time += dt
+
+    def texts(self, status=None):
+        return " ".join(t for s, t in self.messages if status is None or s == status)
+
+    def get_state(self):
+        return self.fmu.getFMUstate()
+
+    def set_state(self, state):
+        self.fmu.setFMUstate(state)
+
+    def free_state(self, state):
+        self.fmu.freeFMUstate(state)
+
+    def serialize(self, state):
+        return self.fmu.serializeFMUstate(state)
+
+    def deserialize(self, data):
+        return self.fmu.deSerializeFMUstate(data)
 
     def close(self, after_fatal=False):
         """Free the instance; after fmi2Fatal FMI allows nothing else."""
@@ -112,7 +134,9 @@ class Instance3:
     """One FMI 3.0 instance through fmpy's low-level API, read and set by the FMI 2.0 FMU's scalar
     names (an element of an array through its array); `messages` collects (status, text)."""
 
-    def __init__(self, path, interface="CoSimulation", start_values=None, initialize=True, **options):
+    def __init__(
+        self, path, interface="CoSimulation", start_values=None, initialize=True, name="instance", **options
+    ):
         self.md = read_model_description(str(path))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.types = {v.name: v.type for v in self.md.modelVariables}
@@ -130,14 +154,17 @@ class Instance3:
             guid=self.md.guid,
             unzipDirectory=self.unzipdir,
             modelIdentifier=self.md.coSimulation.modelIdentifier,
-            instanceName="instance",
+            instanceName=name,
         )
         self.fmu.instantiate(loggingOn=True, logMessage=log, **options)
         self.time = 0.0
         self.set(start_values or {})
         if initialize:
-            self.fmu.enterInitializationMode(startTime=0.0)
-            self.fmu.exitInitializationMode()
+            self.initialize()
+
+    def initialize(self):
+        self.fmu.enterInitializationMode(startTime=0.0)
+        self.fmu.exitInitializationMode()
 
     def set(self, values):
         """Before initialization (an array is set whole, from its start values)."""
@@ -167,5 +194,24 @@ class Instance3:
     def texts(self, status=None):
         return " ".join(t for s, t in self.messages if status is None or s == status)
 
+    def get_state(self):
+        return self.fmu.getFMUState()
+
+    def set_state(self, state):
+        self.fmu.setFMUState(state)
+
+    def free_state(self, state):
+        self.fmu.freeFMUState(state)
+
+    def serialize(self, state):
+        return self.fmu.serializeFMUState(state)
+
+    def deserialize(self, data):
+        return self.fmu.deserializeFMUState(data)
+
     def close(self):
         self.fmu.freeInstance()
+        shutil.rmtree(self.unzipdir, ignore_errors=True)
+
+
+INSTANCES = {2: Instance, 3: Instance3}

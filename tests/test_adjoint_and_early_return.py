@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from conical_pendulum import Link, Scene
-from conical_pendulum.builder.fmu import build_fmu
+from differences import assert_adjoint_and_directional_match_differences
 from model_host import MODEL_DISCARD, MODEL_OK, MODEL_REFUSED, Model, compile_model
 
 SCENES = {
@@ -26,13 +26,13 @@ SCENES = {
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
+def built(built_fmu, tmp_path_factory):
     """(FMU, model library) of a scene, built once."""
     folder, made = tmp_path_factory.mktemp("contract"), {}
 
     def get(name):
         if name not in made:
-            fmu = build_fmu(SCENES[name], folder / f"{name}.fmu", backend="native").path
+            fmu = built_fmu(SCENES[name], backend="native")
             made[name] = fmu, compile_model(fmu, folder / name)
         return made[name]
 
@@ -94,27 +94,20 @@ def test_both_agree_with_central_differences(built, scene):
     entry), at a random state, inputs, seed and direction."""
     m = model(built, scene)
     x, a = random_point(m, 7)
-    point = np.concatenate([x, a])
     n = len(x)
-    rng = np.random.default_rng(8)
-    w, v = rng.standard_normal(len(m.unknowns)), rng.standard_normal(len(point))
 
     def values(p):
         m.set_point(p[:n], p[n:])
         return m.values()
 
-    def richardson(direction, h=2e-3):
-        def central(h):
-            return (values(point + h * direction) - values(point - h * direction)) / (2 * h)
-
-        return (4 * central(h) - central(2 * h)) / 3
-
     m.set_point(x, a)
-    _, sensitivity = m.adjoint(m.unknowns, m.knowns, w)
-    _, along = m.directional(m.unknowns, m.knowns, v)
-    differences = np.array([w @ richardson(np.eye(len(point))[k]) for k in range(len(point))])
-    assert np.abs(sensitivity - differences).max() < 1e-8 * np.abs(sensitivity).max()
-    assert np.abs(along - richardson(v)).max() < 1e-8 * np.abs(along).max()
+    assert_adjoint_and_directional_match_differences(
+        values,
+        lambda w: m.adjoint(m.unknowns, m.knowns, w)[1],
+        lambda v: m.directional(m.unknowns, m.knowns, v)[1],
+        np.concatenate([x, a]),
+        len(m.unknowns),
+    )
 
 
 def test_bad_references_and_seeds_are_refused_and_the_model_goes_on(built):

@@ -7,7 +7,6 @@ import pytest
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.builder.compiler import load_core
-from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.builder.model import joint_kinematics
 from conical_pendulum.scene import APPARENT_MASS, FREE_FORCE, PIVOT_OUTPUTS
 from fmu_helpers import Instance
@@ -49,14 +48,12 @@ def test_one_rigid_link_by_hand(formulation):
 
 
 @pytest.mark.parametrize("backend", ["pythonfmu", "native"])
-def test_it_is_the_pivot_forces_answer_to_the_inputs_through_fmpy(backend, fmu_dir):
+def test_it_is_the_pivot_forces_answer_to_the_inputs_through_fmpy(backend, built_fmu):
     """Finite differences of F_pivot over the inputs, through fmpy: exact, F_pivot being
     affine; F_free is the force at a_pivot = 0, the same whatever the inputs. M_app is
     computed without differences (m I - P M^-1 P^T, or the articulated inertia at the
     pivot), so this checks it independently."""
-    path = build_fmu(
-        Scene.uniform(3, coupling=True), fmu_dir / f"Apparent_{backend}.fmu", backend=backend
-    ).path
+    path = built_fmu(Scene.uniform(3, coupling=True), backend=backend)
     fmu = Instance(path, start_values={"alpha1": 0.7, "delta2": 1.5, "omega0": -0.4})
     for _ in range(30):
         fmu.step(1 / 60)

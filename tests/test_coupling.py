@@ -13,7 +13,6 @@ from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
 from conical_pendulum.builder.compiler import load_core
-from conical_pendulum.builder.fmu import build_fmu
 from fmu_helpers import Instance
 
 COUPLED = Scene.uniform(3, coupling=True)
@@ -81,8 +80,8 @@ def swing_period(fmu, a_up):
     return np.diff(crossings).mean()
 
 
-def test_upward_pivot_acceleration_changes_the_period_as_g_plus_a(fmu_dir):
-    fmu = build_fmu(Scene.uniform(1, coupling=True), fmu_dir / "CoupledOne.fmu").path
+def test_upward_pivot_acceleration_changes_the_period_as_g_plus_a(built_fmu):
+    fmu = built_fmu(Scene.uniform(1, coupling=True))
     still, lifted = swing_period(fmu, 0.0), swing_period(fmu, 4.0)
     assert lifted / still == pytest.approx(math.sqrt(9.8 / (9.8 + 4.0)), rel=1e-6)
     # and the compound pendulum's own small-swing period, to the amplitude correction

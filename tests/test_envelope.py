@@ -12,7 +12,6 @@ from fmpy.fmi1 import FMICallException
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.builder.fmu import build_fmu
 from fmu_helpers import Instance
 
 SEED = Scene.uniform(3)
@@ -60,9 +59,9 @@ def test_extreme_cases_match_the_native_reference(seed_fmu, case):
     assert np.abs(result["energy"] - energy).max() <= 1e-6 * scale
 
 
-def test_ten_links(fmu_dir):
+def test_ten_links(built_fmu):
     scene = Scene.uniform(10)
-    path = build_fmu(scene, fmu_dir / "Ten.fmu").path
+    path = built_fmu(scene)
     start = {**TIGHT, "alpha4": 0.8, "delta9": 1.0}
     result = run_fmu(path, stop_time=2.0, output_interval=0.05, start_values=start)
     native = simulate(scene, result["time"], state={"alpha4": 0.8, "delta9": 1.0}, rtol=1e-13, atol=1e-13)
@@ -111,10 +110,10 @@ def test_a_step_never_hangs(seed_fmu):
     fmu.close()
 
 
-def test_approaching_the_joint_singularity(fmu_dir):
+def test_approaching_the_joint_singularity(built_fmu):
     """A massless link with a bob near its parent's x axis: fine up to the singular point."""
     scene = Scene(links=(Link(), Link(has_mass=False)))
-    path = build_fmu(scene, fmu_dir / "Singular.fmu").path
+    path = built_fmu(scene)
     for alpha1 in (math.pi / 2 - 1e-3, math.pi / 2 - 1e-6):
         start = {"alpha1": alpha1, "beta1": 0.3}
         result = run_fmu(path, stop_time=2.0, output_interval=0.05, start_values={**TIGHT, **start})
@@ -172,11 +171,11 @@ def test_a_thousand_cycles_in_one_process(seed_fmu, tmp_path):
 
 
 @pytest.mark.parametrize("radius, outcome", [(0.5, "matches"), (1e-3, "matches"), (1e-9, "singular")])
-def test_a_massive_link_on_its_parents_x_axis(fmu_dir, radius, outcome):
+def test_a_massive_link_on_its_parents_x_axis(built_fmu, radius, outcome):
     """On the joint singularity a link's beta turns it about its own axis: only Iyy = M r^2
     resists, so the mass matrix is regular for a real cylinder and singular as r -> 0."""
     scene = Scene.uniform(2)
-    path = build_fmu(scene, fmu_dir / "Two.fmu").path
+    path = built_fmu(scene)
     start = {"alpha1": math.pi / 2, "beta1": 0.0, "omega0": 0.3, "Iyy1": 10.0 * radius**2}
     if outcome == "matches":
         result = run_fmu(path, stop_time=2.0, output_interval=0.05, start_values={**TIGHT, **start})

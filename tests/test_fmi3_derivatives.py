@@ -15,7 +15,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import fmi3Boolean, fmi3Float64
 
 from conical_pendulum import Link, Scene
-from conical_pendulum.builder.fmu import build_fmu
+from differences import assert_adjoint_and_directional_match_differences
 from fmu_helpers import Instance3
 
 OK, DISCARD, ERROR = 0, 2, 3
@@ -27,15 +27,8 @@ STATE_ARRAYS = ("alpha", "beta", "omega", "delta")
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    folder, made = tmp_path_factory.mktemp("fmi3_derivatives"), {}
-
-    def get(name):
-        if name not in made:
-            made[name] = build_fmu(SCENES[name], folder / f"{name}.fmu", backend="native", fmi_version=3).path
-        return made[name]
-
-    return get
+def fmus(built_fmu):
+    return lambda name: built_fmu(SCENES[name], backend="native", fmi_version=3)
 
 
 class Fmi3(Instance3):
@@ -171,26 +164,20 @@ def test_both_agree_with_central_differences(fmus):
     extrapolated central differences of fmi3GetContinuousStateDerivatives and fmi3GetFloat64."""
     fmu = Fmi3(fmus("coupled"), "ModelExchange")
     x, a = random_point(fmu, 7)
-    point, n = np.concatenate([x, a]), len(x)
-    rng = np.random.default_rng(8)
-    w, v = rng.standard_normal(fmu.count(fmu.unknowns)), rng.standard_normal(len(point))
+    n = len(x)
 
     def values(p):
         fmu.set_point(p[:n], p[n:])
         return fmu.unknown_values()
 
-    def richardson(direction, h=2e-3):
-        def central(h):
-            return (values(point + h * direction) - values(point - h * direction)) / (2 * h)
-
-        return (4 * central(h) - central(2 * h)) / 3
-
     fmu.set_point(x, a)
-    sensitivity = fmu.adjoint(fmu.unknowns, fmu.knowns, w)
-    along = fmu.directional(fmu.unknowns, fmu.knowns, v)
-    differences = np.array([w @ richardson(e) for e in np.eye(len(point))])
-    assert np.abs(sensitivity - differences).max() < 1e-8 * np.abs(sensitivity).max()
-    assert np.abs(along - richardson(v)).max() < 1e-8 * np.abs(along).max()
+    assert_adjoint_and_directional_match_differences(
+        values,
+        lambda w: fmu.adjoint(fmu.unknowns, fmu.knowns, w),
+        lambda v: fmu.directional(fmu.unknowns, fmu.knowns, v),
+        np.concatenate([x, a]),
+        fmu.count(fmu.unknowns),
+    )
     fmu.close()
 
 

@@ -111,7 +111,7 @@ def test_a_c_host_with_libpython_preloaded_exits_normally(seed_fmu, c_host, tmp_
     for _ in range(5):
         run = subprocess.run(
             [
-                str(c_host),
+                str(c_host(2)),
                 str(tmp_path / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"),
                 md.guid,
                 "0.1",

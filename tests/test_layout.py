@@ -179,13 +179,6 @@ def shipped(fmu) -> tuple[str, dict[str, str]]:
         }
 
 
-@pytest.fixture(scope="module")
-def cart_fmu(tmp_path_factory):
-    from conical_pendulum.demos.coupled import build_cart_fmu
-
-    return build_cart_fmu(tmp_path_factory.mktemp("cart") / "Cart.fmu")
-
-
 def test_an_fmu_ships_exactly_the_runtime_its_slave_imports(seed_fmu):
     from conical_pendulum.builder.fmu import runtime_digest, runtime_modules
 

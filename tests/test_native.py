@@ -3,6 +3,7 @@
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -15,43 +16,39 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
+import c_hosts
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.builder.fmu import build_fmu
-from conical_pendulum.builder.native import fmi_headers
-from fmu_helpers import BAD_VALUES, Instance
+from fmu_helpers import BAD_VALUES, INSTANCES, Instance
 from required_tools import require_tool
 
-HOST_SOURCE = Path(__file__).parent / "hosts" / "fmi_host.c"
 SCENES = {
     "seed": Scene.uniform(3),
     "coupled": Scene.uniform(3, coupling=True),
     "mixed": Scene(links=(Link(has_mass=False), Link(has_bob=False), Link(length=4.0))),
     "published": Scene.uniform(2, kinematics="pydy-example", outputs=("energy",)),
 }
+COUPLED = SCENES["coupled"]
 START = {"l0": 8.0, "alpha0": 0.5, "delta2": 0.3}
+ERROR, DISCARD = 3, 2  # fmi2Error, fmi2Discard (fmi3Error, fmi3Discard the same)
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
+def fmus(built_fmu):
     """{scene name: (native FMU, pythonfmu FMU)}, built on first use."""
-    folder, built = tmp_path_factory.mktemp("native"), {}
-
-    def get(name):
-        if name not in built:
-            built[name] = tuple(
-                build_fmu(SCENES[name], folder / f"{name}_{backend}.fmu", backend=backend).path
-                for backend in ("native", "pythonfmu")
-            )
-        return built[name]
-
-    return get
+    return lambda name: tuple(built_fmu(SCENES[name], backend=backend) for backend in ("native", "pythonfmu"))
 
 
 @pytest.fixture(scope="module")
 def native(fmus):
     return fmus("seed")[0]
+
+
+@pytest.fixture(scope="module")
+def host(c_host):
+    """tests/hosts/fmi_host.c compiled: a host that is a plain C program."""
+    return c_host(2)
 
 
 def unzipped(path, folder):
@@ -208,40 +205,35 @@ def test_the_fmi_layer_knows_the_model_only_through_the_contract(native):
     assert "fmi2" not in model
 
 
-def test_a_c_host_runs_it_with_a_clean_environment(native, c_host, tmp_path):
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_a_c_host_runs_it_with_a_clean_environment_as_fmpy_does(built_fmu, c_host, fmi_version, tmp_path):
     """dlopen and the FMI calls from a C program: no Python, no preload, no paths."""
-    md = read_model_description(str(native))
-    names = ["alpha0", "beta2", "bob2_x", "energy"]
+    path = built_fmu(COUPLED, backend="native", fmi_version=fmi_version)
     run = subprocess.run(
         [
-            str(c_host),
-            str(library(native, tmp_path)),
-            md.guid,
-            "10",
-            repr(1 / 60),
-            "1",
-            ",".join(map(str, vrs(native, names))),
-            "--",
-            f"{vrs(native, ['l0'])[0]}=8",
+            str(c_host(fmi_version)),
+            str(c_hosts.binary(fmi_version, unzipped(path, tmp_path))),
+            *c_hosts.host_arguments(fmi_version, path),
         ],
         capture_output=True,
         text=True,
         env={},
         check=True,
     )
-    rows = np.array([[float(x) for x in line.split(",")] for line in run.stdout.split()])
-    ours = run_fmu(native, stop_time=10.0, start_values={"l0": 8.0})
+    rows = c_hosts.rows_of(run)
+    ours = run_fmu(path, stop_time=10.0, start_values={"l0": 8.0})
+    names = c_hosts.OUTPUTS[fmi_version]
     assert rows.shape == (601, 1 + len(names))
     for k, name in enumerate(names, start=1):
         np.testing.assert_array_equal(rows[:, k], ours[name], err_msg=name)
 
 
-def test_two_instances_side_by_side_keep_their_own_parameters(native, c_host, tmp_path):
+def test_two_instances_side_by_side_keep_their_own_parameters(native, host, tmp_path):
     md = read_model_description(str(native))
     l0, alpha0 = vrs(native, ["l0", "alpha0"])
     run = subprocess.run(
         [
-            str(c_host),
+            str(host),
             str(library(native, tmp_path)),
             md.guid,
             "3",
@@ -310,9 +302,10 @@ def test_ecos_command_line_engine_runs_it_with_a_clean_environment(native, tmp_p
         )
 
 
-def test_a_thousand_cycles_under_valgrind(native, c_host, tmp_path):
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_a_thousand_cycles_under_valgrind(built_fmu, c_host, fmi_version, tmp_path):
     require_tool("valgrind", None, "Debian's valgrind (.ci/run installs it)")
-    md = read_model_description(str(native))
+    path = built_fmu(COUPLED, backend="native", fmi_version=fmi_version)
     run = subprocess.run(
         [
             "valgrind",
@@ -320,13 +313,9 @@ def test_a_thousand_cycles_under_valgrind(native, c_host, tmp_path):
             "--leak-check=full",
             "--errors-for-leak-kinds=definite,indirect,possible",
             "--quiet",
-            str(c_host),
-            str(library(native, tmp_path)),
-            md.guid,
-            "1",
-            repr(1 / 60),
-            "1000",
-            ",".join(map(str, vrs(native, ["alpha0", "energy"]))),
+            str(c_host(fmi_version)),
+            str(c_hosts.binary(fmi_version, unzipped(path, tmp_path))),
+            *c_hosts.host_arguments(fmi_version, path, stop="1", cycles="1000"),
         ],
         check=False,
         capture_output=True,
@@ -338,35 +327,54 @@ def test_a_thousand_cycles_under_valgrind(native, c_host, tmp_path):
     assert len(run.stdout.split()) == 61
 
 
-def test_fmu_state_get_set_and_serialize_replay_bit_for_bit(native):
-    fmu = Instance(native, start_values={"alpha0": 0.8})
-    for _ in range(60):
-        fmu.step(1 / 60)
-    saved = fmu.fmu.getFMUstate()
-    data = fmu.fmu.serializeFMUstate(saved)
-    names = ["alpha0", "delta1", "energy", "n_rhs"]
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_fmu_state_get_set_and_serialize_replay_bit_for_bit_and_corrupt_bytes_are_refused(
+    built_fmu, fmi_version
+):
+    """A saved state, and one serialized and restored in another instance, replay the run
+    bit for bit; bytes with a NaN time, or not of this FMU, are refused and change nothing."""
+    path = built_fmu(COUPLED, backend="native", fmi_version=fmi_version)
+    fmu = INSTANCES[fmi_version](path, start_values=START)
+    fmu.step(0.5)
+    saved = fmu.get_state()
+    data = fmu.serialize(saved)
+    names = [*COUPLED.state_names(), "energy", "n_rhs"]
 
     def run_on(instance):
-        for _ in range(60):
+        for _ in range(30):
             instance.step(1 / 60)
         return instance.get(*names)
 
     start_time = fmu.time
     first = run_on(fmu)
-    fmu.fmu.setFMUstate(saved)
+    fmu.set_state(saved)
     fmu.time = start_time
+    if fmi_version == 3:  # the independent variable, a variable in FMI 3.0
+        assert fmu.get("time") == [start_time]
     assert run_on(fmu) == first
-    other = Instance(native, name="other")
-    restored = other.fmu.deSerializeFMUstate(data)
-    other.fmu.setFMUstate(restored)
+    other = INSTANCES[fmi_version](path, name="other")
+    restored = other.deserialize(data)
+    other.set_state(restored)
     other.time = start_time
     assert run_on(other) == first
-    fmu.fmu.freeFMUstate(saved)
-    other.fmu.freeFMUstate(restored)
+    # the state's time (the first 0.5 after the header) made NaN: refused, naming it
+    at = data.index(struct.pack("<d", 0.5))
+    corrupt = data[:at] + struct.pack("<d", float("nan")) + data[at + 8 :]
+    with pytest.raises(FMICallException) as refusal:
+        other.deserialize(corrupt)
+    assert refusal.value.status == ERROR
+    assert "the state's time = nan: must be finite" in other.texts(ERROR)
+    with pytest.raises(FMICallException):
+        other.deserialize(b"\0" + data[1:])
+    assert "the bytes are not a state of this FMU" in other.texts(ERROR)
+    assert other.get(*names) == first  # nothing taken
+    fmu.free_state(saved)
+    other.free_state(restored)
     fmu.close()
     other.close()
 
 
+@pytest.mark.parametrize("fmi_version", [2, 3])
 @pytest.mark.parametrize(
     "name, value, message",
     BAD_VALUES
@@ -374,17 +382,23 @@ def test_fmu_state_get_set_and_serialize_replay_bit_for_bit(native):
         ("solver", 3, "solver = 3: choose 0 to 2 (0 = rk4, 1 = rk45, 2 = dop853); Radau needs"),
     ],
 )
-def test_a_bad_value_is_an_error_and_the_instance_goes_on(native, name, value, message):
-    fmu = Instance(native, initialize=False)
+def test_a_bad_value_is_an_error_and_the_instance_goes_on(built_fmu, fmi_version, name, value, message):
+    """fmi2Error, fmi3Error naming the value, which is not taken; the instance goes on as it
+    was, and after a reset."""
+    fmu = INSTANCES[fmi_version](
+        built_fmu(COUPLED, backend="native", fmi_version=fmi_version), initialize=False
+    )
     with pytest.raises(FMICallException) as failure:
         fmu.set({name: value})
-    assert failure.value.status == 3  # fmi2Error: the value is not taken
-    assert any(status == 3 and text.startswith(message) for status, text in fmu.messages)
+    assert failure.value.status == ERROR
+    assert any(status == ERROR and text.startswith(message) for status, text in fmu.messages), fmu.messages
+    fmu.initialize()
+    fmu.step(0.1)
+    assert np.isfinite(fmu.get("alpha0", "energy")).all()
     fmu.fmu.reset()
+    fmu.time = 0.0
     fmu.set({"l0": 7.0})
-    fmu.fmu.setupExperiment(startTime=0.0)
-    fmu.fmu.enterInitializationMode()
-    fmu.fmu.exitInitializationMode()
+    fmu.initialize()
     fmu.step(0.5)
     assert np.isfinite(fmu.get("alpha0", "energy")).all()
     fmu.close()
@@ -411,42 +425,46 @@ def test_wrong_references_and_states_are_errors_not_crashes(native):
     fmu.close(after_fatal=True)
 
 
-def test_a_failed_step_is_discarded_with_the_diagnosis_and_reset_goes_on(tmp_path):
-    """The singular two-angle joint of the envelope: a massless link along its parent's x axis."""
-    scene = Scene(links=(Link(), Link(has_mass=False)))
-    native = build_fmu(scene, tmp_path / "Singular.fmu", backend="native").path
-    fmu = Instance(native, start_values={"alpha1": np.pi / 2, "beta1": 0.0, "solver": 0})
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_a_failed_step_is_discarded_with_the_diagnosis_and_reset_goes_on(built_fmu, fmi_version):
+    """The singular two-angle joint of the envelope: a massless link along its parent's x axis.
+    The instance stays at its start; FMI 2.0 says so by fmi2LastSuccessfulTime, FMI 3.0 by time."""
+    path = built_fmu(Scene(links=(Link(), Link(has_mass=False))), backend="native", fmi_version=fmi_version)
+    fmu = INSTANCES[fmi_version](path, start_values={"alpha1": np.pi / 2, "beta1": 0.0, "solver": 0})
+    before = fmu.get("alpha0", "alpha1", "omega0")
     with pytest.raises(FMICallException) as failure:
         fmu.step(0.1)
-    assert failure.value.status == 2  # fmi2Discard
-    text = " ".join(t for s, t in fmu.messages if s == 2)
+    assert failure.value.status == DISCARD
+    text = fmu.texts(DISCARD)
     assert "singular mass matrix" in text and "link 1" in text
-    assert fmu.fmu.getRealStatus(2) == 0.0  # fmi2LastSuccessfulTime: nothing was taken
-    with pytest.raises(FMICallException):  # a discarded step: only reset or a saved state go on
-        fmu.step(0.1)
+    assert fmu.get("alpha0", "alpha1", "omega0") == before
+    if fmi_version == 2:
+        assert fmu.fmu.getRealStatus(2) == 0.0  # fmi2LastSuccessfulTime: nothing was taken
+        with pytest.raises(FMICallException):  # a discarded step: only reset or a saved state go on
+            fmu.step(0.1)
+    else:
+        assert fmu.get("time") == [0.0]
     fmu.fmu.reset()
-    fmu.fmu.setupExperiment(startTime=0.0)
-    fmu.fmu.enterInitializationMode()
-    fmu.fmu.exitInitializationMode()
+    fmu.initialize()
     fmu.time = 0.0
     fmu.step(0.1)
     assert np.isfinite(fmu.get("alpha0")).all()
     fmu.close()
 
 
-def test_the_windows_binary_runs_under_wine(tmp_path, c_host):
-    """binaries/win64 cross-compiled with Debian's mingw-w64, run by the same C host built
-    for Windows, under Debian's wine64; it agrees with the Linux binary."""
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_the_windows_binary_runs_under_wine(built_fmu, c_host, fmi_version, tmp_path):
+    """The Windows binary cross-compiled with Debian's mingw-w64 (it needs only Windows' own
+    DLLs), run by the same C host built for Windows, under Debian's wine64; it agrees with the
+    Linux binary."""
     compiler = require_tool(
         "x86_64-w64-mingw32-gcc", None, "Debian's gcc-mingw-w64-x86-64 (.ci/run installs it)"
     )
     wine = require_tool("wine64", "/usr/lib/wine/wine64", "Debian's wine64 (.ci/run installs it)")
-    both = build_fmu(
-        SCENES["seed"], tmp_path / "Both.fmu", backend="native", platforms=("linux64", "win64")
-    ).path
+    both = built_fmu(COUPLED, backend="native", fmi_version=fmi_version, platforms=("linux64", "win64"))
     assert validate_fmu(str(both)) == []
     folder = unzipped(both, tmp_path / "fmu")
-    dll = folder / "binaries" / "win64" / "ConicalPendulum.dll"
+    dll = c_hosts.binary(fmi_version, folder, "win64")
     objdump = subprocess.run(
         ["x86_64-w64-mingw32-objdump", "-p", str(dll)], capture_output=True, text=True, check=True
     ).stdout
@@ -454,26 +472,9 @@ def test_the_windows_binary_runs_under_wine(tmp_path, c_host):
         "KERNEL32.dll",
         "msvcrt.dll",
     }
-    exe = tmp_path / "fmi_host.exe"
-    subprocess.run(
-        [
-            compiler,
-            "-std=c99",
-            "-O1",
-            "-Wall",
-            "-Werror",
-            f"-I{fmi_headers()}",
-            str(HOST_SOURCE),
-            "-o",
-            str(exe),
-            "-static-libgcc",
-        ],
-        check=True,
-    )
+    exe = c_hosts.compile_host(fmi_version, compiler, tmp_path / "fmi_host.exe", "-static-libgcc")
     shutil.copy2(dll, tmp_path / dll.name)
-    guid = read_model_description(str(both)).guid
-    outputs = ",".join(map(str, vrs(both, ["alpha0", "bob2_x", "energy"])))
-    args = [guid, "10", repr(1 / 60), "1", outputs, "--", f"{vrs(both, ['l0'])[0]}=8"]
+    args = c_hosts.host_arguments(fmi_version, both)
     windows = subprocess.run(
         [wine, str(exe), dll.name, *args],
         cwd=tmp_path,
@@ -485,15 +486,12 @@ def test_the_windows_binary_runs_under_wine(tmp_path, c_host):
     )
     assert windows.returncode == 0, windows.stderr[-2000:]
     linux = subprocess.run(
-        [str(c_host), str(folder / "binaries" / "linux64" / "ConicalPendulum.so"), *args],
+        [str(c_host(fmi_version)), str(c_hosts.binary(fmi_version, folder)), *args],
         capture_output=True,
         text=True,
         env={},
         check=True,
     )
-    rows = [
-        np.array([[float(x) for x in line.split(",")] for line in run.stdout.split()])
-        for run in (windows, linux)
-    ]
-    assert rows[0].shape == rows[1].shape == (601, 4)
+    rows = [c_hosts.rows_of(run) for run in (windows, linux)]
+    assert rows[0].shape == rows[1].shape == (601, 1 + len(c_hosts.OUTPUTS[fmi_version]))
     np.testing.assert_allclose(rows[0], rows[1], rtol=1e-12, atol=1e-12)  # libm differs, not the C

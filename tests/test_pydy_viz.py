@@ -36,11 +36,9 @@ def test_the_page_carries_the_fmu_trajectories(seed_fmu, tmp_path):
         )
 
 
-def test_a_scene_without_bobs_draws_only_links(seed_fmu, tmp_path, fmu_dir):
-    from conical_pendulum.builder.fmu import build_fmu
-
+def test_a_scene_without_bobs_draws_only_links(seed_fmu, tmp_path, built_fmu):
     scene = Scene(links=(Link(has_bob=False), Link(has_bob=False)))
-    path = build_fmu(scene, fmu_dir / "NoBobs.fmu").path
+    path = built_fmu(scene)
     run = run_fmu(path, stop_time=0.2, output_interval=0.05)
     folder, _ = write_pydy_page(scene, {n: run[n] for n in run.dtype.names}, tmp_path)
     description = json.loads((folder / f"{PREFIX}_scene_desc.json").read_text())

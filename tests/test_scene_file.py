@@ -7,7 +7,6 @@ from pathlib import Path
 import pytest
 
 from conical_pendulum import Link, Scene, SceneError
-from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -26,7 +25,7 @@ def test_the_example_file_is_the_seed_scene():
     assert scene.parameter_defaults() == seed.parameter_defaults()
 
 
-def test_a_scene_file_decides_equations_variables_and_starts(tmp_path, fmu_dir):
+def test_a_scene_file_decides_equations_variables_and_starts(tmp_path, built_fmu):
     path = tmp_path / "two.toml"
     path.write_text("""
 gravity = 3.7
@@ -49,7 +48,7 @@ inertia = [0.07, 0.015, 0.07]
         Link(has_mass=False, length=2.0, bob_mass=1.5),
         Link(has_bob=False, length=0.5, mass=3.0, radius=0.1, moments=(0.07, 0.015, 0.07)),
     )
-    built = variables(build_fmu(scene, fmu_dir / "FromFile.fmu").path)
+    built = variables(built_fmu(scene))
     assert {"M0", "Ixx0", "m1", "bob0_x", "link0_qw"}.isdisjoint(built)
     starts = {
         name: float(built[name].find("Real").get("start"))

@@ -9,7 +9,6 @@ import pytest
 from fmpy.ssp.ssd import read_ssd, read_ssv
 from lxml import etree
 
-from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.demos import coupled, ecospy_run, libcosim_run, ssp, ssp_tools
 from conical_pendulum.demos.monolithic import cart_parameters
 from fmu_helpers import Instance
@@ -19,10 +18,8 @@ STEP, STOP_TIME, CART_MASS = 0.01, 0.1, 5.0  # 10 steps: the fewest ecos' comman
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("ssp_fmus")
-    pendulum = build_fmu(coupled.SCENE, folder / "ConicalPendulum.fmu", backend="native").path
-    return pendulum, coupled.build_cart_fmu(folder / "Cart.fmu")
+def fmus(built_fmu, cart_fmu):
+    return built_fmu(coupled.SCENE, backend="native"), cart_fmu
 
 
 @pytest.fixture(scope="module")

@@ -33,7 +33,6 @@ from fmpy.fmi2 import (
 )
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.builder.native import LOG_CATEGORIES
 
 OK, DISCARD, ERROR = 0, 2, 3
@@ -371,9 +370,8 @@ def calls(fmu, interface, serialized):
 
 
 @pytest.fixture(scope="module")
-def native(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("state_machine")
-    return build_fmu(SCENE, folder / "StateMachine.fmu", backend="native").path
+def native(built_fmu):
+    return built_fmu(SCENE, backend="native")
 
 
 @pytest.fixture(scope="module")

@@ -29,21 +29,13 @@ DOCS = Path(__file__).parents[1] / "docs" / "fmu.md"
 
 
 @pytest.fixture(scope="module")
-def fmus(seed_fmu, native_seed_fmu, coupled_fmu, fmu_dir):
-    """{(scene name, backend): FMU}: the session's where there is one, the others built here."""
-    built = {
-        ("seed", "pythonfmu"): (SEED, seed_fmu),
-        ("seed", "native"): (SEED, native_seed_fmu),
-        ("coupled", "pythonfmu"): (COUPLED, coupled_fmu),
+def fmus(built_fmu):
+    """{(scene name, backend): (scene, FMU)}."""
+    return {
+        (name, backend): (scene, built_fmu(scene, backend=backend))
+        for name, scene in (("seed", SEED), ("coupled", COUPLED), ("one link", ONE_LINK))
+        for backend in ("pythonfmu", "native")
     }
-    for name, scene, backend in (
-        ("coupled", COUPLED, "native"),
-        ("one link", ONE_LINK, "pythonfmu"),
-        ("one link", ONE_LINK, "native"),
-    ):
-        path = fmu_dir / f"variables_{name.replace(' ', '_')}_{backend}.fmu"
-        built[name, backend] = (scene, build_fmu(scene, path, backend=backend).path)
-    return built
 
 
 def read(fmu):

@@ -1,0 +1,28 @@
+"""Richardson-extrapolated central differences, (4 D(h) - D(2h)) / 3 = J + O(h^4), for the
+FMI 2.0 FMU's directional derivatives (test_directional), and one check that an adjoint
+(w^T J) and a directional derivative (J v) are the derivatives of a model's values, for the
+model contract (test_adjoint_and_early_return) and the FMI 3.0 FMU (test_fmi3_derivatives)
+alike."""
+
+import numpy as np
+
+
+def richardson(values, point, direction, h=2e-3):
+    """The derivative of values(p) at `point` along `direction`."""
+
+    def central(h):
+        return (values(point + h * direction) - values(point - h * direction)) / (2 * h)
+
+    return (4 * central(h) - central(2 * h)) / 3
+
+
+def assert_adjoint_and_directional_match_differences(values, adjoint, directional, point, n_unknowns):
+    """adjoint(w) and directional(v), asked at `point` before any difference moves it, against
+    the differences of values(p) (which sets p), for a random seed w and direction v: within
+    1e-8 of the largest entry (fmi2's test bound)."""
+    rng = np.random.default_rng(8)
+    w, v = rng.standard_normal(n_unknowns), rng.standard_normal(len(point))
+    sensitivity, along = adjoint(w), directional(v)
+    differences = np.array([w @ richardson(values, point, e) for e in np.eye(len(point))])
+    assert np.abs(sensitivity - differences).max() < 1e-8 * np.abs(sensitivity).max()
+    assert np.abs(along - richardson(values, point, v)).max() < 1e-8 * np.abs(along).max()
