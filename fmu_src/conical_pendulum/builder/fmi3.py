@@ -161,9 +161,20 @@ def model_description(described: Description) -> bytes:
     for category, text in LOG_CATEGORIES.items():
         ET.SubElement(categories, "Category", name=category, description=text)
     ET.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime="10.0", stepSize=repr(model.step_size))
-    variables = ET.SubElement(root, "ModelVariables")
     variables_ = layout(records)
     vr = {m.name: str(v.value_reference) for v in variables_ for m in v.members}  # an element: its array's
+    _model_variables(ET.SubElement(root, "ModelVariables"), described, variables_, vr)
+    _model_structure(ET.SubElement(root, "ModelStructure"), records, variables_, vr)
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def _model_variables(
+    variables: ET.Element, described: Description, variables_: list[Fmi3Variable], vr
+) -> None:
+    """ModelVariables: time, the arrays' structural parameter if there are arrays, then the
+    variables (arrays and scalars) by value reference."""
+    model, records = described.model, described.records
     n_variables = len(records)
     ET.SubElement(  # FMI 3.0 names the independent variable (fmi3_arrays.h's CP_VR_TIME)
         variables,
@@ -204,7 +215,11 @@ def model_description(described: Description) -> bytes:
         if variable.array:
             ET.SubElement(element, "Dimension", valueReference=str(n_variables + 1))
 
-    element = ET.SubElement(root, "ModelStructure")
+
+def _model_structure(
+    element: ET.Element, records: list[Variable], variables_: list[Fmi3Variable], vr
+) -> None:
+    """ModelStructure by value reference: builder.variables.model_structure's unknowns."""
     structure = model_structure(records)
     # FMI 3.0's order: Output, ContinuousStateDerivative, InitialUnknown, each by value
     # reference; an array is an unknown where its first element is
@@ -222,8 +237,6 @@ def model_description(described: Description) -> bytes:
                 names = [name for m in variable.members for name in m.depends_on]
                 attributes["dependencies"] = " ".join(dict.fromkeys(vr[name] for name in names))
             ET.SubElement(element, tag, attributes)
-    ET.indent(root)
-    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
 def build_description(sources: list[str], model_identifier: str) -> bytes:

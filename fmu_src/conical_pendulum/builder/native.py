@@ -113,10 +113,11 @@ def guid_of(model: NativeModel, data: dict, fmi_version: int = 2) -> str:
     """A GUID that changes with anything the model description or binary says: the
     variables and start values, for the pendulum the core's build (scene structure and
     generator) and the settings, every C file it ships from runtime/csrc, and the code
-    that writes it (WRITERS, and its standard's module)."""
+    that writes it (WRITERS, its standard's module and its model's)."""
     files = glue_sources(model, fmi_version) + glue_headers(model)
     shipped = [CSRC / name for name in files if (CSRC / name).exists()]
-    writers = [*WRITERS, Path(sys.modules[STANDARDS[fmi_version].model_description.__module__].__file__)]
+    modules = (STANDARDS[fmi_version].model_description.__module__, model.config.__module__)
+    writers = [*WRITERS, *(Path(sys.modules[name].__file__) for name in modules)]
     glue = b"".join(path.read_bytes() for path in shipped + writers)
     text = json.dumps(data, sort_keys=True) + glue.hex()
     return "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, text)) + "}"

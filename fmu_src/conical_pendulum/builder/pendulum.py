@@ -22,24 +22,20 @@ def _config(data: dict, records: list[Variable]) -> list[str]:
     core's arrays (model.h), its Integer settings' starts and rules, the carried step's rule."""
     n_state = sum(v.group == "states" for v in records)
     step_rule, step_what = rule_of("h")
-    return [
-        '#include "model.h"',
-        "/* What the glue takes from that order: the core's p (parameters, then inputs), x and",
-        " * y lie in the Reals as the core reads them. */",
-        "#if CP_VR_STATE != CP_NPARAM || CP_VR_OUTPUT != CP_VR_STATE + CP_NSTATE \\",
-        "    || CP_VR_STATISTICS != CP_VR_OUTPUT + CP_NOUTPUT || CP_VR_INPUT + CP_NINPUT != CP_NPARAM",
-        '#error "the value-reference order does not fit the core\'s arrays (builder/variables.py)"',
-        "#endif",
-        f"#if CP_NSTATE != {n_state}",
-        '#error "fmu_config.h and model.h come from different scenes"',
-        "#endif",
-        c.define("CP_SOLVER_START", data["settings"]["solver"]),
-        c.define("CP_MAX_STEPS_START", data["settings"]["max_steps"]),
-        c.define("CP_SOLVER_RULE", RULE_INDEX["native-solver"]),
-        c.define("CP_MAX_STEPS_RULE", RULE_INDEX[rule_of("max_steps")[0]]),
-        c.define("CP_STEP_RULE", RULE_INDEX[step_rule]),
-        c.define("CP_STEP_WHAT", c.string(step_what)),
-    ]
+    return c.fill(
+        "pendulum_config.h.in",
+        n_state=n_state,
+        defines="\n".join(
+            [
+                c.define("CP_SOLVER_START", data["settings"]["solver"]),
+                c.define("CP_MAX_STEPS_START", data["settings"]["max_steps"]),
+                c.define("CP_SOLVER_RULE", RULE_INDEX["native-solver"]),
+                c.define("CP_MAX_STEPS_RULE", RULE_INDEX[rule_of("max_steps")[0]]),
+                c.define("CP_STEP_RULE", RULE_INDEX[step_rule]),
+                c.define("CP_STEP_WHAT", c.string(step_what)),
+            ]
+        ),
+    ).splitlines()
 
 
 PENDULUM = NativeModel(
