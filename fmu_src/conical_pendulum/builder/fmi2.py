@@ -11,10 +11,6 @@ from .native_model import LOG_CATEGORIES, Description, Standard
 from .variables import model_structure
 
 
-def _start(variable) -> str:
-    return repr(float(variable.start)) if variable.type == "Real" else str(variable.start)
-
-
 def model_description(described: Description) -> bytes:
     """modelDescription.xml (FMI 2.0) for both interfaces of the model."""
     model, records = described.model, described.records
@@ -73,7 +69,7 @@ def model_description(described: Description) -> bytes:
             attributes["initial"] = v.initial
         value = {}
         if v.start is not None:
-            value["start"] = _start(v)
+            value["start"] = v.start_text()
         if v.derivative_of:
             value["derivative"] = index[v.derivative_of]
         ET.SubElement(ET.SubElement(variables, "ScalarVariable", attributes), v.type, value)

@@ -110,10 +110,6 @@ def _description(variable: Fmi3Variable) -> str:
     return describe(first.quantity, every_link=True) + " (element [k + 1]: link k)"
 
 
-def _start(variable: Variable) -> str:
-    return repr(float(variable.start)) if variable.type == "Real" else str(variable.start)
-
-
 def model_description(described: Description) -> bytes:
     """modelDescription.xml (FMI 3.0) for both interfaces of the model: the same variables and
     value references as its FMI 2.0 native FMU; no clocks, no events, no event mode; the
@@ -208,7 +204,7 @@ def _model_variables(
         if v.initial:
             attributes["initial"] = v.initial
         if v.start is not None:
-            attributes["start"] = " ".join(_start(m) for m in variable.members)
+            attributes["start"] = " ".join(m.start_text() for m in variable.members)
         if v.derivative_of:
             attributes["derivative"] = vr[v.derivative_of]
         element = ET.SubElement(variables, TYPES[v.type], attributes)

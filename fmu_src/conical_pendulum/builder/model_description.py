@@ -39,7 +39,7 @@ def complete(fmu: Path, described: list[Variable]) -> None:
     for var, v in zip(variables, described):
         real = var.find("Real")
         if real is not None and real.get("start") is not None:
-            real.set("start", repr(float(v.start)))
+            real.set("start", v.start_text())
     element = root.find("ModelStructure")
     for child in list(element):
         element.remove(child)

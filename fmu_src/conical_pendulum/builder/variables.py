@@ -49,6 +49,10 @@ class Variable:
     index: int | None = None  # its 0-based place in that array
     what: str = ""  # what a refusal of a value calls it ("a length"): its rule's words
 
+    def start_text(self) -> str:
+        """The start as a model description writes it: a Real with the digits that round-trip."""
+        return repr(float(self.start)) if self.type == "Real" else str(self.start)
+
     def to_dict(self) -> dict:
         data = asdict(self)
         data["depends_on"] = list(self.depends_on)
