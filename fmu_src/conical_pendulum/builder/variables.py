@@ -5,9 +5,13 @@ variability and initial; `variables(scene, settings, backend)` makes from it the
 of one FMU, in value-reference order (a variable's value reference is its place in the
 list). model.json carries these records to the pythonfmu slave, which registers its
 variables from them; the pythonfmu FMU's model description is checked against them and
-completed from them (model_description.complete); the native FMU's model description and
-fmu_config.h are written from them (native.py). Adding a group of variables is one
-entry in GROUPS (and the code that computes its values).
+completed from them (model_description.complete); the native FMU's model descriptions
+(builder.fmi2, builder.fmi3) and fmu_config.h (builder.fmu_config) are written from them.
+Adding a group of variables is one entry in GROUPS (and the code that computes its values).
+
+A record carries what its variable is as fields (its quantity and link, from the scene's
+Scalar; its unit and description, from DESCRIBED by quantity; its FMI 3.0 array and index;
+its rule): everything written about it is made from these, nothing parsed from its name.
 
 The statistics' order is runtime.rules.STATISTICS's, which the C indexes by name
 (CP_STAT_*, generated into model.h by codegen).
