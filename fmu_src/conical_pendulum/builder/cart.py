@@ -28,13 +28,14 @@ DESCRIPTION = (
     "cart on a spring and damper along X carrying an apparent mass M_x; inputs F_x (held or "
     "extrapolated) and M_x (held) over each communication step, solved exactly"
 )
+# Descriptions with the hole {unit}: UNITS's, the one source of each variable's unit.
 PARAMETERS = {
-    "m_cart": ("mass of the cart [kg]", 100.0),
-    "k_cart": ("stiffness of the spring from the ground to the cart [N/m]", 150.0),
-    "c_cart": ("damping from the ground to the cart [N s/m]", 20.0),
+    "m_cart": ("mass of the cart [{unit}]", 100.0),
+    "k_cart": ("stiffness of the spring from the ground to the cart [{unit}]", 150.0),
+    "c_cart": ("damping from the ground to the cart [{unit}]", 20.0),
 }
 START = {"x": 1.0, "v": 0.0}  # the cart's state at t = 0 [m, m/s]
-STATES = {"x": "position of the cart along X [m]", "v": "velocity of the cart along X [m/s]"}
+STATES = {"x": "position of the cart along X [{unit}]", "v": "velocity of the cart along X [{unit}]"}
 UNITS = {
     "m_cart": "kg",
     "k_cart": "N/m",
@@ -46,13 +47,13 @@ UNITS = {
     "a": "m/s2",
 }
 INPUTS = {
-    "F_x": "force on the cart along X [N]: the pendulum's F_pivot_x, or F_free_x with M_x",
-    "M_x": "apparent mass along X of what the cart carries [kg] (the pendulum's M_pivot_xx), moved "
+    "F_x": "force on the cart along X [{unit}]: the pendulum's F_pivot_x, or F_free_x with M_x",
+    "M_x": "apparent mass along X of what the cart carries [{unit}] (the pendulum's M_pivot_xx), moved "
     "with the cart: (m_cart + M_x) a = F_x - k_cart x - c_cart v; 0 for an explicit exchange; "
     "held over each step",
 }
 ACCELERATION = (
-    "acceleration of the cart along X [m/s2] (the pendulum's a_pivot_x); depends at once on F_x and M_x"
+    "acceleration of the cart along X [{unit}] (the pendulum's a_pivot_x); depends at once on F_x and M_x"
 )
 F_X_ORDER = (
     "the force over a step: 0 held at its value, 1 extrapolated linearly through the last two "
@@ -66,6 +67,11 @@ def _members(*members):
     return lambda scene, settings: list(members)
 
 
+def _member(name, start, text, depends_on=()):
+    """A cart variable whose description names its unit (UNITS)."""
+    return Member(Scalar(name), start, text.format(unit=UNITS[name]), depends_on, unit=UNITS[name])
+
+
 # The value-reference order: Reals (parameters, inputs, states, the output), the Integer,
 # then the state derivatives (Model Exchange), as the pendulum's groups go.
 GROUPS = (
@@ -76,12 +82,7 @@ GROUPS = (
         "fixed",
         None,
         "PARAMETER",
-        _members(
-            *(
-                Member(Scalar(name), start, text, unit=UNITS[name])
-                for name, (text, start) in PARAMETERS.items()
-            )
-        ),
+        _members(*(_member(name, start, text) for name, (text, start) in PARAMETERS.items())),
         named=True,
     ),
     Group(
@@ -91,7 +92,7 @@ GROUPS = (
         "continuous",
         None,
         "INPUT",
-        _members(*(Member(Scalar(name), 0.0, text, unit=UNITS[name]) for name, text in INPUTS.items())),
+        _members(*(_member(name, 0.0, text) for name, text in INPUTS.items())),
         named=True,
     ),
     Group(
@@ -101,12 +102,7 @@ GROUPS = (
         "continuous",
         "exact",
         "STATE",
-        _members(
-            *(
-                Member(Scalar(name), START[name], text, (name,), unit=UNITS[name])
-                for name, text in STATES.items()
-            )
-        ),
+        _members(*(_member(name, START[name], text, (name,)) for name, text in STATES.items())),
         named=True,
     ),
     Group(
@@ -116,7 +112,7 @@ GROUPS = (
         "continuous",
         "calculated",
         "OUTPUT",
-        _members(Member(Scalar("a"), None, ACCELERATION, KNOWNS, unit=UNITS["a"])),
+        _members(_member("a", None, ACCELERATION, KNOWNS)),
         named=True,
     ),
     Group(

@@ -8,7 +8,7 @@ import time
 import xml.etree.ElementTree as ET
 
 from .native_model import LOG_CATEGORIES, Description, Standard
-from .variables import model_structure
+from .variables import Variable, model_structure
 
 
 def model_description(described: Description) -> bytes:
@@ -55,8 +55,15 @@ def model_description(described: Description) -> bytes:
     for name, text in LOG_CATEGORIES.items():
         ET.SubElement(categories, "Category", name=name, description=text)
     ET.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime="10.0", stepSize=repr(model.step_size))
-    variables = ET.SubElement(root, "ModelVariables")
     index = {v.name: str(v.value_reference + 1) for v in records}  # its place in ModelVariables
+    _model_variables(ET.SubElement(root, "ModelVariables"), records, index)
+    _model_structure(ET.SubElement(root, "ModelStructure"), records, index)
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def _model_variables(variables: ET.Element, records: list[Variable], index: dict[str, str]) -> None:
+    """ModelVariables: one ScalarVariable per record, in value-reference order."""
     for v in records:
         attributes = {
             "name": v.name,
@@ -74,8 +81,11 @@ def model_description(described: Description) -> bytes:
             value["derivative"] = index[v.derivative_of]
         ET.SubElement(ET.SubElement(variables, "ScalarVariable", attributes), v.type, value)
 
-    structure = model_structure(records)  # each list in the order of ModelVariables, as FMI 2.0 asks
-    element = ET.SubElement(root, "ModelStructure")
+
+def _model_structure(element: ET.Element, records: list[Variable], index: dict[str, str]) -> None:
+    """ModelStructure by index: builder.variables.model_structure's unknowns, each list in the
+    order of ModelVariables, as FMI 2.0 asks."""
+    structure = model_structure(records)
     for tag, unknowns in (("Outputs", structure.outputs), ("Derivatives", structure.derivatives)):
         listed = ET.SubElement(element, tag)
         for v in unknowns:
@@ -84,8 +94,6 @@ def model_description(described: Description) -> bytes:
     initial = ET.SubElement(element, "InitialUnknowns")
     for v in structure.initial_unknowns:
         ET.SubElement(initial, "Unknown", index=index[v.name])
-    ET.indent(root)
-    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
 FMI2 = Standard(
