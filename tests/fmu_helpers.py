@@ -12,8 +12,8 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 
+from conical_pendulum.analysis.fmi3_arrays import element_names
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
-from conical_pendulum.builder.fmi3 import element_names
 
 # Values every FMU of the package refuses, whatever its backend, with these words (runtime.rules).
 BAD_VALUES = [

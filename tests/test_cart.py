@@ -16,6 +16,7 @@ from scipy.linalg import expm
 
 from conical_pendulum.builder import cart, native
 from conical_pendulum.builder.compiler import CSRC
+from conical_pendulum.builder.pendulum import PENDULUM
 from conical_pendulum.cli import main
 from conical_pendulum.demos.monolithic import cart_parameters
 from fmu_helpers import INSTANCES, Instance, Instance3
@@ -54,15 +55,23 @@ def test_the_glue_is_the_pendulums_unchanged(built_cart, version):
     path = built_cart(version)
     with zipfile.ZipFile(path) as archive:
         shipped = {name.split("/", 1)[1] for name in archive.namelist() if name.startswith("sources/")}
-        for name in (*native.LAYER_SOURCES[version], "fmi_layer.h", "fmu_model.h", "rules.c", "rules.h"):
+        for name in (
+            *native.LAYER_SOURCES[version],
+            "fmi_layer.h",
+            "fmu_model.h",
+            "rules.c",
+            "rules.h",
+            "variable_table.c",
+            "variable_table.h",
+        ):
             assert archive.read(f"sources/{name}") == (CSRC / name).read_bytes(), name
     generated = {"fmi3_arrays.h", "buildDescription.xml"} if version == 3 else set()
     assert shipped == {
-        *native.glue_sources(version, cart.MODEL),
+        *native.glue_sources(cart.MODEL, version),
         *native.glue_headers(cart.MODEL),
         *generated,
     }
-    pendulum, cart_sources = native.glue_sources(version), native.glue_sources(version, cart.MODEL)
+    pendulum, cart_sources = native.glue_sources(PENDULUM, version), native.glue_sources(cart.MODEL, version)
     assert pendulum[-2:] == cart_sources[-2:] == list(native.LAYER_SOURCES[version])
     assert "pendulum_model.c" not in cart_sources and "cart_model.c" not in pendulum
 
@@ -348,7 +357,7 @@ def test_the_fmi3_cart_is_valid_with_the_fmi2_carts_variables_and_no_structural_
         assert "binaries/x86_64-linux/Cart.so" in archive.namelist()
         build = ET.fromstring(archive.read("sources/buildDescription.xml"))
     assert build.find("BuildConfiguration").get("modelIdentifier") == "Cart"
-    assert [f.get("name") for f in build.iter("SourceFile")] == native.glue_sources(3, cart.MODEL)
+    assert [f.get("name") for f in build.iter("SourceFile")] == native.glue_sources(cart.MODEL, 3)
 
 
 def _simulate(path, fmi_type, **options):

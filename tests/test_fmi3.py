@@ -18,7 +18,8 @@ from fmpy.validation import validate_fmu
 
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.builder.native import LOG_CATEGORIES, fmi_headers
+from conical_pendulum.builder.native import fmi_headers
+from conical_pendulum.builder.native_model import LOG_CATEGORIES
 from fmu_helpers import Instance3, fmi3_names, fmi3_start_values
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -15,11 +15,15 @@ from fmpy.fmi1 import FMICallException
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.builder import fmi2
 from conical_pendulum.builder import variables as described
 from conical_pendulum.builder.compiler import build_core, load_core
 from conical_pendulum.builder.fmu import build_fmu, checked_settings, model_data
-from conical_pendulum.builder.native import config_header, model_description
+from conical_pendulum.builder.fmu_config import config_header
+from conical_pendulum.builder.native_model import Description
+from conical_pendulum.builder.pendulum import PENDULUM
 from conical_pendulum.runtime.rules import STATISTICS
+from conical_pendulum.scene import Scalar
 from fmu_helpers import Instance
 
 SETTINGS = checked_settings(None)
@@ -116,13 +120,13 @@ def test_the_statistics_slots_of_the_c_are_the_variables_order():
 
 def test_fmu_config_h_takes_its_value_references_from_the_description():
     data = model_data(COUPLED, build_core(COUPLED), SETTINGS, "native")
-    header = config_header(data, "{guid}")
+    header = config_header(PENDULUM, data, described.records(data), "{guid}")
     records = data["variables"]
     first = {v["group"]: v["value_reference"] for v in reversed(records)}
     for group in described.groups("native"):
         assert f"#define CP_VR_{group.c_name} {first[group.name]}\n" in header
     assert f"#define CP_NREAL {first['integer_settings']}\n" in header
-    names = re.search(r"cp_names\[\] = \{\n(.*?)\n\};", header, re.DOTALL).group(1)
+    names = re.search(r"cp_names\[CP_NVARIABLE\] = \{\n(.*?)\n\};", header, re.DOTALL).group(1)
     assert [json.loads(line.strip().rstrip(",")) for line in names.splitlines()] == [
         v["name"] for v in records
     ]
@@ -157,8 +161,8 @@ EXTRA = described.Group(
     "calculated",
     "EXTRA",
     lambda scene, settings: [
-        described.Member("n_extra", None, "an extra count"),
-        described.Member("n_more", None, "another one"),
+        described.Member(Scalar("n_extra"), None, "an extra count"),
+        described.Member(Scalar("n_more"), None, "another one"),
     ],
 )
 EXTRA_PARAMETER = described.Group(
@@ -168,7 +172,7 @@ EXTRA_PARAMETER = described.Group(
     "fixed",
     None,
     "EXTRA_PARAMETER",
-    lambda scene, settings: [described.Member("k_extra", 2.5, "a number")],
+    lambda scene, settings: [described.Member(Scalar("k_extra"), 2.5, "a number")],
 )
 
 PLAIN = {v.name: v.value_reference for v in described.variables(SEED, SETTINGS, "native")}
@@ -194,7 +198,7 @@ def test_a_new_group_is_one_entry_in_the_list(extra_groups, tmp_path):
     }
     data = {"variables": list(records.values()), "settings": SETTINGS, "description": "extra"}
     # fmu_config.h: its value references, the names and how each may be set
-    header = config_header(data, "{guid}")
+    header = config_header(PENDULUM, data, described.records(data), "{guid}")
     for line in (
         f"CP_VR_EXTRA {first}",
         f"CP_VR_SETTINGS {first + 2}",
@@ -206,7 +210,9 @@ def test_a_new_group_is_one_entry_in_the_list(extra_groups, tmp_path):
     settable = re.search(r"cp_settable\[CP_NVARIABLE\] = \{(.*)\};", header).group(1).split(", ")
     assert settable[first] == "CP_SET_NEVER" and settable[later + 2] == "CP_SET_BEFORE_INIT"
     # the native model description
-    root = ET.fromstring(model_description(data, "{guid}"))
+    root = ET.fromstring(
+        fmi2.model_description(Description(PENDULUM, data, described.records(data), "{guid}", []))
+    )
     rows = {row["name"]: row for row in declared(root)}
     assert rows["n_extra"] == {
         "name": "n_extra",

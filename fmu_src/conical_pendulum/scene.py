@@ -60,6 +60,30 @@ class Link:
 
 
 @dataclass(frozen=True)
+class Scalar:
+    """One scalar of the scene, by its structure: a quantity (stem + suffix: l, alpha, bob_x,
+    g, a_pivot_x) of one link or of none. Its name is made from these, never read back."""
+
+    stem: str
+    link: int | None = None
+    suffix: str = ""
+
+    @property
+    def quantity(self) -> str:
+        """What the scalar is, whatever its link: its rule's and its FMI 3.0 array's key."""
+        return self.stem + self.suffix
+
+    @property
+    def name(self) -> str:
+        """The FMU's name of it: l0, bob2_x, der(alpha1), g."""
+        return self.stem + ("" if self.link is None else str(self.link)) + self.suffix
+
+
+def _names(scalars: list[Scalar]) -> list[str]:
+    return [scalar.name for scalar in scalars]
+
+
+@dataclass(frozen=True)
 class Scene:
     links: tuple[Link, ...] = field(default_factory=lambda: (Link(),) * 3)
     outputs: tuple[str, ...] = OUTPUT_GROUPS
@@ -173,18 +197,21 @@ class Scene:
 
     # --- names: the FMU's contract, in the order of the compiled core's arrays ---
 
-    def parameter_names(self) -> list[str]:
+    def parameter_scalars(self) -> list[Scalar]:
         """Parameters in the seed's order: l, m (bobs), M (links), Ixx, Iyy, Izz, g."""
         n = range(self.n)
         massive = [i for i in n if self.links[i].has_mass]
         bobs = [i for i in n if self.links[i].has_bob]
         return (
-            [f"l{i}" for i in n]
-            + [f"m{i}" for i in bobs]
-            + [f"M{i}" for i in massive]
-            + [f"{axis}{i}" for axis in ("Ixx", "Iyy", "Izz") for i in massive]
-            + ["g"]
+            [Scalar("l", i) for i in n]
+            + [Scalar("m", i) for i in bobs]
+            + [Scalar("M", i) for i in massive]
+            + [Scalar(axis, i) for axis in ("Ixx", "Iyy", "Izz") for i in massive]
+            + [Scalar("g")]
         )
+
+    def parameter_names(self) -> list[str]:
+        return _names(self.parameter_scalars())
 
     def parameter_defaults(self) -> list[float]:
         values = {}
@@ -196,33 +223,51 @@ class Scene:
         values["g"] = self.gravity
         return [float(values[name]) for name in self.parameter_names()]
 
-    def input_names(self) -> list[str]:
+    def input_scalars(self) -> list[Scalar]:
         """Inputs, held constant over a communication step: the pivot's inertial acceleration."""
-        return list(PIVOT_INPUTS) if self.coupling else []
+        return [Scalar(name) for name in PIVOT_INPUTS] if self.coupling else []
+
+    def input_names(self) -> list[str]:
+        return _names(self.input_scalars())
+
+    def core_parameter_scalars(self) -> list[Scalar]:
+        """What the compiled core reads from its array p: the parameters, then the inputs."""
+        return self.parameter_scalars() + self.input_scalars()
 
     def core_parameter_names(self) -> list[str]:
-        """What the compiled core reads from its array p: the parameters, then the inputs."""
-        return self.parameter_names() + self.input_names()
+        return _names(self.core_parameter_scalars())
+
+    def state_scalars(self) -> list[Scalar]:
+        """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order."""
+        return [Scalar(s, i) for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)]
 
     def state_names(self) -> list[str]:
-        """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order."""
-        return [f"{s}{i}" for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)]
+        return _names(self.state_scalars())
 
     def state_defaults(self) -> list[float]:
         return [SEED_ANGLE] * (2 * self.n) + [0.0] * (2 * self.n)
 
-    def output_names(self) -> list[str]:
+    def output_scalars(self) -> list[Scalar]:
         """Calculated outputs besides the state, in the compiled core's order."""
-        names = []
+        scalars = []
         if "bobs" in self.outputs:
-            names += [f"bob{i}_{c}" for i, link in enumerate(self.links) if link.has_bob for c in "xyz"]
+            scalars += [
+                Scalar("bob", i, f"_{c}") for i, link in enumerate(self.links) if link.has_bob for c in "xyz"
+            ]
         if "poses" in self.outputs:
-            names += [f"link{i}_{c}" for i in range(self.n) for c in ("x", "y", "z", "qw", "qx", "qy", "qz")]
+            scalars += [
+                Scalar("link", i, f"_{c}")
+                for i in range(self.n)
+                for c in ("x", "y", "z", "qw", "qx", "qy", "qz")
+            ]
         if "energy" in self.outputs:
-            names.append("energy")
+            scalars.append(Scalar("energy"))
         if self.coupling:
-            names += PIVOT_OUTPUTS + FREE_FORCE + APPARENT_MASS
-        return names
+            scalars += [Scalar(name) for name in PIVOT_OUTPUTS + FREE_FORCE + APPARENT_MASS]
+        return scalars
+
+    def output_names(self) -> list[str]:
+        return _names(self.output_scalars())
 
     def parameters(self, overrides: dict | None = None) -> list[float]:
         """The core's p: the scene's numbers, then inputs at 0, some replaced by name.

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from .fmi3_arrays import array_start_values, fmu_data, scalar_columns
+
 
 def logging_callbacks(on_message):
     """fmi2CallbackFunctions that hand each log message to on_message(status, text).
@@ -30,14 +32,12 @@ def logging_callbacks(on_message):
 def run_fmu(fmu_path, stop_time=10.0, output_interval=1.0 / 60.0, start_values=None, **kwargs):
     """fmpy.simulate_fmu with the output interval always given (fmpy ignores step_size for CS).
     An FMI 3.0 FMU of this package takes and gives the FMI 2.0 FMU's scalar names (its arrays
-    set whole and split into columns: builder.fmi3)."""
+    set whole and split into columns: analysis.fmi3_arrays)."""
     import fmpy
 
-    from ..builder import fmi3
-
-    data = fmi3.fmu_data(fmu_path)
+    data = fmu_data(fmu_path)
     if data is not None:
-        start_values = fmi3.array_start_values(data, start_values or {})
+        start_values = array_start_values(data, start_values or {})
     result = fmpy.simulate_fmu(
         str(fmu_path),
         stop_time=stop_time,
@@ -45,4 +45,4 @@ def run_fmu(fmu_path, stop_time=10.0, output_interval=1.0 / 60.0, start_values=N
         start_values=start_values or {},
         **kwargs,
     )
-    return result if data is None else fmi3.scalar_columns(data, result)
+    return result if data is None else scalar_columns(data, result)

@@ -56,12 +56,15 @@ def simulate(
     times = np.asarray(times, dtype=float)
     p = np.array(
         [
-            check_value(name, value)
-            for name, value in zip(scene.core_parameter_names(), scene.parameters(parameters))
+            check_value(scalar.name, value, scalar.quantity)
+            for scalar, value in zip(scene.core_parameter_scalars(), scene.parameters(parameters))
         ]
     )
     x0 = np.array(
-        [check_value(name, value) for name, value in zip(scene.state_names(), scene.initial_state(state))]
+        [
+            check_value(scalar.name, value, scalar.quantity)
+            for scalar, value in zip(scene.state_scalars(), scene.initial_state(state))
+        ]
     )
     rhs = core.rhs
     if method == "core":

@@ -13,33 +13,47 @@ pendulum's is, and links with the same FMI layers.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from ..runtime.rules import RULES, rule_of
-from .native import NativeModel, write_model_fmu
-from .variables import Group, Member, variables_of
+from ..runtime.rules import rule_of
+from ..scene import Scalar
+from . import c_literals as c
+from .fmu_config import RULE_INDEX
+from .native import write_model_fmu
+from .native_model import NativeModel
+from .variables import Group, Member, Variable, per_second, variables_of
 
 NAME = "Cart"
 DESCRIPTION = (
     "cart on a spring and damper along X carrying an apparent mass M_x; inputs F_x (held or "
     "extrapolated) and M_x (held) over each communication step, solved exactly"
 )
+# Descriptions with the hole {unit}: UNITS's, the one source of each variable's unit.
 PARAMETERS = {
-    "m_cart": ("mass of the cart [kg]", 100.0),
-    "k_cart": ("stiffness of the spring from the ground to the cart [N/m]", 150.0),
-    "c_cart": ("damping from the ground to the cart [N s/m]", 20.0),
+    "m_cart": ("mass of the cart [{unit}]", 100.0),
+    "k_cart": ("stiffness of the spring from the ground to the cart [{unit}]", 150.0),
+    "c_cart": ("damping from the ground to the cart [{unit}]", 20.0),
 }
 START = {"x": 1.0, "v": 0.0}  # the cart's state at t = 0 [m, m/s]
-STATES = {"x": "position of the cart along X [m]", "v": "velocity of the cart along X [m/s]"}
+STATES = {"x": "position of the cart along X [{unit}]", "v": "velocity of the cart along X [{unit}]"}
+UNITS = {
+    "m_cart": "kg",
+    "k_cart": "N/m",
+    "c_cart": "N s/m",
+    "x": "m",
+    "v": "m/s",
+    "F_x": "N",
+    "M_x": "kg",
+    "a": "m/s2",
+}
 INPUTS = {
-    "F_x": "force on the cart along X [N]: the pendulum's F_pivot_x, or F_free_x with M_x",
-    "M_x": "apparent mass along X of what the cart carries [kg] (the pendulum's M_pivot_xx), moved "
+    "F_x": "force on the cart along X [{unit}]: the pendulum's F_pivot_x, or F_free_x with M_x",
+    "M_x": "apparent mass along X of what the cart carries [{unit}] (the pendulum's M_pivot_xx), moved "
     "with the cart: (m_cart + M_x) a = F_x - k_cart x - c_cart v; 0 for an explicit exchange; "
     "held over each step",
 }
 ACCELERATION = (
-    "acceleration of the cart along X [m/s2] (the pendulum's a_pivot_x); depends at once on F_x and M_x"
+    "acceleration of the cart along X [{unit}] (the pendulum's a_pivot_x); depends at once on F_x and M_x"
 )
 F_X_ORDER = (
     "the force over a step: 0 held at its value, 1 extrapolated linearly through the last two "
@@ -53,6 +67,11 @@ def _members(*members):
     return lambda scene, settings: list(members)
 
 
+def _member(name, start, text, depends_on=()):
+    """A cart variable whose description names its unit (UNITS)."""
+    return Member(Scalar(name), start, text.format(unit=UNITS[name]), depends_on, unit=UNITS[name])
+
+
 # The value-reference order: Reals (parameters, inputs, states, the output), the Integer,
 # then the state derivatives (Model Exchange), as the pendulum's groups go.
 GROUPS = (
@@ -63,7 +82,7 @@ GROUPS = (
         "fixed",
         None,
         "PARAMETER",
-        _members(*(Member(name, start, text) for name, (text, start) in PARAMETERS.items())),
+        _members(*(_member(name, start, text) for name, (text, start) in PARAMETERS.items())),
         named=True,
     ),
     Group(
@@ -73,7 +92,7 @@ GROUPS = (
         "continuous",
         None,
         "INPUT",
-        _members(*(Member(name, 0.0, text) for name, text in INPUTS.items())),
+        _members(*(_member(name, 0.0, text) for name, text in INPUTS.items())),
         named=True,
     ),
     Group(
@@ -83,7 +102,7 @@ GROUPS = (
         "continuous",
         "exact",
         "STATE",
-        _members(*(Member(name, START[name], text, (name,)) for name, text in STATES.items())),
+        _members(*(_member(name, START[name], text, (name,)) for name, text in STATES.items())),
         named=True,
     ),
     Group(
@@ -93,7 +112,7 @@ GROUPS = (
         "continuous",
         "calculated",
         "OUTPUT",
-        _members(Member("a", None, ACCELERATION, KNOWNS)),
+        _members(_member("a", None, ACCELERATION, KNOWNS)),
         named=True,
     ),
     Group(
@@ -103,7 +122,7 @@ GROUPS = (
         "fixed",
         None,
         "INTEGER_PARAMETER",
-        _members(Member("F_x_order", 0, F_X_ORDER)),
+        _members(Member(Scalar("F_x_order"), 0, F_X_ORDER)),
         named=True,
     ),
     Group(
@@ -114,28 +133,34 @@ GROUPS = (
         "calculated",
         "DERIVATIVE",
         _members(
-            Member("der(x)", None, "time derivative of x", ("v",), "x"),
-            Member("der(v)", None, "time derivative of v: a", KNOWNS, "v"),
+            Member(Scalar("der(x)"), None, "time derivative of x", ("v",), "x", per_second(UNITS["x"])),
+            Member(Scalar("der(v)"), None, "time derivative of v: a", KNOWNS, "v", per_second(UNITS["v"])),
         ),
     ),
 )
 
 
-def _config(data: dict) -> list[str]:
+def _config(data: dict, records: list[Variable]) -> list[str]:
     """The cart's own lines of fmu_config.h: F_x_order's start and rule, the rule a
     tolerance keeps."""
-    start = next(v["start"] for v in data["variables"] if v["name"] == "F_x_order")
-    rule_names = list(RULES)
+    order = next(v for v in records if v.name == "F_x_order")
+    tolerance_rule, tolerance_what = rule_of("atol")
     return [
-        f"#define CP_F_X_ORDER_START {start}",
-        f"#define CP_F_X_ORDER_RULE {rule_names.index(rule_of('F_x_order')[0])}",
-        f"#define CP_TOLERANCE_RULE {rule_names.index(rule_of('atol')[0])}",
-        f"#define CP_TOLERANCE_WHAT {json.dumps(rule_of('atol')[1])}",
+        c.define("CP_F_X_ORDER_START", order.start),
+        c.define("CP_F_X_ORDER_RULE", RULE_INDEX[order.rule]),
+        c.define("CP_TOLERANCE_RULE", RULE_INDEX[tolerance_rule]),
+        c.define("CP_TOLERANCE_WHAT", c.string(tolerance_what)),
     ]
 
 
 MODEL = NativeModel(
-    NAME, ("rules.c", "cart_model.c"), ("rules.h",), lambda: list(GROUPS), _config, 0.01, (2, 3)
+    NAME,
+    ("rules.c", "variable_table.c", "cart_model.c"),
+    ("rules.h", "variable_table.h"),
+    lambda: list(GROUPS),
+    _config,
+    0.01,
+    (2, 3),
 )
 
 

@@ -23,11 +23,11 @@ from pathlib import Path
 from ..runtime.files import MODEL_FILE, MODEL_NAME
 from ..runtime.rules import SETTINGS, check_setting
 from ..scene import Scene
-from . import native
+from . import pendulum
 from .compiler import CoreBuild, build_core
 from .model_description import complete, model_description_text
 from .pythonfmu_export import export_library
-from .variables import variables
+from .variables import Variable, records, variables
 
 RUNTIME = Path(__file__).parents[1] / "runtime"
 DEFAULT_SETTINGS = {name: setting.default for name, setting in SETTINGS.items()}
@@ -85,11 +85,11 @@ def build_fmu(
     start = time.perf_counter()
     output, settings = checked_output(output), checked_settings(settings)
     if backend == "native":
-        native.check_settings(settings)  # before the core's build
+        pendulum.check_settings(settings)  # before the core's build
     core = build_core(scene, cache)
     data = model_data(scene, core, settings, backend)
     if backend == "native":
-        native.write_native_fmu(scene, core, data, output, platforms, fmi_version)
+        pendulum.write_native_fmu(scene, core, data, output, platforms, fmi_version)
         return FmuBuild(output, core, MODEL_NAME, time.perf_counter() - start)
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_model_") as tmp:
         model_file = Path(tmp) / MODEL_FILE
@@ -98,7 +98,7 @@ def build_fmu(
             "slave",
             [model_file, core.library],
             output,
-            data["variables"],
+            records(data),
             canGetAndSetFMUstate=True,
             canSerializeFMUstate=True,
         )
@@ -155,7 +155,7 @@ def package(
     slave_module: str,
     data_files: list[Path],
     output: Path,
-    described: list[dict],
+    described: list[Variable],
     **capabilities,
 ) -> str:
     """Build the FMU of runtime/<slave_module>.py (its SLAVE class) at `output`.

@@ -1,4 +1,4 @@
-"""The FMU's model description: what pythonfmu leaves out or gets wrong, and the variables' descriptions."""
+"""The pythonfmu FMU's model description: what pythonfmu leaves out or gets wrong; the scene's one-line text."""
 
 from __future__ import annotations
 
@@ -7,18 +7,19 @@ import zipfile
 from pathlib import Path
 
 from ..scene import Scene
+from .variables import Variable, model_structure
 
 
-def complete(fmu: Path, described: list[dict], library: Path) -> None:
+def complete(fmu: Path, described: list[Variable], library: Path) -> None:
     """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only,
     its binary `library` (pythonfmu's export library as built here, builder.pythonfmu_export);
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
-    `described`: the FMU's variables as builder.variables describes them (as dicts, in
-    value-reference order); pythonfmu's variables must be exactly those (name, value
-    reference, type, causality, variability, initial), and the starts and each output's
-    dependencies on the inputs (its direct feedthrough, so a master knows where an algebraic
-    loop can be) are theirs.
+    `described`: the FMU's variables' records (builder.variables, in value-reference order);
+    pythonfmu's variables must be exactly those (name, value reference, type, causality,
+    variability, initial), and the starts and the ModelStructure (builder.variables.
+    model_structure; each output's dependencies on the inputs, its direct feedthrough, so a
+    master knows where an algebraic loop can be) are theirs.
 
     pythonfmu lists no InitialUnknowns, writes Real starts with 16 digits (a double
     needs 17 to round-trip), and packs binaries for every platform it has, while the
@@ -39,36 +40,26 @@ def complete(fmu: Path, described: list[dict], library: Path) -> None:
     entries[binaries[0]] = library.read_bytes()
     root = ET.fromstring(entries["modelDescription.xml"])
     variables = root.find("ModelVariables").findall("ScalarVariable")
-    structure = root.find("ModelStructure")
-    for child in list(structure):
-        structure.remove(child)
-    outputs = ET.SubElement(structure, "Outputs")
-    initial = ET.SubElement(structure, "InitialUnknowns")
     _check_described(variables, described)
-    starts = {v["name"]: v["start"] for v in described if v["start"] is not None}
-    index_of = {v["name"]: str(index) for index, v in enumerate(described, start=1)}
-    inputs_of = {v["name"]: v["causality"] == "input" for v in described}
-    # Co-Simulation only: an output depends on the inputs it names (the state is not a known)
-    depends = {
-        v["name"]: " ".join(index_of[name] for name in v["depends_on"] if inputs_of[name]) for v in described
-    }
-    for index, var in enumerate(variables, start=1):
+    for var, v in zip(variables, described):
         real = var.find("Real")
         if real is not None and real.get("start") is not None:
-            real.set("start", repr(float(starts[var.get("name")])))
-        if var.get("causality") == "output":
-            direct = depends[var.get("name")]
-            ET.SubElement(
-                outputs,
-                "Unknown",
-                index=str(index),
-                dependencies=direct,
-                **({"dependenciesKind": " ".join(["dependent"] * len(direct.split()))} if direct else {}),
-            )
-            if var.get("initial") in ("calculated", "approx"):
-                ET.SubElement(initial, "Unknown", index=str(index))
-    if not len(initial):
-        structure.remove(initial)
+            real.set("start", v.start_text())
+    element = root.find("ModelStructure")
+    for child in list(element):
+        element.remove(child)
+    structure = model_structure(described)
+    index = {v.name: str(v.value_reference + 1) for v in described}  # its place in ModelVariables
+    inputs = {v.name for v in described if v.causality == "input"}
+    outputs = ET.SubElement(element, "Outputs")
+    for v in structure.outputs:  # Co-Simulation only: the state is not a known
+        direct = [index[name] for name in v.depends_on if name in inputs]
+        kinds = {"dependenciesKind": " ".join(["dependent"] * len(direct))} if direct else {}
+        ET.SubElement(outputs, "Unknown", index=index[v.name], dependencies=" ".join(direct), **kinds)
+    if structure.initial_unknowns:
+        initial = ET.SubElement(element, "InitialUnknowns")
+        for v in structure.initial_unknowns:
+            ET.SubElement(initial, "Unknown", index=index[v.name])
     ET.indent(root)
     entries["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
     with zipfile.ZipFile(fmu, "w") as archive:
@@ -77,7 +68,7 @@ def complete(fmu: Path, described: list[dict], library: Path) -> None:
             archive.writestr(name, data, zipfile.ZIP_STORED if stored else zipfile.ZIP_DEFLATED)
 
 
-def _check_described(variables, described: list[dict]) -> None:
+def _check_described(variables, described: list[Variable]) -> None:
     """pythonfmu wrote the variables the description gives, in its order (else ValueError)."""
 
     def attributes(var):
@@ -92,10 +83,7 @@ def _check_described(variables, described: list[dict]) -> None:
         )
 
     written = [attributes(var) for var in variables]
-    wanted = [
-        (v["name"], v["value_reference"], v["type"], v["causality"], v["variability"], v["initial"])
-        for v in described
-    ]
+    wanted = [(v.name, v.value_reference, v.type, v.causality, v.variability, v.initial) for v in described]
     if written != wanted:
         padded = max(len(written), len(wanted))
         wrong = next((w, d) for w, d in zip(written + [None] * padded, wanted + [None] * padded) if w != d)
@@ -124,57 +112,3 @@ def model_description_text(scene: Scene) -> str:
         else ""
     )
     return f"{scene.n}-link conical pendulum ({links}){kinematics}{coupling}"
-
-
-_INDEXED = {
-    "l": "length of link {i} [m]",
-    "m": "mass of bob {i} [kg]",
-    "M": "mass of link {i} [kg]",
-    "Ixx": "central inertia of link {i} about its x axis [kg m2]",
-    "Iyy": "central inertia of link {i} about its own (y) axis [kg m2]",
-    "Izz": "central inertia of link {i} about its z axis [kg m2]",
-    "alpha": "angle of joint {i} about the parent's z axis [rad]",
-    "beta": "angle of joint {i} about the parent's x axis [rad]",
-    "omega": "alpha{i}' [rad/s]",
-    "delta": "beta{i}' [rad/s]",
-}
-_NAMED = {
-    "g": "gravitational acceleration along -Y [m/s2]",
-    "energy": "total mechanical energy relative to the pivot (kinetic + potential, zero at Y = 0) [J]",
-}
-
-
-def describe(name: str) -> str:
-    """The description of one of the scene's variables (parameters, inputs, state, outputs),
-    from its name; the solver settings and statistics describe themselves (runtime.rules)."""
-    if name in _NAMED:
-        return _NAMED[name]
-    if name.startswith("a_pivot_"):
-        return (
-            f"acceleration of the pivot (the support), inertial {name[-1]} (Y up) [m/s2]; "
-            "held constant over each communication step"
-        )
-    if name.startswith("M_pivot_"):
-        return (
-            f"apparent mass of the chain at the pivot, entry {name[-2:]} of the symmetric "
-            "M_app in F_pivot = F_free - M_app a_pivot [kg]; depends on the state only"
-        )
-    if name.startswith("F_free_"):
-        return (
-            f"force the pendulum would exert on a support at rest (a_pivot = 0), inertial "
-            f"{name[-1]} (Y up) [N]: F_pivot = F_free - M_app a_pivot; depends on the state only"
-        )
-    if name.startswith("F_pivot_"):
-        return (
-            f"force the pendulum exerts on its support, inertial {name[-1]} (Y up) [N]; "
-            "depends at once on the a_pivot inputs"
-        )
-    if name.startswith("bob"):
-        return f"bob {name[3:].split('_')[0]} position relative to the pivot, inertial {name[-1]} (Y up) [m]"
-    if name.startswith("link"):
-        index, part = name[4:].split("_")
-        if part.startswith("q"):
-            return f"link {index} orientation quaternion, {part[1]} component"
-        return f"link {index} mass-centre position relative to the pivot, inertial {part} [m]"
-    kind = name.rstrip("0123456789")
-    return _INDEXED[kind].format(i=name[len(kind) :])

@@ -5,9 +5,13 @@ variability and initial; `variables(scene, settings, backend)` makes from it the
 of one FMU, in value-reference order (a variable's value reference is its place in the
 list). model.json carries these records to the pythonfmu slave, which registers its
 variables from them; the pythonfmu FMU's model description is checked against them and
-completed from them (model_description.complete); the native FMU's model description and
-fmu_config.h are written from them (native.py). Adding a group of variables is one
-entry in GROUPS (and the code that computes its values).
+completed from them (model_description.complete); the native FMU's model descriptions
+(builder.fmi2, builder.fmi3) and fmu_config.h (builder.fmu_config) are written from them.
+Adding a group of variables is one entry in GROUPS (and the code that computes its values).
+
+A record carries what its variable is as fields (its quantity and link, from the scene's
+Scalar; its unit and description, from DESCRIBED by quantity; its FMI 3.0 array and index;
+its rule): everything written about it is made from these, nothing parsed from its name.
 
 The statistics' order is runtime.rules.STATISTICS's, which the C indexes by name
 (CP_STAT_*, generated into model.h by codegen).
@@ -16,18 +20,19 @@ The statistics' order is runtime.rules.STATISTICS's, which the C indexes by name
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 
 from ..runtime.rules import SETTINGS, STATISTICS, rule_of
-from ..scene import PIVOT_OUTPUTS, Scene
-from .model_description import describe
+from ..scene import PIVOT_OUTPUTS, Scalar, Scene
 
 BACKENDS = ("pythonfmu", "native")
 
 
 @dataclass(frozen=True)
 class Variable:
-    """One variable of an FMU, as its model description, model.json and fmu_config.h say."""
+    """One variable of an FMU, as its model description, model.json and fmu_config.h say;
+    what it is (its quantity and link, its FMI 3.0 array, unit and rule) are fields, made once
+    here and never read back out of its name or description."""
 
     name: str
     type: str  # "Real" or "Integer"
@@ -41,22 +46,50 @@ class Variable:
     depends_on: tuple[str, ...] = ()  # an unknown's dependencies on knowns (ModelStructure)
     group: str = ""  # the GROUPS entry it belongs to
     derivative_of: str | None = None  # der(x): the state x
+    quantity: str = ""  # what it is whatever its link (l for l0, bob_x for bob2_x): its rule's key
+    link: int | None = None  # the link it belongs to, if any
+    unit: str | None = None  # SI, as the description writes it (m, rad/s, kg m2, N s/m)
+    array: str | None = None  # the FMI 3.0 FMU's array holding it (one element per link), if any
+    index: int | None = None  # its 0-based place in that array
+    what: str = ""  # what a refusal of a value calls it ("a length"): its rule's words
+
+    def start_text(self) -> str:
+        """The start as a model description writes it: a Real with the digits that round-trip."""
+        return repr(float(self.start)) if self.type == "Real" else str(self.start)
 
     def to_dict(self) -> dict:
         data = asdict(self)
         data["depends_on"] = list(self.depends_on)
         return data
 
+    @classmethod
+    def from_dict(cls, data: dict) -> Variable:
+        """The record model.json holds (to_dict)."""
+        known = {field.name for field in fields(cls)}
+        return cls(
+            **{k: v for k, v in data.items() if k in known} | {"depends_on": tuple(data["depends_on"])}
+        )
+
+
+def records(data: dict) -> list[Variable]:
+    """The variables of model.json's data (builder.fmu.model_data, builder.cart.cart_data)."""
+    return [Variable.from_dict(v) for v in data["variables"]]
+
 
 @dataclass(frozen=True)
 class Member:
     """What a group's function gives per variable; the group gives the rest."""
 
-    name: str
+    scalar: Scalar
     start: float | int | None = None
     description: str = ""
     depends_on: tuple[str, ...] = ()
     derivative_of: str | None = None
+    unit: str | None = None
+
+    @property
+    def name(self) -> str:
+        return self.scalar.name
 
 
 @dataclass(frozen=True)
@@ -72,42 +105,142 @@ class Group:
     named: bool = False  # fmu_config.h also defines CP_VR_<NAME> for each of its variables
 
 
-def _described(names, starts=None):
-    starts = starts if starts is not None else [None] * len(names)
-    return [Member(name, start, describe(name)) for name, start in zip(names, starts)]
+@dataclass(frozen=True)
+class Described:
+    """How the scene's variables of one quantity are described: their unit, and a text with
+    the holes {link} (the link, or k for an FMI 3.0 array), {unit} and {of} (the variable
+    it is the rate of: `of` of the same link, or that array)."""
+
+    unit: str | None
+    text: str
+    of: str = ""
+
+
+def _axes(text: str, unit: str, quantities: dict[str, str]) -> dict[str, Described]:
+    return {
+        quantity: Described(unit, text.format(axis=axis, unit="{unit}"))
+        for quantity, axis in quantities.items()
+    }
+
+
+# The scene's quantities: a unit and a description each (the settings and statistics describe
+# themselves in runtime.rules).
+DESCRIBED = {
+    "l": Described("m", "length of link {link} [{unit}]"),
+    "m": Described("kg", "mass of bob {link} [{unit}]"),
+    "M": Described("kg", "mass of link {link} [{unit}]"),
+    "Ixx": Described("kg m2", "central inertia of link {link} about its x axis [{unit}]"),
+    "Iyy": Described("kg m2", "central inertia of link {link} about its own (y) axis [{unit}]"),
+    "Izz": Described("kg m2", "central inertia of link {link} about its z axis [{unit}]"),
+    "alpha": Described("rad", "angle of joint {link} about the parent's z axis [{unit}]"),
+    "beta": Described("rad", "angle of joint {link} about the parent's x axis [{unit}]"),
+    "omega": Described("rad/s", "{of}' [{unit}]", "alpha"),
+    "delta": Described("rad/s", "{of}' [{unit}]", "beta"),
+    "g": Described("m/s2", "gravitational acceleration along -Y [{unit}]"),
+    "energy": Described(
+        "J", "total mechanical energy relative to the pivot (kinetic + potential, zero at Y = 0) [{unit}]"
+    ),
+    **_axes(
+        "acceleration of the pivot (the support), inertial {axis} (Y up) [{unit}]; held constant over "
+        "each communication step",
+        "m/s2",
+        {f"a_pivot_{c}": c for c in "xyz"},
+    ),
+    **_axes(
+        "apparent mass of the chain at the pivot, entry {axis} of the symmetric M_app in F_pivot = "
+        "F_free - M_app a_pivot [{unit}]; depends on the state only",
+        "kg",
+        {f"M_pivot_{ij}": ij for ij in ("xx", "xy", "xz", "yy", "yz", "zz")},
+    ),
+    **_axes(
+        "force the pendulum would exert on a support at rest (a_pivot = 0), inertial {axis} (Y up) "
+        "[{unit}]: F_pivot = F_free - M_app a_pivot; depends on the state only",
+        "N",
+        {f"F_free_{c}": c for c in "xyz"},
+    ),
+    **_axes(
+        "force the pendulum exerts on its support, inertial {axis} (Y up) [{unit}]; depends at once on "
+        "the a_pivot inputs",
+        "N",
+        {f"F_pivot_{c}": c for c in "xyz"},
+    ),
+    **_axes(
+        "bob {{link}} position relative to the pivot, inertial {axis} (Y up) [{unit}]",
+        "m",
+        {f"bob_{c}": c for c in "xyz"},
+    ),
+    **_axes(
+        "link {{link}} mass-centre position relative to the pivot, inertial {axis} [{unit}]",
+        "m",
+        {f"link_{c}": c for c in "xyz"},
+    ),
+    **{
+        f"link_q{c}": Described(None, f"link {{link}} orientation quaternion, {c} component")
+        for c in ("w", "x", "y", "z")
+    },
+}
+
+
+def per_second(unit: str | None) -> str | None:
+    """The unit of a rate of change: m -> m/s, m/s -> m/s2."""
+    if unit is None:
+        return None
+    return unit + ("2" if unit.endswith("/s") else "/s")
+
+
+def describe(quantity: str, link: int | None = None, every_link: bool = False) -> str:
+    """The description of the scene's variable of `quantity` and `link`; every_link: of the
+    FMI 3.0 array of that quantity (link k)."""
+    if quantity.startswith("der("):
+        state = quantity[4:-1]
+        return f"time derivative of {state if every_link else Scalar(state, link).name}"
+    described = DESCRIBED[quantity]
+    of = described.of if every_link else Scalar(described.of, link).name
+    return described.text.format(link="k" if every_link else link, unit=described.unit, of=of)
+
+
+def unit_of(quantity: str) -> str | None:
+    """The unit of the scene's variable of `quantity`."""
+    if quantity.startswith("der("):
+        return per_second(unit_of(quantity[4:-1]))
+    return DESCRIBED[quantity].unit
+
+
+def _described(scalars, starts=None, depends=lambda scalar: ()):
+    starts = starts if starts is not None else [None] * len(scalars)
+    return [
+        Member(s, start, describe(s.quantity, s.link), depends(s), unit=unit_of(s.quantity))
+        for s, start in zip(scalars, starts)
+    ]
 
 
 def _parameters(scene, settings):
-    return _described(scene.parameter_names(), scene.parameter_defaults())
+    return _described(scene.parameter_scalars(), scene.parameter_defaults())
 
 
 def _inputs(scene, settings):  # at rest; held over each communication step
-    return _described(scene.input_names(), [0.0] * len(scene.input_names()))
+    return _described(scene.input_scalars(), [0.0] * len(scene.input_scalars()))
 
 
 def _states(scene, settings):  # a state is an output of its own value
-    return [
-        Member(name, start, describe(name), (name,))
-        for name, start in zip(scene.state_names(), scene.state_defaults())
-    ]
+    return _described(scene.state_scalars(), scene.state_defaults(), lambda s: (s.name,))
 
 
 def _outputs(scene, settings):  # functions of the state; the pivot force of the inputs too
     states, inputs = tuple(scene.state_names()), tuple(scene.input_names())
-    return [
-        Member(name, None, describe(name), states + (inputs if name in PIVOT_OUTPUTS else ()))
-        for name in scene.output_names()
-    ]
+    return _described(
+        scene.output_scalars(), None, lambda s: states + (inputs if s.name in PIVOT_OUTPUTS else ())
+    )
 
 
 def _statistics(scene, settings):  # counts of what the solver did, not functions of the knowns
-    return [Member(name, None, text) for name, text in STATISTICS.items()]
+    return [Member(Scalar(name), None, text) for name, text in STATISTICS.items()]
 
 
 def _settings(integer):
     def members(scene, settings):
         return [
-            Member(name, settings[name], setting.description)
+            Member(Scalar(name), settings[name], setting.description, unit=setting.unit)
             for name, setting in SETTINGS.items()
             if setting.integer == integer
         ]
@@ -116,17 +249,19 @@ def _settings(integer):
 
 
 def _derivatives(scene, settings):  # x = (angles, rates): an angle's derivative is its rate
-    states, inputs = scene.state_names(), tuple(scene.input_names())
+    states, inputs = scene.state_scalars(), tuple(scene.input_names())
+    names = [s.name for s in states]
     n_dof = len(states) // 2
     return [
         Member(
-            f"der({name})",
+            Scalar(f"der({s.stem}", s.link, f"{s.suffix})"),
             None,
-            f"time derivative of {name}",
-            (states[n_dof + k],) if k < n_dof else tuple(states) + inputs,
-            name,
+            describe(f"der({s.quantity})", s.link),
+            (names[n_dof + k],) if k < n_dof else tuple(names) + inputs,
+            s.name,
+            per_second(unit_of(s.quantity)),
         )
-        for k, name in enumerate(states)
+        for k, s in enumerate(states)
     ]
 
 
@@ -179,35 +314,82 @@ def variables(scene: Scene, settings: dict, backend: str = "pythonfmu") -> list[
 
 def variables_of(in_order, scene: Scene | None = None, settings: dict | None = None) -> list[Variable]:
     """The variables of groups in_order, in value-reference order (a variable's value
-    reference is its place): the pendulum's (variables), or another model's (builder.cart)."""
-    records = []
+    reference is its place): the pendulum's (variables), or another model's (builder.cart).
+    The Reals of one quantity in a group with one per link of the scene (each link present)
+    are an FMI 3.0 array, element k the link k's."""
+    result = []
     for group in in_order:
-        for member in group.members(scene, settings):
-            records.append(
+        members = group.members(scene, settings)
+        arrays = _arrays(members, scene) if group.type == "Real" else set()
+        for member in members:
+            scalar = member.scalar
+            rule, what = rule_of(scalar.quantity)
+            in_array = scalar.quantity in arrays
+            result.append(
                 Variable(
                     name=member.name,
                     type=group.type,
                     causality=group.causality,
                     variability=group.variability,
                     initial=group.initial,
-                    value_reference=len(records),
+                    value_reference=len(result),
                     start=member.start,
-                    rule=rule_of(member.name)[0],
+                    rule=rule,
                     description=member.description,
                     depends_on=member.depends_on,
                     group=group.name,
                     derivative_of=member.derivative_of,
+                    quantity=scalar.quantity,
+                    link=scalar.link,
+                    unit=member.unit,
+                    array=scalar.quantity if in_array else None,
+                    index=scalar.link if in_array else None,
+                    what=what,
                 )
             )
-    return records
+    return result
 
 
-def first_references(records: list[dict], in_order) -> dict[str, int]:
+def _arrays(members: list[Member], scene: Scene | None) -> set[str]:
+    """The quantities of members with one member per link of the scene, link by link."""
+    links: dict[str, list[int]] = {}
+    for member in members:
+        if member.scalar.link is not None:
+            links.setdefault(member.scalar.quantity, []).append(member.scalar.link)
+    every = list(range(scene.n)) if scene is not None else None
+    return {quantity for quantity, found in links.items() if sorted(found) == every}
+
+
+def first_references(records: list[Variable], in_order) -> dict[str, int]:
     """Each group's first value reference (where it would start when empty), by group name;
-    records: the variables as dicts (Variable.to_dict, model.json) of the groups in_order
-    (groups(backend), or another model's: builder.cart)."""
+    records: the variables of the groups in_order (groups(backend), or another model's:
+    builder.cart)."""
     first, seen = {}, 0
     for group in in_order:
         first[group.name] = seen
-        seen += sum(v["group"] == group.name for v in records)
+        seen += sum(v.group == group.name for v in records)
     return first
+
+
+@dataclass(frozen=True)
+class Structure:
+    """A model description's ModelStructure, written once for every writer (builder.fmi2,
+    builder.fmi3, model_description.complete): its unknowns, each list in value-reference
+    order; an unknown's dependencies are its record's depends_on."""
+
+    outputs: list[Variable]
+    derivatives: list[Variable]
+    initial_unknowns: list[Variable]  # no dependencies listed: they may depend on every known
+
+
+def model_structure(records: list[Variable]) -> Structure:
+    """The unknowns of the variables `records`: the outputs, the state derivatives, and those
+    of both calculated at initialization."""
+    outputs = [v for v in records if v.causality == "output"]
+    derivatives = [v for v in records if v.derivative_of]
+    initial = [
+        v
+        for v in records
+        if v.initial in ("approx", "calculated") and (v.causality == "output" or v.derivative_of)
+    ]
+    return Structure(outputs, derivatives, initial)

@@ -15,7 +15,7 @@ Each variant binds one parameter set (so SSP's rule, every binding applies, and 
 tools' reading, each binding a named set, agree). The default experiment carries the step
 as the annotation `com.opensimulationplatform` (osp:FixedStepAlgorithm baseStepSize),
 which libcosim reads; ecos takes its step from its caller, FMPy from its arguments. The
-connectors' units come from the FMUs' own variable descriptions ("... [m/s2]").
+connectors' units come from the FMUs' own variable records (resources/model.json's `unit`).
 
 The XML uses the prefixes ssd:, ssc:, ssv: and osp: throughout: ecos (pugixml) and
 libcosim (boost property_tree) match element names with their prefixes, not namespaces.
@@ -24,6 +24,7 @@ libcosim (boost property_tree) match element names with their prefixes, not name
 from __future__ import annotations
 
 import functools
+import json
 import re
 import shutil
 import zipfile
@@ -31,7 +32,9 @@ from pathlib import Path
 
 from lxml import etree
 
+from ..builder.variables import Variable, records
 from ..errors import UserError
+from ..runtime.files import MODEL_FILE
 from .coupled import EXCHANGED, SCHEMES, STOP_TIME
 from .monolithic import cart_parameters
 
@@ -45,7 +48,7 @@ VARIANTS = {"explicit": "SystemStructure.ssd", "apparent-mass": "ApparentMass.ss
 FMUS = {"p": "resources/ConicalPendulum.fmu", "cart": "resources/Cart.fmu"}  # instance -> file
 SYSTEM = "PendulumOnCart"
 STEP = 0.01  # [s] the default experiment's communication step
-# SI base-unit exponents of the unit symbols the FMUs' descriptions use
+# SI base-unit exponents of the unit symbols the FMUs' records use
 BASE_UNITS = {
     "m": {"m": 1},
     "s": {"s": 1},
@@ -81,12 +84,6 @@ def base_unit(unit: str) -> dict[str, int]:
     return {base: exponent for base, exponent in exponents.items() if exponent}
 
 
-def unit_of(description: str | None) -> str | None:
-    """The unit a variable's description gives in brackets ("position ... [m]"), or None."""
-    found = re.search(r"\[([^\]]+)\]", description or "")
-    return found.group(1) if found else None
-
-
 def connectors(scheme: str) -> dict[str, list[str]]:
     """{instance: connector names}: the variables the scheme connects, and the outputs the
     demo records. No input is left unconnected: FMPy's simulate_ssp would connect it to
@@ -99,10 +96,12 @@ def connectors(scheme: str) -> dict[str, list[str]]:
     return wanted
 
 
-def _variables(fmu: Path) -> dict:
-    from fmpy import read_model_description
-
-    return {v.name: v for v in read_model_description(str(fmu)).modelVariables}
+def _variables(fmu: Path) -> dict[str, Variable]:
+    """The FMU's variables by name: the records its model.json carries (builder.variables),
+    each with its type, causality and unit."""
+    with zipfile.ZipFile(fmu) as archive:
+        data = json.loads(archive.read(f"resources/{MODEL_FILE}"))
+    return {v.name: v for v in records(data)}
 
 
 def _units(root, prefix: str, units: set[str]) -> None:
@@ -135,7 +134,7 @@ def _ssd(scheme: str, variables: dict, step: float, stop_time: float) -> bytes:
         for name in names:
             variable = variables[instance][name]
             connector = _element(table, "ssd", "Connector", name=name, kind=variable.causality)
-            unit = unit_of(variable.description)
+            unit = variable.unit
             _element(connector, "ssc", variable.type, **({"unit": unit} if unit else {}))
             units |= {unit} - {None}
         if instance == "cart":
@@ -181,7 +180,7 @@ def _ssv(scheme: str, values: dict, variables: dict) -> bytes:
         if variable.type == "Integer":
             _element(parameter, "ssv", "Integer", value=int(value))
         else:
-            unit = unit_of(variable.description)
+            unit = variable.unit
             _element(parameter, "ssv", "Real", value=repr(float(value)), **({"unit": unit} if unit else {}))
             units |= {unit} - {None}
     _units(root, "ssv", units)

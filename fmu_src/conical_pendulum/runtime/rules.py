@@ -79,7 +79,8 @@ RULES = {
     ),
 }
 
-# The rule of a variable by its name without the link index: (rule, what it is).
+# The rule of a variable by its quantity (builder.variables' records carry both; a variable
+# of no link is its own quantity): (rule, what it is).
 QUANTITIES = {
     "l": ("positive", "a length"),
     "m": ("positive", "a bob mass"),
@@ -115,6 +116,7 @@ class Setting:
     default: float | int
     integer: bool
     description: str
+    unit: str | None = None  # SI, as its description writes it
 
 
 SETTINGS = {
@@ -129,6 +131,7 @@ SETTINGS = {
         False,
         "largest internal step [s]; RK4 splits each communication "
         "step into steps of at most this (0: no limit)",
+        "s",
     ),
     "solver": Setting(
         1, True, "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), 2 = DOP853, 3 = Radau (scipy, stiff)"
@@ -156,9 +159,10 @@ class BadValue(ValueError):
     """A value a variable cannot take; the message names the variable, the value and the rule."""
 
 
-def rule_of(name: str) -> tuple[str, str]:
-    """(rule, what the variable is) for a variable name; anything unnamed must be finite."""
-    return QUANTITIES.get(name.rstrip("0123456789"), ("finite", ""))
+def rule_of(quantity: str) -> tuple[str, str]:
+    """(rule, what a variable is) for its quantity (l for l0, l1, ...); anything unnamed must
+    be finite."""
+    return QUANTITIES.get(quantity, ("finite", ""))
 
 
 def satisfies(rule: str, value) -> bool:
@@ -174,7 +178,13 @@ def satisfies(rule: str, value) -> bool:
 def check_value(name: str, value, quantity: str | None = None) -> float:
     """value as a float, or BadValue naming the variable, its value and the rule.
 
-    quantity: the name whose rule applies, when `name` only labels the value."""
+    quantity: whose rule applies (a scene scalar's or a record's), when it is not `name`."""
+    return check_rule(name, value, *rule_of(quantity or name))
+
+
+def check_rule(name: str, value, rule: str = "finite", what: str = "") -> float:
+    """value as a float, or BadValue naming the variable, its value and the rule (a key of
+    RULES; `what` the variable is, for the message): as a variable's record gives them."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise BadValue(f"{name}: expected a number, got {value!r}")
     try:
@@ -184,7 +194,6 @@ def check_value(name: str, value, quantity: str | None = None) -> float:
     shown = value if isinstance(value, numbers.Integral) else number  # a count reads as one
     if not math.isfinite(number):
         raise BadValue(f"{name} = {shown!r}: must be finite")
-    rule, what = rule_of(quantity or name)
     if not RULES[rule].holds(number):
         raise BadValue(f"{name} = {shown!r}: {what + ' ' if what else ''}{RULES[rule].refusal}")
     return number

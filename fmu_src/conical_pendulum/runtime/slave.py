@@ -23,7 +23,18 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 
 from .files import MODEL_FILE
-from .rules import CALCULATED, FIXED, SETTINGS, SOLVERS, STATISTICS, BadValue, check_setting, check_value
+from .rules import (
+    CALCULATED,
+    FIXED,
+    SETTINGS,
+    SOLVERS,
+    STATISTICS,
+    BadValue,
+    check_rule,
+    check_setting,
+    check_value,
+    rule_of,
+)
 
 RADAU = SOLVERS.index("radau")
 STAT = {name: k for k, name in enumerate(STATISTICS)}  # the core's stats slots (model.h's CP_STAT_*)
@@ -122,6 +133,7 @@ class ConicalPendulum(Fmi2Slave):
         self._ints = [v["start"] for v in variables[n_real:]]
         self._int_names = [v["name"] for v in variables[n_real:]]
         self._vr = {v["name"]: v["value_reference"] for v in variables}
+        self._rules = [(v["rule"], v["what"]) for v in variables]  # each record's, not its name's
         n_state = sum(v["group"] == "states" for v in variables)
         self._state = self._reals[state_values.start : state_values.start + n_state]
         self._stepper = self._core.Stepper(self._reals[reals], self._reals[state_values], self._reals[stats])
@@ -161,7 +173,7 @@ class ConicalPendulum(Fmi2Slave):
         self._check_alive()
         if tolerance is not None:
             self._tolerance = self._fail_unless_valid(
-                "tolerance (from setupExperiment)", tolerance, quantity="rtol"
+                "tolerance (from setupExperiment)", tolerance, rule_of("rtol")
             )
 
     @_fmi_call
@@ -211,7 +223,7 @@ class ConicalPendulum(Fmi2Slave):
                 raise TypeError(f"value reference {vr} is not a Real variable")
             name = self.vars[vr].name
             self._check_settable(vr, name)
-            value = self._fail_unless_valid(name, value)
+            value = self._fail_unless_valid(name, value, self._rules[vr])
             changed |= self._reals[vr] != value
             self._reals[vr] = value
         if changed:  # outputs depend on inputs at once (the pivot force), and so does x'
@@ -369,7 +381,9 @@ class ConicalPendulum(Fmi2Slave):
         if isinstance(fsal, bool) or fsal not in (0, 1):
             refuse(f"fsal = {fsal!r:.80}: must be 0 or 1")
         try:
-            reals = [check_value(self.vars[vr].name, value) for vr, value in enumerate(reals)]
+            reals = [
+                check_rule(self.vars[vr].name, value, *self._rules[vr]) for vr, value in enumerate(reals)
+            ]
             ints = [check_setting(name, value) for name, value in zip(self._int_names, ints)]
             for name, value in zip(self._int_names, ints):
                 if not -(2**31) <= value < 2**31:
@@ -404,12 +418,13 @@ class ConicalPendulum(Fmi2Slave):
         self.log(message, Fmi2Status.error)
         raise Refused(message)
 
-    def _fail_unless_valid(self, name, value, quantity=None):
-        """The value as its variable takes it, or a refusal naming it (runtime.rules)."""
+    def _fail_unless_valid(self, name, value, rule=("finite", "")):
+        """The value as its variable takes it (a setting by its type too; else `rule`, its
+        record's (rule, what)), or a refusal naming it (runtime.rules)."""
         try:
             if name in SETTINGS:
                 return check_setting(name, value)
-            return check_value(name, value, quantity)
+            return check_rule(name, value, *rule)
         except BadValue as exc:
             self._fail(str(exc))
 
