@@ -15,7 +15,7 @@ from fmpy.validation import validate_fmu
 from scipy.linalg import expm
 
 from conical_pendulum.builder import cart, native
-from conical_pendulum.builder.compiler import CSRC
+from conical_pendulum.builder.compiler import CSRC_FILES
 from conical_pendulum.cli import main
 from conical_pendulum.demos.coupled import build_cart_fmu
 from conical_pendulum.demos.monolithic import cart_parameters
@@ -66,7 +66,7 @@ def test_the_glue_is_the_pendulums_unchanged(request, version):
     with zipfile.ZipFile(path) as archive:
         shipped = {name.split("/", 1)[1] for name in archive.namelist() if name.startswith("sources/")}
         for name in (*native.LAYER_SOURCES[version], "fmi_layer.h", "fmu_model.h", "rules.c", "rules.h"):
-            assert archive.read(f"sources/{name}") == (CSRC / name).read_bytes(), name
+            assert archive.read(f"sources/{name}") == CSRC_FILES[name].read_bytes(), name
     generated = {"fmi3_arrays.h", "buildDescription.xml"} if version == 3 else set()
     assert shipped == {
         *native.glue_sources(version, cart.MODEL),

@@ -30,7 +30,7 @@ from ..errors import UserError
 from ..runtime.files import MODEL_FILE, MODEL_NAME
 from ..runtime.rules import CALCULATED, FIXED, RULES, rule_of
 from ..scene import Scene
-from .compiler import CSRC, CoreBuild
+from .compiler import CSRC_FILES, CoreBuild
 from .variables import Group, first_references, groups
 
 # The C files of the FMI layers, which serve every model behind fmu_model.h.
@@ -432,7 +432,7 @@ def guid_of(data: dict, fmi_version: int = 2, model: NativeModel | None = None) 
     variables and start values, for the pendulum the core's build (scene structure and
     generator) and the settings, and every C file it ships from runtime/csrc."""
     files = glue_sources(fmi_version, model) + glue_headers(model)
-    shipped = [CSRC / name for name in files if (CSRC / name).exists()]
+    shipped = [CSRC_FILES[name] for name in files if name in CSRC_FILES]
     glue = b"".join(path.read_bytes() for path in shipped) + Path(__file__).read_bytes()
     if fmi_version == 3:
         glue += (Path(__file__).parent / "fmi3.py").read_bytes()
@@ -486,7 +486,7 @@ def write_model_fmu(
         sources.mkdir()
         for name in shipped + glue_headers(model):
             if name != "fmu_config.h":
-                shutil.copy2((generated or {}).get(name, CSRC / name), sources / name)
+                shutil.copy2((generated or {}).get(name) or CSRC_FILES[name], sources / name)
         (sources / "fmu_config.h").write_text(config_header(data, guid, model))
         if fmi_version == 3:
             (sources / "fmi3_arrays.h").write_text(fmi3.arrays_header(data))
