@@ -97,101 +97,65 @@ static const char *const state_names[] = {  /* by bit, as the standard's tables 
 #define STATES_fmi2GetBooleanStatus              (STEP_COMPLETE | STEP_FAILED | TERMINATED), NO_STATE
 #define STATES_fmi2GetStringStatus               (STEP_COMPLETE | STEP_FAILED | TERMINATED), NO_STATE
 
-/* What FMI 2.0 keeps of an instance besides the model's data: where it is in the state
- * machine, its time, and the last communication point a step reached. */
-typedef FmiMachine Machine;
+/* What the shared body (fmi_layer.c) says in FMI 2.0's words. */
+static void emit(FmiInstance *fmi, FmiStatus status, const char *category, const char *text);
+static const FmiStandard standard = {
+    .name = "FMI 2.0",
+    .state_names = state_names,
+    .n_states = (int)(sizeof state_names / sizeof state_names[0]),
+    .co_simulation_states = CO_SIMULATION_STATES,
+    .model_exchange_states = MODEL_EXCHANGE_STATES,
+    .instantiated = INSTANTIATED,
+    .initialization = INITIALIZATION,
+    .stepping = STEP_COMPLETE,
+    .event_mode = EVENT_MODE,
+    .step_failed = STEP_FAILED,
+    .in_state = "state ",
+    .co_simulation_where = "Co-Simulation, section 4.2.4",
+    .model_exchange_where = "Model Exchange, section 3.2.3",
+    .never = ": only while a step is in progress, and fmi2DoStep never runs asynchronously here",
+    .after_failed = "; after a discarded step fmi2SetFMUstate or fmi2Reset go back, fmi2Terminate ends",
+    .experiment = "",
+    .tolerance = "tolerance (from setupExperiment)",
+    .arguments_null = "vr or value is NULL",
+    .n_states_argument = "nx",
+    .n_indicators_argument = "ni",
+    .fmu_state = "FMUstate",
+    .serialized_size = "fmi2SerializedFMUstateSize",
+    .state_magic = 0x43504632u,  /* "CPF2": a serialized FMU state of this build */
+    .token = CP_GUID,
+    .token_mismatch = "fmuGUID is not this FMU's: the model description and binary do not match",
+    .log_categories = cp_log_categories,
+    .n_log_categories = CP_NLOG,
+    .log_error = CP_LOG_STATUS_ERROR,
+    .log_discard = CP_LOG_STATUS_DISCARD,
+    .variable_name = cp_variable_name,
+    .emit = emit,
+};
 
-/* An FMU state, as fmi2GetFMUstate saves it and fmi2SerializeFMUstate writes it after its
- * header: the machine, then the model's data (model_sizes.data_size bytes), plain data
- * copied as a whole. */
+/* An instance: the shared body's part, the host's callbacks and the instance's name, then the
+ * model's data. */
 typedef struct {
-    Machine machine;
-    double model[];               /* a ModelData; double: its alignment (fmu_model.h) */
-} SavedState;
-
-typedef struct {
-    Machine machine;              /* first: the state word is where the instance begins */
+    FmiInstance fmi;              /* first: the machine, the state word first of all */
     fmi2CallbackFunctions cb;
-    fmi2Type type;
-    unsigned logging;             /* bit k: log category cp_log_categories[k] is on */
     char name[128];
-    char discarded[2048];         /* the last discarded step's diagnosis, while in stepFailed */
-    double model[];               /* the model's data, in the instance's allocation */
+    double model[];               /* a ModelData; double: its alignment (fmu_model.h) */
 } Instance;
 
-#define ALL_CATEGORIES ((1u << CP_NLOG) - 1)
-#define MODEL(inst) ((ModelData *)(inst)->model)
+/* A message to the host's logger (FMI 2.0, section 2.1.3; fmi_log decides what is reported). */
+static void emit(FmiInstance *fmi, FmiStatus status, const char *category, const char *text)
+{
+    const Instance *inst = (const Instance *)fmi;
+    if (inst->cb.logger)
+        inst->cb.logger(inst->cb.componentEnvironment, inst->name, (fmi2Status)status, category, text);
+}
+
 #define MESSAGE_SIZE 1024
-#define SAVED_SIZE (sizeof(SavedState) + model_sizes.data_size)
-
-/* A layer's message, formatted by fmi_vlog, to the host's logger. */
-static void emit(void *context, int status, int category, const char *text)
-{
-    Instance *inst = context;
-    inst->cb.logger(inst->cb.componentEnvironment, inst->name, (fmi2Status)status,
-                    cp_log_categories[category], text);
-}
-
-/* A message through the host's logger, in one of the model description's log categories
- * (CP_LOG_*, fmu_config.h). FMI 2.0, section 2.1.3: after fmi2Warning, fmi2Error and fmi2Fatal
- * "function logger was called", so those are always reported; other messages (fmi2Discard's
- * diagnoses) only in debug mode, that is when their category is on (section 2.1.5: loggingOn
- * of fmi2Instantiate, then fmi2SetDebugLogging). */
-static void log_message(Instance *inst, fmi2Status status, int category, const char *format, ...)
-{
-    if (!inst->cb.logger) return;
-    va_list args;
-    va_start(args, format);
-    fmi_vlog(emit, inst, status, status != fmi2OK && status != fmi2Discard, inst->logging,
-             category, format, args);
-    va_end(args);
-}
-
-#define REFUSE(inst, ...) (log_message((inst), fmi2Error, CP_LOG_STATUS_ERROR, __VA_ARGS__), fmi2Error)
+#define REFUSE(inst, ...) ((fmi2Status)fmi_error((inst), __VA_ARGS__))
 
 /* The instance behind c if FMI 2.0 allows the function in its state (the table above, in the
  * column of the instance's type); logs that it does not otherwise, naming the state. */
-#define CHECKED(c, function) checked((c), #function, STATES_##function)
-
-static Instance *checked(fmi2Component c, const char *function, int co_simulation,
-                         int model_exchange)
-{
-    Instance *inst = (Instance *)c;
-    if (!inst) return NULL;
-    const int cs = inst->type == fmi2CoSimulation;
-    const int allowed = cs ? co_simulation : model_exchange;
-    if (inst->machine.state & allowed) return inst;
-    const char *state = fmi_state_name(inst->machine.state, state_names,
-                                       (int)(sizeof state_names / sizeof state_names[0]));
-    const char *why = fmi_refusal_reason(
-        cs, allowed, cs ? model_exchange : co_simulation,
-        ": only while a step is in progress, and fmi2DoStep never runs asynchronously here",
-        inst->machine.state == STEP_FAILED
-            ? "; after a discarded step fmi2SetFMUstate or fmi2Reset go back, fmi2Terminate ends"
-            : "");
-    /* the diagnosis again, in an error that is always reported: logged at the discard only in
-     * debug mode, it would otherwise never reach a host that did not ask for it */
-    const int failed = inst->machine.state == STEP_FAILED && inst->discarded[0];
-    log_message(inst, fmi2Error, CP_LOG_STATUS_ERROR, "%s is not allowed in state %s (FMI 2.0, %s)%s%s%s",
-                function, state, cs ? "Co-Simulation, section 4.2.4" : "Model Exchange, section 3.2.3",
-                why, failed ? ". The step was discarded: " : "", failed ? inst->discarded : "");
-    return NULL;
-}
-
-/* The instance as it is instantiated, and as fmi2Reset leaves it. */
-static void reset(Instance *inst)
-{
-    fmi_machine_reset(&inst->machine, INSTANTIATED);
-    inst->discarded[0] = '\0';
-    model_reset(MODEL(inst));
-}
-
-/* Where the model can say only that x' or a step cannot be had: its message, logged. */
-static fmi2Status discard(Instance *inst, const char *message)
-{
-    log_message(inst, fmi2Discard, CP_LOG_STATUS_DISCARD, "%s", message);
-    return fmi2Discard;
-}
+#define CHECKED(c, function) fmi_checked((c), #function, STATES_##function)
 
 /* ---- common functions ------------------------------------------------------------------ */
 
@@ -201,17 +165,8 @@ const char *fmi2GetVersion(void) { return fmi2Version; }
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[])
 {
-    /* FMI 2.0, section 2.1.5: with nCategories = 0, loggingOn applies to every category; with
-     * a list, loggingOn makes the listed ones the categories in force, and logging off turns
-     * the listed ones off and leaves the others. A name the model description does not declare
-     * is refused, naming it, and the categories in force stay as they were. */
-    Instance *inst = CHECKED(c, fmi2SetDebugLogging);
-    if (!inst) return fmi2Error;
-    char refusal[4096];
-    if (fmi_set_logging(&inst->logging, loggingOn, nCategories, categories, cp_log_categories,
-                        CP_NLOG, "fmi2SetDebugLogging", refusal, sizeof refusal))
-        return REFUSE(inst, "%s", refusal);
-    return fmi2OK;
+    return (fmi2Status)fmi_set_debug_logging(CHECKED(c, fmi2SetDebugLogging), "fmi2SetDebugLogging",
+                                             loggingOn, nCategories, categories);
 }
 
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
@@ -224,22 +179,19 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (!functions || !functions->allocateMemory || !functions->freeMemory) return NULL;
     Instance *inst = functions->allocateMemory(1, sizeof(Instance) + model_sizes.data_size);
     if (!inst) return NULL;
+    fmi_instance_init(&inst->fmi, &standard, fmuType == fmi2CoSimulation, loggingOn,
+                      functions->allocateMemory, functions->freeMemory, (ModelData *)inst->model);
     inst->cb = *functions;
-    inst->type = fmuType;
-    inst->logging = loggingOn ? ALL_CATEGORIES : 0;
     snprintf(inst->name, sizeof inst->name, "%s", instanceName ? instanceName : "?");
-    const char *problem = NULL;
-    if (!instanceName || !*instanceName) problem = "instanceName is empty";
-    else if (!fmuGUID || strcmp(fmuGUID, CP_GUID) != 0)
-        problem = "fmuGUID is not this FMU's: the model description and binary do not match";
-    else if (fmuType != fmi2ModelExchange && fmuType != fmi2CoSimulation)
+    const char *problem = fmi_instantiation_problem(&standard, instanceName, fmuGUID);
+    if (!problem && fmuType != fmi2ModelExchange && fmuType != fmi2CoSimulation)
         problem = "fmuType is neither fmi2ModelExchange nor fmi2CoSimulation";
     if (problem) {
-        log_message(inst, fmi2Error, CP_LOG_STATUS_ERROR, "fmi2Instantiate: %s", problem);
+        fmi_error(&inst->fmi, "fmi2Instantiate: %s", problem);
         functions->freeMemory(inst);
         return NULL;
     }
-    reset(inst);
+    fmi_reset(&inst->fmi);
     return inst;
 }
 
@@ -254,74 +206,41 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 {
     (void)stopTimeDefined;
     (void)stopTime;
-    Instance *inst = CHECKED(c, fmi2SetupExperiment);
-    if (!inst) return fmi2Error;
-    char message[MESSAGE_SIZE];
-    if (toleranceDefined && model_tolerance_refusal(tolerance, message, sizeof message))
-        return REFUSE(inst, "%s", message);
-    if (!isfinite(startTime)) return REFUSE(inst, "startTime = %g: must be finite", startTime);
-    model_set_tolerance(MODEL(inst), toleranceDefined ? tolerance : 0.0);
-    inst->machine.time = inst->machine.last_successful_time = startTime;
-    return fmi2OK;
+    return (fmi2Status)fmi_setup_experiment(CHECKED(c, fmi2SetupExperiment), toleranceDefined,
+                                            tolerance, startTime);
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
-    Instance *inst = CHECKED(c, fmi2EnterInitializationMode);
-    if (!inst) return fmi2Error;
-    inst->machine.state = INITIALIZATION;
-    return fmi2OK;
+    return (fmi2Status)fmi_enter(CHECKED(c, fmi2EnterInitializationMode), INITIALIZATION);
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
-    Instance *inst = CHECKED(c, fmi2ExitInitializationMode);
-    if (!inst) return fmi2Error;
-    model_initialize(MODEL(inst));
-    inst->machine.state = inst->type == fmi2CoSimulation ? STEP_COMPLETE : EVENT_MODE;
-    return fmi2OK;
+    return (fmi2Status)fmi_exit_initialization(CHECKED(c, fmi2ExitInitializationMode));
 }
 
 fmi2Status fmi2Terminate(fmi2Component c)
 {
-    Instance *inst = CHECKED(c, fmi2Terminate);
-    if (!inst) return fmi2Error;
-    inst->machine.state = TERMINATED;
-    return fmi2OK;
+    return (fmi2Status)fmi_enter(CHECKED(c, fmi2Terminate), TERMINATED);
 }
 
 fmi2Status fmi2Reset(fmi2Component c)
 {
-    Instance *inst = (Instance *)c;  /* allowed in every state: whatever it holds, never refused */
-    if (!inst) return fmi2Error;
-    reset(inst);
-    return fmi2OK;
+    return (fmi2Status)fmi_reset(c);  /* allowed in every state: whatever it holds, never refused */
 }
 
 /* ---- getting and setting values ------------------------------------------------------- */
 
-/* Whether the instance is past initialization mode, where only inputs may still be set. */
-static int initialized(const Instance *inst)
-{
-    return !(inst->machine.state & BEFORE_INIT);
-}
-
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[])
 {
-    Instance *inst = CHECKED(c, fmi2GetReal);
+    FmiInstance *inst = CHECKED(c, fmi2GetReal);
     if (!inst) return fmi2Error;
     if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2GetReal: vr or value is NULL");
-    char message[MESSAGE_SIZE];
     for (size_t k = 0; k < nvr; k++) {
-        switch (model_get_real(MODEL(inst), vr[k], &value[k], inst->machine.time, message,
-                               sizeof message)) {
-        case MODEL_OK: break;
-        case MODEL_DISCARD: return discard(inst, message);
-        case MODEL_REFUSED: return REFUSE(inst, "fmi2GetReal: %s", message);
-        case MODEL_NO_VARIABLE:
-            return REFUSE(inst, "fmi2GetReal: value reference %u is not a Real variable", vr[k]);
-        }
+        const FmiStatus status = fmi_get_real(inst, "fmi2GetReal", "Real", vr[k], vr[k], &value[k]);
+        if (status != FMI_OK) return (fmi2Status)status;
     }
     return fmi2OK;
 }
@@ -329,192 +248,79 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        const fmi2Real value[])
 {
-    Instance *inst = CHECKED(c, fmi2SetReal);
+    FmiInstance *inst = CHECKED(c, fmi2SetReal);
     if (!inst) return fmi2Error;
     if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2SetReal: vr or value is NULL");
-    char message[MESSAGE_SIZE];
-    for (size_t k = 0; k < nvr; k++) {  /* all checked before any is taken */
-        ModelStatus status = model_check_real(MODEL(inst), vr[k], value[k], initialized(inst),
-                                              message, sizeof message);
-        if (status == MODEL_NO_VARIABLE)
-            return REFUSE(inst, "fmi2SetReal: value reference %u is not a Real variable", vr[k]);
-        if (status != MODEL_OK) return REFUSE(inst, "%s", message);
-    }
-    for (size_t k = 0; k < nvr; k++) model_set_real(MODEL(inst), vr[k], value[k]);
+    for (size_t k = 0; k < nvr; k++)  /* all checked before any is taken */
+        if (fmi_check_real(inst, "fmi2SetReal", "Real", vr[k], vr[k], value[k])) return fmi2Error;
+    for (size_t k = 0; k < nvr; k++) model_set_real(inst->model, vr[k], value[k]);
     return fmi2OK;
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Integer value[])
 {
-    Instance *inst = CHECKED(c, fmi2GetInteger);
-    if (!inst) return fmi2Error;
-    if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2GetInteger: vr or value is NULL");
-    for (size_t k = 0; k < nvr; k++)
-        if (model_get_integer(MODEL(inst), vr[k], &value[k]) != MODEL_OK)
-            return REFUSE(inst, "fmi2GetInteger: value reference %u is not an Integer variable",
-                          vr[k]);
-    return fmi2OK;
+    return (fmi2Status)fmi_get_integers(CHECKED(c, fmi2GetInteger), "fmi2GetInteger", "Integer",
+                                        vr, nvr, value);
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[])
 {
-    Instance *inst = CHECKED(c, fmi2SetInteger);
-    if (!inst) return fmi2Error;
-    if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2SetInteger: vr or value is NULL");
-    char message[MESSAGE_SIZE];
-    for (size_t k = 0; k < nvr; k++) {  /* all checked before any is taken */
-        ModelStatus status = model_check_integer(MODEL(inst), vr[k], value[k], initialized(inst),
-                                                 message, sizeof message);
-        if (status == MODEL_NO_VARIABLE)
-            return REFUSE(inst, "fmi2SetInteger: value reference %u is not an Integer variable",
-                          vr[k]);
-        if (status != MODEL_OK) return REFUSE(inst, "%s", message);
-    }
-    for (size_t k = 0; k < nvr; k++) model_set_integer(MODEL(inst), vr[k], value[k]);
-    return fmi2OK;
+    return (fmi2Status)fmi_set_integers(CHECKED(c, fmi2SetInteger), "fmi2SetInteger", "Integer",
+                                        vr, nvr, value);
 }
 
 /* Booleans and Strings: the model contract has none, so any value reference is refused. */
-static fmi2Status no_variables(Instance *inst, const char *function, const char *type,
-                               const fmi2ValueReference vr[], size_t nvr)
-{
-    if (!inst) return fmi2Error;
-    return nvr ? REFUSE(inst, "%s: value reference %u: this FMU has no %s variables", function,
-                        vr ? vr[0] : 0, type) : fmi2OK;
-}
-
 #define NO_VARIABLES(function, type, value_type)                                              \
     fmi2Status function(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,            \
                         value_type value[])                                                   \
     {                                                                                          \
         (void)value;                                                                           \
-        return no_variables(CHECKED(c, function), #function, type, vr, nvr);                   \
+        return (fmi2Status)fmi_no_variables(CHECKED(c, function), #function, type, vr, nvr);   \
     }
 NO_VARIABLES(fmi2GetBoolean, "Boolean", fmi2Boolean)
 NO_VARIABLES(fmi2SetBoolean, "Boolean", const fmi2Boolean)
 NO_VARIABLES(fmi2GetString, "String", fmi2String)
 NO_VARIABLES(fmi2SetString, "String", const fmi2String)
 
-/* ---- the FMU state ---------------------------------------------------------------------- */
-
-#define STATE_MAGIC 0x43504632u  /* "CPF2": a serialized SavedState of this build */
-
-#define HEADER_SIZE fmi_state_header_size(CP_GUID)
-
-/* NULL if s can be the state of an instance of this type, or what is wrong with it, naming
- * the field and its value: a restored state is checked as values set through the API are.
- * The instance state is one state of the type's state machine, the model's data passes
- * model_invalid, and the times are finite. */
-static const char *invalid_state(fmi2Type type, const SavedState *s, char *message, size_t size)
-{
-    const unsigned states = type == fmi2CoSimulation ? CO_SIMULATION_STATES : MODEL_EXCHANGE_STATES;
-    const unsigned bits = (unsigned)s->machine.state;
-    if (!(bits & states) || (bits & (bits - 1))) {  /* none of them, or more than one bit */
-        snprintf(message, size, "instance state = %d: not one state a%s instance can be in",
-                 s->machine.state, type == fmi2CoSimulation ? " Co-Simulation" : " Model Exchange");
-        return message;
-    }
-    if (model_invalid((const ModelData *)s->model, message, size)) return message;
-    const struct { const char *name; double value; } times[] = {
-        {"time", s->machine.time}, {"last_successful_time", s->machine.last_successful_time}};
-    for (size_t k = 0; k < sizeof times / sizeof times[0]; k++)
-        if (!isfinite(times[k].value)) {  /* %g writes nan, inf, -inf as Python's repr does */
-            snprintf(message, size, "%s = %g: must be finite", times[k].name, times[k].value);
-            return message;
-        }
-    return NULL;
-}
+/* ---- the FMU state: fmi_layer.c's, in FMI 2.0's names ----------------------------------- */
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
-    Instance *inst = CHECKED(c, fmi2GetFMUstate);
-    if (!inst) return fmi2Error;
-    if (!FMUstate) return REFUSE(inst, "fmi2GetFMUstate: FMUstate is NULL");
-    SavedState *copy = *FMUstate ? *FMUstate : inst->cb.allocateMemory(1, SAVED_SIZE);
-    if (!copy) return REFUSE(inst, "fmi2GetFMUstate: out of memory");
-    copy->machine = inst->machine;
-    memcpy(copy->model, inst->model, model_sizes.data_size);
-    *FMUstate = copy;
-    return fmi2OK;
+    return (fmi2Status)fmi_get_fmu_state(CHECKED(c, fmi2GetFMUstate), "fmi2GetFMUstate", FMUstate);
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
-    Instance *inst = CHECKED(c, fmi2SetFMUstate);
-    if (!inst) return fmi2Error;
-    if (!FMUstate) return REFUSE(inst, "fmi2SetFMUstate: FMUstate is NULL");
-    const SavedState *saved = FMUstate;
-    char message[MESSAGE_SIZE];
-    if (invalid_state(inst->type, saved, message, sizeof message))
-        return REFUSE(inst, "fmi2SetFMUstate: the state's %s", message);
-    inst->machine = saved->machine;
-    memcpy(inst->model, saved->model, model_sizes.data_size);
-    inst->discarded[0] = '\0';
-    return fmi2OK;
+    return (fmi2Status)fmi_set_fmu_state(CHECKED(c, fmi2SetFMUstate), "fmi2SetFMUstate", FMUstate);
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
-    Instance *inst = (Instance *)c;  /* allowed in every state: whatever it holds, never refused */
-    if (!inst) return fmi2Error;
-    if (!FMUstate) return REFUSE(inst, "fmi2FreeFMUstate: FMUstate is NULL");
-    if (*FMUstate) inst->cb.freeMemory(*FMUstate);
-    *FMUstate = NULL;
-    return fmi2OK;
+    /* allowed in every state: whatever the instance holds, never refused */
+    return (fmi2Status)fmi_free_fmu_state(c, "fmi2FreeFMUstate", FMUstate);
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
-    Instance *inst = CHECKED(c, fmi2SerializedFMUstateSize);
-    if (!inst) return fmi2Error;
-    if (!FMUstate || !size) return REFUSE(inst, "fmi2SerializedFMUstateSize: a pointer is NULL");
-    *size = HEADER_SIZE + SAVED_SIZE;
-    return fmi2OK;
+    return (fmi2Status)fmi_serialized_size(CHECKED(c, fmi2SerializedFMUstateSize),
+                                           "fmi2SerializedFMUstateSize", FMUstate, size);
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
                                  fmi2Byte serializedState[], size_t size)
 {
-    Instance *inst = CHECKED(c, fmi2SerializeFMUstate);
-    if (!inst) return fmi2Error;
-    if (!FMUstate || !serializedState) return REFUSE(inst, "fmi2SerializeFMUstate: a pointer is NULL");
-    if (size < HEADER_SIZE + SAVED_SIZE)
-        return REFUSE(inst, "fmi2SerializeFMUstate: %zu bytes are too few; "
-                      "fmi2SerializedFMUstateSize says how many", size);
-    fmi_state_header_write(serializedState, STATE_MAGIC, (unsigned)SAVED_SIZE, CP_GUID);
-    memcpy(serializedState + HEADER_SIZE, FMUstate, SAVED_SIZE);
-    return fmi2OK;
+    return (fmi2Status)fmi_serialize(CHECKED(c, fmi2SerializeFMUstate), "fmi2SerializeFMUstate",
+                                     FMUstate, (unsigned char *)serializedState, size);
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate)
 {
-    Instance *inst = CHECKED(c, fmi2DeSerializeFMUstate);
-    if (!inst) return fmi2Error;
-    if (!serializedState || !FMUstate) return REFUSE(inst, "fmi2DeSerializeFMUstate: a pointer is NULL");
-    if (size != HEADER_SIZE + SAVED_SIZE)
-        return REFUSE(inst, "fmi2DeSerializeFMUstate: %zu bytes are not a state of this FMU", size);
-    if (!fmi_state_header_matches(serializedState, STATE_MAGIC, (unsigned)SAVED_SIZE, CP_GUID))
-        return REFUSE(inst, "fmi2DeSerializeFMUstate: the bytes are not a state of this FMU "
-                      "(another model, build or version)");
-    /* Checked in a copy of its own (the bytes need not be aligned), taken only if it passes. */
-    SavedState *copy = inst->cb.allocateMemory(1, SAVED_SIZE);
-    if (!copy) return REFUSE(inst, "fmi2DeSerializeFMUstate: out of memory");
-    memcpy(copy, serializedState + HEADER_SIZE, SAVED_SIZE);
-    char message[MESSAGE_SIZE];
-    if (invalid_state(inst->type, copy, message, sizeof message)) {
-        inst->cb.freeMemory(copy);
-        return REFUSE(inst, "fmi2DeSerializeFMUstate: the state's %s", message);
-    }
-    if (*FMUstate) {  /* the caller's state, reused */
-        memcpy(*FMUstate, copy, SAVED_SIZE);
-        inst->cb.freeMemory(copy);
-    } else {
-        *FMUstate = copy;
-    }
-    return fmi2OK;
+    return (fmi2Status)fmi_deserialize(CHECKED(c, fmi2DeSerializeFMUstate),
+                                       "fmi2DeSerializeFMUstate",
+                                       (const unsigned char *)serializedState, size, FMUstate);
 }
 
 /* ---- directional derivatives -------------------------------------------------------------- */
@@ -527,45 +333,24 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         size_t nKnown, const fmi2Real dvKnown[], fmi2Real dvUnknown[])
 {
     static const char *const function = "fmi2GetDirectionalDerivative";
-    Instance *inst = CHECKED(c, fmi2GetDirectionalDerivative);
+    FmiInstance *inst = CHECKED(c, fmi2GetDirectionalDerivative);
     if (!inst) return fmi2Error;
     if ((nUnknown && (!vUnknown_ref || !dvUnknown)) || (nKnown && (!vKnown_ref || !dvKnown)))
         return REFUSE(inst, "%s: a pointer is NULL", function);
-    for (size_t k = 0; k < nKnown; k++)
-        if (!isfinite(dvKnown[k]))
-            return REFUSE(inst, "%s: dvKnown of %s = %g: must be finite", function,
-                          cp_variable_name(vKnown_ref[k]), dvKnown[k]);
-    char message[MESSAGE_SIZE];
-    switch (model_directional_derivative(MODEL(inst), vUnknown_ref, nUnknown, vKnown_ref, nKnown,
-                                         dvKnown, dvUnknown, inst->machine.time, message,
-                                         sizeof message)) {
-    case MODEL_OK: break;
-    case MODEL_DISCARD: return discard(inst, message);
-    default: return REFUSE(inst, "%s: %s", function, message);
-    }
-    for (size_t k = 0; k < nUnknown; k++)
-        if (!isfinite(dvUnknown[k])) {
-            log_message(inst, fmi2Discard, CP_LOG_STATUS_DISCARD, "%s: the derivative of %s is "
-                        "not finite at t = %.9g s; check parameters and state", function,
-                        cp_variable_name(vUnknown_ref[k]), inst->machine.time);
-            return fmi2Discard;
-        }
-    return fmi2OK;
+    return (fmi2Status)fmi_derivative(inst, function, "dvKnown", 0, vUnknown_ref, nUnknown,
+                                      vKnown_ref, nKnown, dvKnown, dvUnknown);
 }
 
 /* ---- Model Exchange ----------------------------------------------------------------------- */
 
 fmi2Status fmi2EnterEventMode(fmi2Component c)
 {
-    Instance *inst = CHECKED(c, fmi2EnterEventMode);
-    if (!inst) return fmi2Error;
-    inst->machine.state = EVENT_MODE;
-    return fmi2OK;
+    return (fmi2Status)fmi_enter(CHECKED(c, fmi2EnterEventMode), EVENT_MODE);
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
 {
-    Instance *inst = CHECKED(c, fmi2NewDiscreteStates);
+    FmiInstance *inst = CHECKED(c, fmi2NewDiscreteStates);
     if (!inst) return fmi2Error;
     if (!eventInfo) return REFUSE(inst, "fmi2NewDiscreteStates: eventInfo is NULL");
     memset(eventInfo, 0, sizeof *eventInfo);  /* no events: nothing changes, nothing to wait for */
@@ -574,91 +359,55 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
 
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
 {
-    Instance *inst = CHECKED(c, fmi2EnterContinuousTimeMode);
-    if (!inst) return fmi2Error;
-    inst->machine.state = CONTINUOUS_TIME;
-    return fmi2OK;
+    return (fmi2Status)fmi_enter(CHECKED(c, fmi2EnterContinuousTimeMode), CONTINUOUS_TIME);
 }
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
 {
     (void)noSetFMUStatePriorToCurrentPoint;
-    Instance *inst = CHECKED(c, fmi2CompletedIntegratorStep);
+    FmiInstance *inst = CHECKED(c, fmi2CompletedIntegratorStep);
     if (!inst) return fmi2Error;
     if (!enterEventMode || !terminateSimulation)
         return REFUSE(inst, "fmi2CompletedIntegratorStep: a pointer is NULL");
     *enterEventMode = *terminateSimulation = fmi2False;
-    inst->machine.last_successful_time = inst->machine.time;
-    return fmi2OK;
+    return (fmi2Status)fmi_completed_integrator_step(inst);
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
 {
-    Instance *inst = CHECKED(c, fmi2SetTime);
-    if (!inst) return fmi2Error;
-    if (!isfinite(time)) return REFUSE(inst, "fmi2SetTime: time = %g must be finite", time);
-    inst->machine.time = time;  /* the contract's models are autonomous: x' does not depend on time */
-    return fmi2OK;
-}
-
-static fmi2Status check_states_call(Instance *inst, const void *x, size_t nx, const char *function)
-{
-    if (!x) return REFUSE(inst, "%s: the array is NULL", function);
-    if (nx != (size_t)model_sizes.n_state)
-        return REFUSE(inst, "%s: nx = %zu, but this FMU has %d continuous states", function, nx,
-                      model_sizes.n_state);
-    return fmi2OK;
+    return (fmi2Status)fmi_set_time(CHECKED(c, fmi2SetTime), "fmi2SetTime", time);
 }
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
 {
-    Instance *inst = CHECKED(c, fmi2SetContinuousStates);
-    if (!inst) return fmi2Error;
-    if (check_states_call(inst, x, nx, "fmi2SetContinuousStates") != fmi2OK) return fmi2Error;
-    char message[MESSAGE_SIZE];
-    if (model_set_states(MODEL(inst), x, message, sizeof message))
-        return REFUSE(inst, "fmi2SetContinuousStates: %s", message);
-    return fmi2OK;
+    return (fmi2Status)fmi_set_continuous_states(CHECKED(c, fmi2SetContinuousStates),
+                                                 "fmi2SetContinuousStates", x, nx);
 }
 
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx)
 {
-    Instance *inst = CHECKED(c, fmi2GetDerivatives);
-    if (!inst) return fmi2Error;
-    if (check_states_call(inst, dx, nx, "fmi2GetDerivatives") != fmi2OK) return fmi2Error;
-    char message[MESSAGE_SIZE];
-    if (model_get_derivatives(MODEL(inst), dx, inst->machine.time, message, sizeof message)
-        != MODEL_OK)
-        return discard(inst, message);
-    return fmi2OK;
+    return (fmi2Status)fmi_get_derivatives(CHECKED(c, fmi2GetDerivatives), "fmi2GetDerivatives",
+                                           dx, nx);
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
 {
     (void)eventIndicators;
-    Instance *inst = CHECKED(c, fmi2GetEventIndicators);
-    if (!inst) return fmi2Error;
-    return ni ? REFUSE(inst, "fmi2GetEventIndicators: ni = %zu, but this FMU has none", ni) : fmi2OK;
+    return (fmi2Status)fmi_get_event_indicators(CHECKED(c, fmi2GetEventIndicators),
+                                                "fmi2GetEventIndicators", ni);
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
 {
-    Instance *inst = CHECKED(c, fmi2GetContinuousStates);
-    if (!inst) return fmi2Error;
-    if (check_states_call(inst, x, nx, "fmi2GetContinuousStates") != fmi2OK) return fmi2Error;
-    model_get_states(MODEL(inst), x);
-    return fmi2OK;
+    return (fmi2Status)fmi_get_continuous_states(CHECKED(c, fmi2GetContinuousStates),
+                                                 "fmi2GetContinuousStates", x, nx);
 }
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx)
 {
-    Instance *inst = CHECKED(c, fmi2GetNominalsOfContinuousStates);
-    if (!inst) return fmi2Error;
-    if (check_states_call(inst, x_nominal, nx, "fmi2GetNominalsOfContinuousStates") != fmi2OK)
-        return fmi2Error;
-    model_get_nominals(MODEL(inst), x_nominal);
-    return fmi2OK;
+    return (fmi2Status)fmi_get_nominals(CHECKED(c, fmi2GetNominalsOfContinuousStates),
+                                        "fmi2GetNominalsOfContinuousStates", x_nominal, nx);
 }
 
 /* ---- Co-Simulation ----------------------------------------------------------------------- */
@@ -667,7 +416,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
                                        const fmi2Integer order[], const fmi2Real value[])
 {
     (void)vr, (void)order, (void)value;
-    Instance *inst = CHECKED(c, fmi2SetRealInputDerivatives);
+    FmiInstance *inst = CHECKED(c, fmi2SetRealInputDerivatives);
     if (!inst) return fmi2Error;
     return nvr ? REFUSE(inst, "fmi2SetRealInputDerivatives: inputs are held constant over a "
                         "step (canInterpolateInputs is false)") : fmi2OK;
@@ -677,7 +426,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
                                         const fmi2Integer order[], fmi2Real value[])
 {
     (void)vr, (void)order, (void)value;
-    Instance *inst = CHECKED(c, fmi2GetRealOutputDerivatives);
+    FmiInstance *inst = CHECKED(c, fmi2GetRealOutputDerivatives);
     if (!inst) return fmi2Error;
     return nvr ? REFUSE(inst, "fmi2GetRealOutputDerivatives: not provided "
                         "(MaxOutputDerivativeOrder is 0)") : fmi2OK;
@@ -687,15 +436,15 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
     (void)noSetFMUStatePriorToCurrentPoint;
-    Instance *inst = CHECKED(c, fmi2DoStep);
+    FmiInstance *inst = CHECKED(c, fmi2DoStep);
     if (!inst) return fmi2Error;
     const double t = currentCommunicationPoint, dt = communicationStepSize;
     if (!(fabs(t - inst->machine.time) <= 1e-9 * fmax(1.0, fabs(t))))
         return REFUSE(inst, "fmi2DoStep: currentCommunicationPoint = %.17g s, but the FMU is "
                       "at t = %.17g s", t, inst->machine.time);
-    if (model_do_step(MODEL(inst), t, dt, inst->discarded, sizeof inst->discarded) != MODEL_OK) {
+    if (model_do_step(inst->model, t, dt, inst->discarded, sizeof inst->discarded) != MODEL_OK) {
         inst->machine.state = STEP_FAILED;
-        return discard(inst, inst->discarded);
+        return (fmi2Status)fmi_discard(inst, inst->discarded);
     }
     inst->machine.time = inst->machine.last_successful_time = t + dt;
     return fmi2OK;
@@ -709,7 +458,7 @@ fmi2Status fmi2CancelStep(fmi2Component c)
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
 {
-    Instance *inst = CHECKED(c, fmi2GetStatus);
+    FmiInstance *inst = CHECKED(c, fmi2GetStatus);
     if (!inst) return fmi2Error;
     if (!value) return REFUSE(inst, "fmi2GetStatus: value is NULL");
     if (s != fmi2DoStepStatus) return fmi2Discard;
@@ -719,7 +468,7 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
 {
-    Instance *inst = CHECKED(c, fmi2GetRealStatus);
+    FmiInstance *inst = CHECKED(c, fmi2GetRealStatus);
     if (!inst) return fmi2Error;
     if (!value) return REFUSE(inst, "fmi2GetRealStatus: value is NULL");
     if (s != fmi2LastSuccessfulTime) return fmi2Discard;
@@ -735,7 +484,7 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
 {
-    Instance *inst = CHECKED(c, fmi2GetBooleanStatus);
+    FmiInstance *inst = CHECKED(c, fmi2GetBooleanStatus);
     if (!inst) return fmi2Error;
     if (!value) return REFUSE(inst, "fmi2GetBooleanStatus: value is NULL");
     if (s != fmi2Terminated) return fmi2Discard;
