@@ -11,7 +11,6 @@
  * for (FMU states).
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 

@@ -19,10 +19,7 @@
  * derivative are marked EARLY RETURN and ADJOINT below.
  */
 #include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "fmi3Functions.h"
 

@@ -1,5 +1,6 @@
 /* What FMI 2.0 and FMI 3.0 share, written once (fmi_layer.h). */
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 

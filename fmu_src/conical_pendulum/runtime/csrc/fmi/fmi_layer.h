@@ -4,22 +4,22 @@
  * Modelica Reference-FMUs. An FMI layer (fmi2_glue.c, fmi3_glue.c) keeps its standard's API,
  * types and state table (the states each function may be called in) and the functions only its
  * standard has; for what both standards do alike (the check of an instance's state, logging,
- * SetDebugLogging, Reset, the experiment, leaving initialization, Integer/Int32 access, the
- * Model Exchange states and derivatives, the FMU states: get, set, free, serialize and the
- * check of a restored one) its entry point is a thin wrapper over a function here, which it
+ * SetDebugLogging, Reset, the experiment, leaving initialization, Real and Integer access by
+ * scalar, directional derivatives, the Model Exchange states and derivatives, the FMU states:
+ * get, set, free, serialize and the check of a restored one) its entry point is a thin wrapper over a function here, which it
  * hands its own function's name.
  *
  * Plain C on the model contract (fmu_model.h): no FMI header, no fmu_config.h. A layer
  * describes its standard once (FmiStandard: state bits and names, the words of its messages,
  * its log categories and token) and its instance begins with an FmiInstance. Status codes are
  * FMI 2.0's and FMI 3.0's alike (OK 0, Warning 1, Discard 2, Error 3), so a layer casts them.
- * Every function taking an FmiInstance takes NULL (an instance refused by fmi_checked) and
- * returns FMI_ERROR for it. Nothing is allocated but an instance's FMU states, with the
- * allocator the layer gives. */
+ * The functions a wrapper hands fmi_checked's result take NULL (a call refused in its state)
+ * and return FMI_ERROR for it; the helpers (fmi_log, fmi_error, fmi_discard, fmi_get_real,
+ * fmi_check_real, fmi_derivative) need an instance. Nothing is allocated but an instance's
+ * FMU states, with the allocator the layer gives. */
 #ifndef FMI_LAYER_H
 #define FMI_LAYER_H
 
-#include <stdarg.h>
 #include <stddef.h>
 
 #include "fmu_model.h"
