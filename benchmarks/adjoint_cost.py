@@ -28,12 +28,13 @@ from fmpy import read_model_description
 
 from conical_pendulum import Scene
 from conical_pendulum.builder.fmu import build_fmu
+from conical_pendulum.builder.native import LAYER_SOURCES
 from results_csv import write_rows
 
 HERE = Path(__file__).parent
 LINKS = (20, 100)
 REPEATS = 5
-GLUES = ("fmi2_glue.c", "fmi3_glue.c")
+GLUES = {name for layer in LAYER_SOURCES.values() for name in layer}  # both FMI layers and their body
 
 
 def main():

@@ -15,8 +15,10 @@ from pathlib import Path
 import numpy as np
 from fmpy import read_model_description
 
+from conical_pendulum.builder.native import LAYER_SOURCES
+
 MODEL_OK, MODEL_DISCARD, MODEL_REFUSED, MODEL_NO_VARIABLE = range(4)
-GLUES = ("fmi2_glue.c", "fmi3_glue.c")
+GLUES = {name for layer in LAYER_SOURCES.values() for name in layer}  # both FMI layers and their body
 
 
 class ModelSizes(ctypes.Structure):
@@ -32,7 +34,7 @@ class ModelSizes(ctypes.Structure):
 
 
 def compile_model(fmu: Path, folder: Path) -> Path:
-    """The library of the FMU's model sources (every C file it ships but the FMI glue)."""
+    """The library of the FMU's model sources (every C file it ships but the FMI layers)."""
     sources = folder / "sources"
     with zipfile.ZipFile(fmu) as archive:
         for name in archive.namelist():

@@ -170,6 +170,22 @@ def test_wrong_calls_are_refused_naming_what(fmus):
     fmu.close()
 
 
+def test_a_bad_tolerance_is_refused_naming_fmi3_enter_initialization_mode(fmus):
+    """FMI 3.0 has no setupExperiment: the tolerance comes with fmi3EnterInitializationMode, and
+    its refusal names that; the instance stays where it was and takes a good one."""
+    fmu = Instance3(fmus[0], initialize=False)
+    with pytest.raises(FMICallException) as refusal:
+        fmu.fmu.enterInitializationMode(tolerance=-1.0, startTime=0.0)
+    assert refusal.value.status == ERROR
+    assert "fmi3EnterInitializationMode: tolerance = -1.0: " in fmu.texts(ERROR)
+    assert "setupExperiment" not in fmu.texts()
+    fmu.fmu.enterInitializationMode(tolerance=1e-6, startTime=0.0)
+    fmu.fmu.exitInitializationMode()
+    fmu.step(0.1)
+    assert np.isfinite(fmu.get("alpha0")).all()
+    fmu.close()
+
+
 def test_early_return_and_event_mode_are_what_the_model_description_says(fmus):
     with pytest.raises(Exception, match="Failed to instantiate"):
         Instance3(fmus[0], eventModeUsed=True)

@@ -15,6 +15,7 @@ turns errors into a line and an exit status.
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -214,3 +215,28 @@ def test_each_subcommand_is_a_module_of_its_own():
         "add_arguments",
         "run",
     }
+
+
+# runtime/csrc by role, and what each role's C may include: core/ (the model's numerics) knows
+# neither FMI nor a model behind the contract; fmi/ (the FMI layers and the contract) knows a model
+# only through fmu_model.h; models/ implement fmu_model.h on the core. Generated files (the
+# core's model.h and model.c, an FMU's fmu_config.h and fmi3_arrays.h) may be included anywhere.
+CSRC = ROOT / "runtime" / "csrc"
+GENERATED_C = {"model.h", "model.c", "fmu_config.h", "fmi3_arrays.h"}
+FMI_HEADERS = {"fmi2Functions.h", "fmi3Functions.h"}
+
+
+def test_csrc_is_laid_out_by_role_and_its_includes_point_one_way():
+    files = [path for path in CSRC.rglob("*") if path.is_file()]
+    role = {path.name: path.parent.name for path in files}
+    assert {path.parent for path in files} == {CSRC / "core", CSRC / "fmi", CSRC / "models"}
+    assert len(role) == len(files)  # names unique: an FMU's sources/ holds them side by side
+    of = {name: {file for file, its in role.items() if its == name} for name in ("core", "fmi", "models")}
+    may_include = {
+        "core": of["core"],
+        "fmi": of["fmi"] | FMI_HEADERS,
+        "models": of["core"] | {"fmu_model.h"},
+    }
+    for path in files:
+        included = set(re.findall(r'(?:#include|cdef extern from) "([^"<]+)"', path.read_text()))
+        assert included - GENERATED_C <= may_include[role[path.name]], path.relative_to(CSRC)

@@ -174,17 +174,19 @@ def test_a_host_rebuilds_the_binary_from_the_fmus_sources(native, tmp_path):
 
 
 def test_the_fmi_layer_knows_the_model_only_through_the_contract(native):
-    """fmi2_glue.c includes the FMI headers, the FMI layers' shared helpers fmi_layer.h,
+    """fmi2_glue.c includes the FMI headers, the body both FMI layers share fmi_layer.h,
     fmu_config.h (GUID, log categories, names) and the model contract fmu_model.h, and touches
     none of the model's value references, sizes, rules or C; the model's file knows nothing of
-    FMI, and fmi_layer.c nothing of the model or of either standard's headers."""
+    FMI, and fmi_layer.c knows the model only through the contract and neither standard's
+    headers, types or functions."""
     with zipfile.ZipFile(native) as archive:
         glue = archive.read("sources/fmi2_glue.c").decode()
         model = archive.read("sources/pendulum_model.c").decode()
         layer = archive.read("sources/fmi_layer.c").decode()
     included = re.findall(r'#include "([^"]+)"', glue)
     assert included == ["fmi2Functions.h", "fmi_layer.h", "fmu_config.h", "fmu_model.h"]
-    assert re.findall(r'#include "([^"]+)"', layer) == ["fmi_layer.h"]
+    assert re.findall(r'#include "([^"]+)"', layer) == ["fmi_layer.h", "fmu_model.h"]
+    assert not re.search(r"\bfmi[23][A-Z]", layer)
     for word in (
         "CP_VR_",
         "CP_NREAL",
@@ -202,6 +204,7 @@ def test_the_fmi_layer_knows_the_model_only_through_the_contract(native):
         "CP_CALCULATED",
     ):
         assert word not in glue, word
+        assert word not in layer, word
     assert "fmi2" not in model
 
 

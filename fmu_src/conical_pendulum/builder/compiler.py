@@ -24,10 +24,15 @@ from ..scene import Scene
 
 HERE = Path(__file__).parent
 CSRC = HERE.parent / "runtime" / "csrc"
+CORE_CSRC = CSRC / "core"  # the model's numerics: the compiled core's C, and the native FMU's
+# Every C file of runtime/csrc by name, whichever role's folder holds it (core/, fmi/: the FMI
+# layers, models/: the models behind fmu_model.h); names are unique, so an FMU's sources/
+# folder holds them side by side.
+CSRC_FILES = {path.name: path for path in sorted(CSRC.glob("*/*.[ch]"))}
 GENERATOR_SOURCES = [
     *(HERE / name for name in ("kane.py", "model.py", "codegen.py", "compiler.py")),
     HERE.parent / "runtime" / "rules.py",  # the statistics' slots (model.h)
-    *sorted(CSRC.glob("*.[chp]*")),
+    *sorted(CORE_CSRC.glob("*.[chp]*")),
 ]
 LIMITED_API = "0x030B0000"  # CPython 3.11: one compiled file serves 3.11 and newer
 
@@ -103,10 +108,9 @@ def build_core(scene: Scene, cache: Path | None = None) -> CoreBuild:
             (work / filename).write_text(text)
 
         start = time.perf_counter()
-        for source in CSRC.iterdir():
-            if source.suffix in (".c", ".h"):
-                shutil.copy2(source, work / source.name)
-        shutil.copy2(CSRC / "core.pyx", work / f"{name}.pyx")
+        for source in CORE_CSRC.glob("*.[ch]"):
+            shutil.copy2(source, work / source.name)
+        shutil.copy2(CORE_CSRC / "core.pyx", work / f"{name}.pyx")
         _compile(name, work)
         seconds["compile"] = time.perf_counter() - start
         (work / "build.json").write_text(json.dumps({"scene": scene.to_dict(), "seconds": seconds}, indent=1))

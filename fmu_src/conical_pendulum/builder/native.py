@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ..errors import UserError
 from ..runtime.files import MODEL_FILE
-from .compiler import CSRC
+from .compiler import CSRC_FILES
 from .fmi2 import FMI2
 from .fmi3 import FMI3
 from .fmu_config import config_header
@@ -115,7 +115,7 @@ def guid_of(model: NativeModel, data: dict, fmi_version: int = 2) -> str:
     generator) and the settings, every C file it ships from runtime/csrc, and the code
     that writes it (WRITERS, its standard's module and its model's)."""
     files = glue_sources(model, fmi_version) + glue_headers(model)
-    shipped = [CSRC / name for name in files if (CSRC / name).exists()]
+    shipped = [CSRC_FILES[name] for name in files if name in CSRC_FILES]
     modules = (STANDARDS[fmi_version].model_description.__module__, model.config.__module__)
     writers = [*WRITERS, *(Path(sys.modules[name].__file__) for name in modules)]
     glue = b"".join(path.read_bytes() for path in shipped + writers)
@@ -145,7 +145,7 @@ def write_model_fmu(
         sources.mkdir()
         for name in shipped + glue_headers(model):
             if name != "fmu_config.h":
-                shutil.copy2((generated or {}).get(name, CSRC / name), sources / name)
+                shutil.copy2((generated or {}).get(name) or CSRC_FILES[name], sources / name)
         headers = {"fmu_config.h": config_header(model, data, described.records, described.guid)}
         for name, text in {**headers, **standard.headers(described)}.items():
             (sources / name).write_text(text)

@@ -29,10 +29,10 @@
  * model_tolerance_refusal and model_set_tolerance, fmi3ExitInitializationMode calls
  * model_initialize, fmi3DoStep calls model_do_step_early (early return when the importer
  * allows it; no event handling), fmi3GetDirectionalDerivative calls
- * model_directional_derivative and fmi3GetAdjointDerivative model_adjoint_derivative,
- * fmi3GetFMUState and fmi3SerializeFMUState copy the ModelData with the layer's own machine
- * state and header, as fmi2_glue.c does. Only the API, the state machine and the FMU state's
- * wrapping are written again.
+ * model_directional_derivative and fmi3GetAdjointDerivative model_adjoint_derivative.
+ * What the two layers do alike on these functions (the FMU states, which copy the ModelData
+ * whole, the experiment, the Model Exchange states, ...) is written once, in fmi_layer.c;
+ * each layer keeps only its standard's API, types, state table and thin wrappers.
  *
  * A second model, the coupled demo's cart (cart_model.c): its struct ModelData (its held
  * Reals by value reference, F_x_order, the force in effect and the extrapolation's last
@@ -81,8 +81,9 @@ extern const ModelSizes model_sizes;
 void model_reset(ModelData *m);
 
 /* NULL if tolerance may be the experiment's tolerance (FMI 2.0's fmi2SetupExperiment, FMI
- * 3.0's fmi3EnterInitializationMode), or the message refusing it. */
-const char *model_tolerance_refusal(double tolerance, char *message, size_t size);
+ * 3.0's fmi3EnterInitializationMode), or the message refusing it, naming it name (NULL: as the
+ * model names its own field, in the check of a restored state). */
+const char *model_tolerance_refusal(double tolerance, const char *name, char *message, size_t size);
 
 /* Takes the experiment's tolerance (0: none), which model_initialize applies. */
 void model_set_tolerance(ModelData *m, double tolerance);

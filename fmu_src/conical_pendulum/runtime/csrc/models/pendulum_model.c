@@ -112,9 +112,10 @@ void model_reset(ModelData *m)
     m->max_steps = CP_MAX_STEPS_START;
 }
 
-const char *model_tolerance_refusal(double tolerance, char *message, size_t size)
+const char *model_tolerance_refusal(double tolerance, const char *name, char *message,
+                                    size_t size)
 {
-    return cp_real_refusal(tolerance_name, tolerance, &cp_rules[cp_real_rule[CP_VR_RTOL]],
+    return cp_real_refusal(name ? name : tolerance_name, tolerance, &cp_rules[cp_real_rule[CP_VR_RTOL]],
                            cp_real_what[CP_VR_RTOL], message, size);
 }
 
@@ -367,7 +368,7 @@ const char *model_invalid(const ModelData *m, char *message, size_t size)
     if (integer_refusal(CP_VR_SOLVER, m->solver, message, size)
         || integer_refusal(CP_VR_MAX_STEPS, m->max_steps, message, size))
         return message;
-    if (m->tolerance != 0.0 && model_tolerance_refusal(m->tolerance, message, size))
+    if (m->tolerance != 0.0 && model_tolerance_refusal(m->tolerance, NULL, message, size))
         return message;
     if (cp_real_refusal("h", m->h, &cp_rules[CP_STEP_RULE], CP_STEP_WHAT, message, size))
         return message;

@@ -78,9 +78,10 @@ void model_reset(ModelData *m)
 
 /* The cart's step is exact: a tolerance has nothing to tighten, but is refused as the
  * pendulum's atol would be when it is no tolerance at all. */
-const char *model_tolerance_refusal(double tolerance, char *message, size_t size)
+const char *model_tolerance_refusal(double tolerance, const char *name, char *message,
+                                    size_t size)
 {
-    return cp_real_refusal(tolerance_name, tolerance, &cp_rules[CP_TOLERANCE_RULE],
+    return cp_real_refusal(name ? name : tolerance_name, tolerance, &cp_rules[CP_TOLERANCE_RULE],
                            CP_TOLERANCE_WHAT, message, size);
 }
 
