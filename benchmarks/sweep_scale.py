@@ -10,8 +10,8 @@ scheduler of its local cluster) and of each worker process. `--killed N` runs an
 sweep and kills (SIGKILL) one worker process once the progress bar shows half the runs
 done; the nanny starts a new one and the sweep carries on. `--resume N` interrupts an
 N-run sweep (SIGINT) half-way, then resumes it, and reports what resuming cost. Nothing
-is extrapolated: every row is a sweep that ran to its end. Appends to
-benchmarks/results/sweep_scale.csv (rows of the same label replaced).
+is extrapolated: every row is a sweep that ran to its end. Adds its rows to
+benchmarks/results/sweep_scale.csv (replacing rows of the same label, kind and size).
 """
 
 import argparse
@@ -49,9 +49,9 @@ def peak_kb(pid: int) -> int:
 
 
 def is_worker(process: psutil.Process) -> bool:
-    """A Dask worker process (the nanny's child), not the nanny itself."""
+    """A Dask worker process: the local cluster's nannies start them with multiprocessing's spawn."""
     try:
-        return process.parent() is not None and "nanny" in " ".join(process.parent().cmdline()).lower()
+        return "spawn_main" in " ".join(process.cmdline())
     except psutil.Error:
         return False
 
@@ -178,7 +178,12 @@ def main():
     kept = []
     if path.exists():
         with open(path, newline="") as file:
-            kept = [line for line in csv.DictReader(file) if line["label"] != args.label]
+            measured = {(line["label"], line["sweep"], str(line["runs"])) for line in rows}
+            kept = [
+                line
+                for line in csv.DictReader(file)
+                if (line["label"], line["sweep"], line["runs"]) not in measured
+            ]
     print(f"wrote {write_rows('sweep_scale', kept + rows)}")
 
 
