@@ -130,6 +130,21 @@ def row(label, kind, runs, result, note=""):
     return line
 
 
+def save(label: str, rows: list[dict]):
+    """The rows measured so far into the CSV (after each sweep: a long session keeps what it measured)."""
+    path = RESULTS / "sweep_scale.csv"
+    kept = []
+    if path.exists():
+        with open(path, newline="") as file:
+            measured = {(line["label"], line["sweep"], str(line["runs"])) for line in rows}
+            kept = [
+                line
+                for line in csv.DictReader(file)
+                if (line["label"], line["sweep"], line["runs"]) not in measured
+            ]
+    return write_rows("sweep_scale", kept + rows)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", default="1000,10000,100000", help="sweep sizes, comma-separated")
@@ -149,6 +164,18 @@ def main():
             result = sweep(fmu, runs, out)
             rows.append(row(args.label, "plain", runs, result, result["stdout"].strip().splitlines()[0]))
             subprocess.run(["rm", "-rf", str(out)], check=True)
+            save(args.label, rows)
+        if args.resume:
+            out = Path(tmp) / "resumed.parquet"
+            first = sweep(fmu, args.resume, out, interrupt_at=0.5)
+            last_line = first["stderr"].strip().splitlines()[-2]
+            rows.append(row(args.label, "interrupted half-way (Ctrl-C)", args.resume, first, last_line))
+            second = sweep(fmu, args.resume, out, extra=["--resume"])
+            rows.append(
+                row(args.label, "resumed", args.resume, second, second["stdout"].strip().splitlines()[0])
+            )
+            subprocess.run(["rm", "-rf", str(out)], check=True)
+            save(args.label, rows)
         if args.killed:
             out = Path(tmp) / "killed.parquet"
             result = sweep(fmu, args.killed, out, kill_at=0.5)
@@ -158,33 +185,8 @@ def main():
             )
             rows.append(row(args.label, "a worker killed half-way", args.killed, result, note))
             subprocess.run(["rm", "-rf", str(out)], check=True)
-        if args.resume:
-            out = Path(tmp) / "resumed.parquet"
-            first = sweep(fmu, args.resume, out, interrupt_at=0.5)
-            rows.append(
-                row(
-                    args.label,
-                    "interrupted half-way (Ctrl-C)",
-                    args.resume,
-                    first,
-                    first["stderr"].strip().splitlines()[-1],
-                )
-            )
-            second = sweep(fmu, args.resume, out, extra=["--resume"])
-            rows.append(
-                row(args.label, "resumed", args.resume, second, second["stdout"].strip().splitlines()[0])
-            )
-    path = RESULTS / "sweep_scale.csv"
-    kept = []
-    if path.exists():
-        with open(path, newline="") as file:
-            measured = {(line["label"], line["sweep"], str(line["runs"])) for line in rows}
-            kept = [
-                line
-                for line in csv.DictReader(file)
-                if (line["label"], line["sweep"], line["runs"]) not in measured
-            ]
-    print(f"wrote {write_rows('sweep_scale', kept + rows)}")
+            save(args.label, rows)
+    print(f"wrote {save(args.label, rows)}")
 
 
 if __name__ == "__main__":
