@@ -702,6 +702,12 @@ def _stop_workers_noting(deaths: _Deaths, plugin: str):
     """The dead workers' notes read (and removed), then the plugin unregistered."""
     deaths.read()
     deaths.client.unregister_worker_plugin(plugin)
+    deaths.client.run(_remove_notes_folder, plugin, on_error="ignore")  # emptied by teardowns and reads
+
+
+def _remove_notes_folder(plugin: str):
+    with contextlib.suppress(OSError):
+        _notes_folder(plugin).rmdir()
 
 
 def sweep(

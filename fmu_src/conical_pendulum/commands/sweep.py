@@ -170,7 +170,8 @@ def run(args) -> int:
     except (ValueError, ConnectionError) as exc:
         raise UserError(str(exc)) from None
     except KeyboardInterrupt:
-        print(f"\nsweep: stopped; the runs done are kept in {args.out}: {resume_hint()}", file=sys.stderr)
+        if (args.out / sweeps.SETTINGS_FILE).exists():  # begun: what is done is kept
+            print(f"\nsweep: stopped; the runs done are kept in {args.out}: {resume_hint()}", file=sys.stderr)
         raise
     seconds = time.perf_counter() - start
     failed = results.failed()
