@@ -61,7 +61,14 @@ def sweep(fmu: Path, runs: int, out: Path, *, kill_at: float | None = None, inte
     args = [COMMAND, "sweep", str(fmu), "--random", "l0=5:15", "--random", "alpha0=0:0.5"]
     args += ["--samples", str(runs), "--seed", "1", "--out", str(out), *extra]
     start = time.perf_counter()
-    process = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        args,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        # Ctrl-C's SIGINT as in a terminal, even when this script runs in the background (SIG_IGN)
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     client, workers, done, killed, stderr = psutil.Process(process.pid), {}, [0], [], []
 
     def read_progress():

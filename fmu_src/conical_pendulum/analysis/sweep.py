@@ -32,6 +32,8 @@ import math
 import numbers
 import os
 import shutil
+import signal
+import sys
 import tempfile
 import threading
 import time
@@ -190,6 +192,15 @@ FATAL_SIGNALS = {
     "Bus error": "SIGBUS",
     "Illegal instruction": "SIGILL",
 }
+
+
+class _LeaveCtrlCToTheClient(WorkerPlugin):
+    """A terminal's Ctrl-C reaches the local cluster's worker processes too: they ignore it,
+    so that the client stops the sweep (keeping what is written) and closes them, rather
+    than each dying with a traceback."""
+
+    def setup(self, worker):
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _notes_folder(plugin: str) -> Path:
@@ -560,8 +571,8 @@ class SweepResults:
     and duckdb's read_parquet('<path>/*.parquet') read it; rows of a run are together and
     in time order, runs in the order they finished (sort by run, as to_pandas does)."""
 
-    def __init__(self, path):
-        self.path = Path(path)
+    def __init__(self, path, ran: int | None = None):
+        self.path, self.ran = Path(path), ran  # ran: the runs the sweep() that returned it ran
         self.attrs = json.loads((self.path / SETTINGS_FILE).read_text())
 
     def __repr__(self):
@@ -612,6 +623,7 @@ def _client(scheduler: str | None, n_workers: int, timeout: float):
                 silence_logs=logging.ERROR,
             )
         with cluster, Client(cluster) as client:
+            client.register_plugin(_LeaveCtrlCToTheClient(), name="conical-pendulum-sweep-ctrl-c")
             yield client
         return
     try:
@@ -647,6 +659,11 @@ class _Progress:
     def add(self, runs: int, failed: int):
         self.done, self.failed = self.done + runs, self.failed + failed
         self.show()
+
+    def stop(self):
+        """Ends the bar's line when the sweep stops short."""
+        if self.shown and self.done < self.total:
+            print(file=sys.stderr)
 
     def show(self):
         if not self.shown:
@@ -775,9 +792,9 @@ def sweep(
     with _client(scheduler, n_workers, timeout) as client:
         parts = _Parts(out, schema, _begin(out, settings, replace))
         plugin = f"conical-pendulum-sweep-{uuid.uuid4().hex}"
-        client.register_plugin(_FmuPlugin(data, loop, plugin), name=plugin)
         deaths = _Deaths(client, plugin)
         try:
+            client.register_plugin(_FmuPlugin(data, loop, plugin), name=plugin)
             fallbacks = client.run(lambda dask_worker: dask_worker.plugins[plugin].fmu.fallback)
             for worker, reason in sorted(fallbacks.items()):
                 if reason:
@@ -818,15 +835,17 @@ def sweep(
                     shown.add(len(summary), sum(not ok for _, ok, _, _ in summary))
                 submit()
         except BaseException as exc:
+            shown.stop()
             parts.close()  # what was written stays, to resume
             with contextlib.suppress(Exception):  # the cluster may be gone
                 _stop_workers_noting(deaths, plugin)
             if isinstance(exc, (OSError, CancelledError, asyncio.CancelledError)):
                 raise ConnectionError(
-                    f"lost the cluster ({type(exc).__name__}: {exc}); the runs done are kept in {out}: "
+                    f"lost the cluster ({type(exc).__name__}: {' '.join(str(exc).split())}); "
+                    f"the runs done are kept in {out}: "
                     "run again with --resume (resume=True) to finish"
                 ) from None
             raise
         parts.close()
         _stop_workers_noting(deaths, plugin)
-    return SweepResults(out)
+    return SweepResults(out, ran=int((~done).sum()))

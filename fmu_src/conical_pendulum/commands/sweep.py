@@ -171,14 +171,15 @@ def run(args) -> int:
         raise UserError(str(exc)) from None
     except KeyboardInterrupt:
         if (args.out / sweeps.SETTINGS_FILE).exists():  # begun: what is done is kept
-            print(f"\nsweep: stopped; the runs done are kept in {args.out}: {resume_hint()}", file=sys.stderr)
+            print(f"sweep: stopped; the runs done are kept in {args.out}: {resume_hint()}", file=sys.stderr)
         raise
     seconds = time.perf_counter() - start
     failed = results.failed()
     total = results.attrs["runs"]
+    earlier = f", {total - results.ran} done before" if results.ran < total else ""
     print(
         f"wrote {args.out}: {total} runs ({len(failed)} failed), {results.rows()} rows, "
-        f"in {seconds:.1f} s ({total / seconds:.1f} runs/s)"
+        f"in {seconds:.1f} s ({results.ran / seconds:.1f} runs/s{earlier})"
     )
     for number, row in failed.head(5).iterrows():
         values = ", ".join(f"{name} = {row[name]:g}" for name in results.attrs["inputs"])
