@@ -21,6 +21,7 @@ medians are reported. Writes benchmarks/results/sweep_throughput.csv.
 """
 
 import argparse
+import os
 import shutil
 import tempfile
 import time
@@ -46,9 +47,16 @@ def timed(call):
     return value, time.perf_counter() - start
 
 
+def sweep_out() -> Path:
+    """Where a round's sweep writes its dataset (replaced at each round)."""
+    return Path(tempfile.gettempdir()) / f"sweep_throughput_{os.getpid()}.parquet"
+
+
 def sweep_energies(results, n):
-    """Each run's energy, from a sweep's long table."""
-    return [results.loc[results["run"] == k, "energy"].to_numpy() for k in range(n)]
+    """Each run's energy, read back from a sweep's dataset (then removed)."""
+    energies = results.to_pandas(["energy"])
+    shutil.rmtree(results.path)
+    return [energies.loc[energies["run"] == k, "energy"].to_numpy() for k in range(n)]
 
 
 def methods(path, runs):
@@ -93,6 +101,7 @@ def methods(path, runs):
                     scheduler=cluster.scheduler_address,
                     progress=False,
                     loop="fmpy",
+                    out=sweep_out(),
                 )
             )
         return sweep_energies(results, len(runs)), seconds, start_seconds
@@ -107,6 +116,7 @@ def methods(path, runs):
                 n_workers=workers,
                 progress=False,
                 loop="fmpy",
+                out=sweep_out(),
             )
         )
         return sweep_energies(results, len(runs)), seconds, None

@@ -1,12 +1,13 @@
 /* A small FMI 2.0 Co-Simulation FMU of another shape than the pendulum's, for the compiled
- * runner's tests (test_runner.py builds it): Real, Integer and Boolean outputs, and steps
- * that fail on request.
+ * runner's and the sweep's tests (shapes.py builds it): Real, Integer and Boolean outputs,
+ * and steps that fail, or crash the process, on request.
  *
  * Reals: 0 x (output: x += gain h (1 + t) per step), 1 h (output: the last step size),
  * 2 gain (parameter, refused when negative), 3 fail_at (parameter: the first step reaching
  * past it fails as `mode` says), 4 nan_at (parameter: from there x is NaN).
  * Integers: 0 count (output: steps taken), 1 mode (parameter: 0 never fail, 1 discard and
- * terminate, 2 discard `repeats` times then go on, 3 fmi2Error), 2 repeats (parameter).
+ * terminate, 2 discard `repeats` times then go on, 3 fmi2Error, 4 write through a null
+ * pointer: SIGSEGV, as a buggy FMU crashes its host), 2 repeats (parameter).
  * Booleans: 0 above (output: x > 0.5). */
 #include <math.h>
 #include <stdio.h>
@@ -21,6 +22,7 @@ typedef struct {
     int integers[3];
     int failures, terminated;
     double lastSuccessfulTime;
+    volatile double *nowhere; /* NULL: mode 4 writes through it */
 } Shapes;
 
 enum { X, H, GAIN, FAIL_AT, NAN_AT };
@@ -41,6 +43,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
     s->reals[FAIL_AT] = 1e300;
     s->reals[NAN_AT] = 1e300;
     s->integers[REPEATS] = 1;
+    s->nowhere = NULL;
     return s;
 }
 
@@ -109,6 +112,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noPri
     (void)noPrior;
     Shapes *s = c;
     int mode = s->integers[MODE];
+    if (mode == 4 && t + h > s->reals[FAIL_AT]) *s->nowhere = t;
     if (mode && t + h > s->reals[FAIL_AT] && s->failures < (mode == 2 ? s->integers[REPEATS] : 1)) {
         char message[96];
         snprintf(message, sizeof message, "step from t = %g s by %g s refused", t, h);

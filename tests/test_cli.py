@@ -484,7 +484,7 @@ def test_a_bad_or_unreadable_file_is_one_line(capsys, tmp_path, name, args, suff
         ("show", ["RESULTS", "--plot", "FOLDER"], "--plot FOLDER: is a directory"),
         ("show", ["RESULTS", "--gif", "FILE/x.gif"], "--gif FILE/x.gif: FILE is not a directory"),
         ("page", ["FMU", "--out", "FILE"], "--out FILE: not a directory"),
-        ("sweep", ["FMU", "--grid", "l0=5,6", "--out", "FOLDER"], "out: FOLDER is a directory"),
+        ("sweep", ["FMU", "--grid", "l0=5,6", "--out", "FILE"], "out: FILE is a file"),
         ("demo", ["--out", "FILE"], "--out FILE: not a directory"),
         ("system", ["--out", "FILE"], "--out FILE: not a directory"),
     ],

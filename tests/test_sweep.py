@@ -1,22 +1,29 @@
 """conical_pendulum.analysis.sweep: Dask runs equal to fmpy's one by one, failures kept with their
-messages, one Parquet file, the FMU loaded once per worker, and a command that refuses
-what it cannot run."""
+messages, a Parquet dataset that pandas, pyarrow, dask and duckdb read, the FMU loaded once
+per worker, a run that crashes its worker costing one row, interrupted sweeps resumed to
+the same dataset, and a command that refuses what it cannot run."""
 
+import hashlib
 import logging
 import math
+import os
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow.dataset as ds
 import pytest
 from distributed import Client, LocalCluster
 
 from conical_pendulum.analysis import runner
 from conical_pendulum.analysis import sweep as sweep_module
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.analysis.sweep import LoadedFmu, grid, random_samples, sweep
+from conical_pendulum.analysis.sweep import LoadedFmu, SweepResults, grid, random_samples, sweep
+from shapes import MODES, build_shapes_fmus
 
 # a start that needs more than 25 internal steps in the communication step from 1.5 s to 2 s
 DISCARDED_AT_1_5 = {"alpha0": 1.2, "delta2": 3.0, "max_steps": 25}
@@ -33,13 +40,13 @@ def by_run(results):
     return results.drop_duplicates("run").set_index("run")
 
 
-def test_runs_equal_fmpy_one_by_one(seed_fmu):
+def test_runs_equal_fmpy_one_by_one(seed_fmu, tmp_path):
     runs = random_samples(
         {"l0": (5, 15), "m1": (1, 10), "alpha0": (-1, 1), "beta2": (-0.5, 0.5), "delta1": (-2, 2)},
         100,
         seed=7,
     )
-    results = sweep(seed_fmu, runs, n_workers=2, progress=False)
+    results = sweep(seed_fmu, runs, n_workers=2, progress=False, out=tmp_path / "s.parquet").to_pandas()
     assert (results["status"] == "ok").all() and (results["message"] == "").all()
     inputs = by_run(results)[["l0", "m1", "alpha0_start", "beta2_start", "delta1_start"]]
     assert inputs.rename(columns=lambda name: name.removesuffix("_start")).to_dict("records") == runs
@@ -50,7 +57,7 @@ def test_runs_equal_fmpy_one_by_one(seed_fmu):
             assert np.array_equal(got[name].to_numpy(), expected[name]), (index, name)
 
 
-def test_both_loops_give_the_same_file_on_a_running_cluster(native_seed_fmu, cluster):
+def test_both_loops_give_the_same_file_on_a_running_cluster(native_seed_fmu, cluster, tmp_path):
     runs = random_samples({"l0": (5, 15), "alpha0": (-1, 1)}, 12, seed=2) + [{"l0": -1.0}, DISCARDED_AT_1_5]
     results = {
         loop: sweep(
@@ -60,7 +67,8 @@ def test_both_loops_give_the_same_file_on_a_running_cluster(native_seed_fmu, clu
             scheduler=cluster.scheduler_address,
             progress=False,
             loop=loop,
-        )
+            out=tmp_path / loop,
+        ).to_pandas()
         for loop in ("runner", "fmpy")
     }
     # the native FMU's discard ends in fmi2Error at the next step: only the runner keeps rows
@@ -71,21 +79,26 @@ def test_both_loops_give_the_same_file_on_a_running_cluster(native_seed_fmu, clu
     assert list(by_run(results["runner"])["status"]) == ["ok"] * 12 + ["failed"] * 2
 
 
-def test_a_worker_without_the_runner_uses_fmpys_loop_and_says_why(seed_fmu, monkeypatch, caplog):
+def test_a_worker_without_the_runner_uses_fmpys_loop_and_says_why(seed_fmu, monkeypatch, caplog, tmp_path):
     monkeypatch.setattr(runner, "unavailable", lambda: "no C compiler cc")
     with (
         LocalCluster(n_workers=1, processes=False, dashboard_address="127.0.0.1:0") as in_process,
         caplog.at_level(logging.WARNING, logger="conical_pendulum.analysis.sweep"),
     ):
         results = sweep(
-            seed_fmu, [{"l0": 5.0}], stop_time=1.0, scheduler=in_process.scheduler_address, progress=False
-        )
+            seed_fmu,
+            [{"l0": 5.0}],
+            stop_time=1.0,
+            scheduler=in_process.scheduler_address,
+            progress=False,
+            out=tmp_path / "s.parquet",
+        ).to_pandas()
     assert (results["status"] == "ok").all()
     assert "runs fmpy's loop, not the compiled runner: no C compiler cc" in caplog.text
     assert "ConicalPendulum: fmpy's loop instead of the compiled runner: no C compiler cc" in caplog.text
 
 
-def test_a_refused_value_fails_only_its_run(seed_fmu, cluster):
+def test_a_refused_value_fails_only_its_run(seed_fmu, cluster, tmp_path):
     runs = grid({"l0": [5.0, 10.0], "alpha0": [0.2, 0.4]}) + [{"l0": -1.0}]
     results = sweep(
         seed_fmu,
@@ -94,7 +107,8 @@ def test_a_refused_value_fails_only_its_run(seed_fmu, cluster):
         output_interval=0.5,
         scheduler=cluster.scheduler_address,
         progress=False,
-    )
+        out=tmp_path / "s.parquet",
+    ).to_pandas()
     inputs = by_run(results)
     assert list(inputs["status"]) == ["ok"] * 4 + ["failed"]
     assert inputs.loc[4, "alpha0_start"] == math.radians(10)  # left alone: the FMU's start value
@@ -106,12 +120,21 @@ def test_a_refused_value_fails_only_its_run(seed_fmu, cluster):
 
 
 @pytest.mark.parametrize("backend", ["pythonfmu", "native"])
-def test_a_discarded_step_fails_the_run_with_the_rows_before(backend, seed_fmu, native_seed_fmu, cluster):
+def test_a_discarded_step_fails_the_run_with_the_rows_before(
+    backend, seed_fmu, native_seed_fmu, cluster, tmp_path
+):
     """The native FMU's discard ends in fmi2Error at the next step (fmpy's loop keeps no rows
     then); the compiled runner keeps the rows before it, as pythonfmu's terminated run has."""
     fmu = seed_fmu if backend == "pythonfmu" else native_seed_fmu
     runs = [{"alpha0": 1.2, "delta2": 3.0}, DISCARDED_AT_1_5]
-    results = sweep(fmu, runs, output_interval=0.5, scheduler=cluster.scheduler_address, progress=False)
+    results = sweep(
+        fmu,
+        runs,
+        output_interval=0.5,
+        scheduler=cluster.scheduler_address,
+        progress=False,
+        out=tmp_path / "s",
+    ).to_pandas()
     assert list(by_run(results)["status"]) == ["ok", "failed"]
     failed = results[results["run"] == 1]
     assert list(failed["time"]) == [0.0, 0.5, 1.0, 1.5]  # fmpy's repeat of the last good point dropped
@@ -139,10 +162,11 @@ def test_non_finite_outputs_fail_the_run(seed_fmu, monkeypatch):
         fmu.close()
 
 
-def test_the_file_round_trips(seed_fmu, cluster, tmp_path):
+def test_the_dataset_round_trips(seed_fmu, cluster, tmp_path, monkeypatch):
+    monkeypatch.setattr(sweep_module, "PART_SECONDS", 0.0)  # a file per batch: a dataset of several
     out = tmp_path / "sweep.parquet"
     runs = grid({"l0": [5.0, -1.0], "solver": [1, 2], "beta1": [0.0, 0.3]})
-    results = sweep(
+    handle = sweep(
         seed_fmu,
         runs,
         stop_time=1.0,
@@ -150,10 +174,13 @@ def test_the_file_round_trips(seed_fmu, cluster, tmp_path):
         outputs=["energy", "bob2_x"],
         scheduler=cluster.scheduler_address,
         out=out,
+        batch=3,
         progress=False,
     )
-    read = pd.read_parquet(out)
-    pd.testing.assert_frame_equal(read, results)
+    assert len(list(out.glob("part-*.parquet"))) == 3 and handle.done() == 8 and handle.rows() == 24
+    results = handle.to_pandas()
+    read = pd.read_parquet(out)  # runs in the order they finished
+    pd.testing.assert_frame_equal(read.sort_values("run", kind="stable", ignore_index=True), results)
     assert list(read.columns) == [
         "run",
         "l0",
@@ -165,23 +192,66 @@ def test_the_file_round_trips(seed_fmu, cluster, tmp_path):
         "energy",
         "bob2_x",
     ]
-    assert read.attrs == {
-        "fmu": "ConicalPendulum",
-        "fmu_guid": read.attrs["fmu_guid"],
-        "stop_time": 1.0,
-        "output_interval": 0.25,
-        "outputs": ["energy", "bob2_x"],
-        "inputs": ["l0", "solver", "beta1_start"],
-    }
-    inputs = by_run(read)
+    assert (
+        read.attrs
+        == results.attrs
+        == {
+            "fmu": "ConicalPendulum",
+            "fmu_guid": read.attrs["fmu_guid"],
+            "fmu_sha256": hashlib.sha256(seed_fmu.read_bytes()).hexdigest(),
+            "stop_time": 1.0,
+            "output_interval": 0.25,
+            "outputs": ["energy", "bob2_x"],
+            "inputs": ["l0", "solver", "beta1_start"],
+            "runs": 8,
+            "runs_sha256": read.attrs["runs_sha256"],
+        }
+    )
+    inputs = by_run(results)
     assert inputs[["l0", "solver", "beta1_start"]].to_dict("records") == [
         {"l0": run["l0"], "solver": run["solver"], "beta1_start": run["beta1"]} for run in runs
     ]
     assert list(inputs["status"]) == ["ok"] * 4 + ["failed"] * 4
-    assert read.groupby("run").size().tolist() == [5] * 4 + [1] * 4
+    assert results.groupby("run").size().tolist() == [5] * 4 + [1] * 4
+    failed = handle.failed()
+    assert list(failed.index) == [4, 5, 6, 7] and list(failed.columns) == [
+        "l0",
+        "solver",
+        "beta1_start",
+        "message",
+    ]
+    assert failed["message"].str.startswith("l0 = -1.0: a length must be positive").all()
 
 
-def test_each_worker_loads_the_fmu_once(seed_fmu, cluster):
+def test_pyarrow_dask_and_duckdb_read_the_dataset(seed_fmu, cluster, tmp_path, monkeypatch):
+    duckdb = pytest.importorskip("duckdb")
+    dd = pytest.importorskip("dask.dataframe")
+    monkeypatch.setattr(sweep_module, "PART_SECONDS", 0.0)
+    out = tmp_path / "sweep.parquet"
+    handle = sweep(
+        seed_fmu,
+        random_samples({"l0": (5, 15)}, 9, seed=1) + [{"l0": -1.0}],
+        stop_time=1.0,
+        output_interval=0.5,
+        outputs=["energy"],
+        scheduler=cluster.scheduler_address,
+        out=out,
+        batch=4,
+        progress=False,
+    )
+    expected = handle.to_pandas().drop(columns="message")
+    by_pyarrow = ds.dataset(out).to_table().to_pandas()
+    by_dask = dd.read_parquet(out).compute()
+    by_duckdb = duckdb.sql(f"select * from read_parquet('{out}/*.parquet') order by run, time").df()
+    for frame in (by_pyarrow, by_dask, by_duckdb):
+        frame = frame.sort_values(["run", "time"], ignore_index=True)  # duckdb's order is its threads'
+        assert list(frame["run"]) == list(expected["run"]) == [k for k in range(9) for _ in range(3)] + [9]
+        for name in ["l0", "time", "energy"]:
+            assert np.array_equal(frame[name].to_numpy(float), expected[name].to_numpy(float), equal_nan=True)
+        assert list(frame["status"]) == ["ok"] * 27 + ["failed"]
+
+
+def test_each_worker_loads_the_fmu_once(seed_fmu, cluster, tmp_path):
     with Client(cluster) as client:
         before = client.run(lambda: LoadedFmu.loads)
         results = sweep(
@@ -191,7 +261,8 @@ def test_each_worker_loads_the_fmu_once(seed_fmu, cluster):
             batch=2,
             scheduler=cluster.scheduler_address,
             progress=False,
-        )
+            out=tmp_path / "s.parquet",
+        ).to_pandas()
         after = client.run(lambda: LoadedFmu.loads)
         left = client.run(lambda dask_worker: [name for name in dask_worker.plugins if "sweep" in name])
     assert (results["status"] == "ok").all() and results["run"].nunique() == 40  # in 20 tasks
@@ -199,12 +270,20 @@ def test_each_worker_loads_the_fmu_once(seed_fmu, cluster):
     assert all(names == [] for names in left.values())  # unregistered: extracted files removed
 
 
-def test_a_scheduler_without_workers_is_refused(seed_fmu):
+def test_a_scheduler_without_workers_is_refused(seed_fmu, tmp_path):
     with (
         LocalCluster(n_workers=0, dashboard_address="127.0.0.1:0") as empty,
         pytest.raises(ConnectionError, match="no workers after 1 s"),
     ):
-        sweep(seed_fmu, [{"l0": 5.0}], scheduler=empty.scheduler_address, timeout=1, progress=False)
+        sweep(
+            seed_fmu,
+            [{"l0": 5.0}],
+            scheduler=empty.scheduler_address,
+            timeout=1,
+            progress=False,
+            out=tmp_path / "s.parquet",
+        )
+    assert not list(tmp_path.iterdir())  # nothing written
 
 
 def test_runs_are_made_reproducibly():
@@ -289,6 +368,10 @@ def test_command_writes_the_sweep(seed_fmu, tmp_path):
         (["--grid", "l0=5", "--workers", "0"], "argument --workers: '0': expected a whole number"),
         (["--grid", "l0=5", "--out", "missing/s.parquet"], "out: missing is not a directory"),
         (
+            ["--grid", "l0=5", "--resume", "--overwrite"],
+            "argument --overwrite: not allowed with argument --resume",
+        ),
+        (
             ["--grid", "l0=5", "--scheduler", "tcp://127.0.0.1:1", "--workers", "2"],
             "--workers is for the local",
         ),
@@ -314,3 +397,202 @@ def test_command_refuses_a_missing_fmu(tmp_path):
     assert run.stderr.count("\n") == 1
     assert "Missing.fmu: cannot read the FMU (No such file or directory)" in run.stderr
     assert "Traceback" not in run.stderr
+
+
+@pytest.fixture(scope="module")
+def crashing_fmu(tmp_path_factory):
+    """The shapes FMU (tests/shapes_fmu.c): with mode = 4 its step past fail_at segfaults."""
+    return build_shapes_fmus(tmp_path_factory.mktemp("shapes"))[True]
+
+
+def test_a_run_that_kills_its_worker_costs_one_row(crashing_fmu, tmp_path):
+    """Runs 3 and 6 segfault their worker: each kills it twice (in its batch, then alone), is
+    failed with the signal, and every other run of their batches completes."""
+    runs = [
+        {"gain": 1.0 + k, "mode": MODES["segfault"] if k in (3, 6) else 0, "fail_at": 0.5} for k in range(10)
+    ]
+    start = time.perf_counter()
+    handle = sweep(
+        crashing_fmu, runs, stop_time=1.0, output_interval=0.25, batch=4, progress=False, out=tmp_path / "s"
+    )
+    seconds = time.perf_counter() - start
+    results = handle.to_pandas()
+    runs_done = by_run(results)
+    assert list(runs_done.index) == list(range(10))
+    assert [k for k in range(10) if runs_done.loc[k, "status"] == "failed"] == [3, 6]
+    for k in (3, 6):
+        crashed = results[results["run"] == k]
+        assert len(crashed) == 1 and crashed["time"].isna().all() and crashed["x"].isna().all()
+        assert crashed["message"].iat[0] == (
+            "the worker process died running this run, twice (SIGSEGV, segmentation fault)"
+        )
+    ok = results[~results["run"].isin([3, 6])]
+    assert ok.groupby("run")["time"].apply(list).eq([[0.0, 0.25, 0.5, 0.75, 1.0]] * 8).all()
+    # x = gain * sum of h (1 + t) over the steps: the runs' own values, none mixed up
+    expected = {k: (1.0 + k) * 0.25 * sum(1 + 0.25 * step for step in range(4)) for k in range(10)}
+    last = ok.groupby("run")["x"].last()
+    assert all(math.isclose(last[k], expected[k]) for k in last.index)
+    print(f"10 runs, 2 segfaulting, on 2 workers: {seconds:.1f} s")
+
+
+def test_the_command_reports_a_crashing_run_and_exits_1(crashing_fmu, tmp_path):
+    run = command(
+        crashing_fmu,
+        "--grid",
+        "mode=0,4",
+        "--grid",
+        "fail_at=0.5",
+        "--grid",
+        "gain=1,2",
+        "--stop-time",
+        "1",
+        "--interval",
+        "0.5",
+        "--out",
+        tmp_path / "s.parquet",
+        cwd=tmp_path,
+    )
+    assert run.returncode == 1, run.stderr
+    assert "4 runs (2 failed), 8 rows" in run.stdout
+    assert (
+        "run 2 (mode = 4, fail_at = 0.5, gain = 1) failed: the worker process died running this run, "
+        "twice (SIGSEGV, segmentation fault)" in run.stdout
+    )
+    assert "Traceback" not in run.stderr and "KilledWorker" not in run.stderr
+
+
+def interrupted_after(batches: int, monkeypatch):
+    """Ctrl-C, as the client's main thread gets it, once that many batches are written."""
+    add = sweep_module._Progress.add
+    calls = []
+
+    def interrupting(self, runs, failed):
+        add(self, runs, failed)
+        calls.append(runs)
+        if len(calls) == batches:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(sweep_module._Progress, "add", interrupting)
+
+
+def test_an_interrupted_sweep_resumes_to_the_same_dataset(seed_fmu, cluster, tmp_path, monkeypatch):
+    runs = random_samples({"l0": (5, 15), "alpha0": (-1, 1)}, 30, seed=5) + [{"l0": -1.0}]
+    settings = {
+        "stop_time": 1.0,
+        "output_interval": 0.1,
+        "batch": 2,
+        "scheduler": cluster.scheduler_address,
+        "progress": False,
+    }
+    whole = sweep(seed_fmu, runs, out=tmp_path / "whole", **settings).to_pandas()
+    out = tmp_path / "resumed"
+    monkeypatch.setattr(sweep_module, "PART_SECONDS", 0.0)
+    with monkeypatch.context() as interrupt:
+        interrupted_after(5, interrupt)
+        with pytest.raises(KeyboardInterrupt):
+            sweep(seed_fmu, runs, out=out, **settings)
+    first = SweepResults(out)
+    assert 10 <= first.done() < 31 and not list(out.glob(".*.tmp"))
+    with pytest.raises(ValueError, match=r"holds a sweep already; --resume \(resume=True\) finishes it"):
+        sweep(seed_fmu, runs, out=out, **settings)
+    resumed = sweep(seed_fmu, runs, out=out, resume=True, **settings)
+    assert resumed.done() == 31 and resumed.rows() == len(whole)
+    pd.testing.assert_frame_equal(resumed.to_pandas(), whole)  # nothing twice, nothing missing
+    again = sweep(seed_fmu, runs, out=out, resume=True, **settings)  # nothing left: nothing run
+    pd.testing.assert_frame_equal(again.to_pandas(), whole)
+
+
+def test_a_killed_command_resumes_to_the_same_dataset(seed_fmu, cluster, tmp_path):
+    """The client killed (SIGKILL) with files written: the same command with --resume ends it."""
+    args = ["--grid", "l0=5,6,7,8,9,10,11,12", "--grid", "alpha0=0.1,0.2,0.3,0.4", "--stop-time", "2"]
+    args += ["--interval", "0.1", "--outputs", "energy,bob2_x", "--batch", "1", "--workers", "1"]
+    out = tmp_path / "s.parquet"
+    script = (
+        "import sys; from conical_pendulum.analysis import sweep; sweep.PART_SECONDS = 0.0; "
+        "from conical_pendulum.cli import main; sys.exit(main(sys.argv[1:]))"
+    )
+    client = subprocess.Popen(
+        [sys.executable, "-c", script, "sweep", seed_fmu, *args, "--out", out, "--no-progress"], cwd=tmp_path
+    )
+    deadline = time.monotonic() + 240
+    while len(list(out.glob("part-*.parquet"))) < 3 and client.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    os.kill(client.pid, signal.SIGKILL)
+    client.wait()
+    kept = SweepResults(out).done()
+    assert 3 <= kept < 32, kept
+    run = command(seed_fmu, *args, "--out", out, "--resume", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert f"wrote {out}: 32 runs (0 failed), 672 rows" in run.stdout
+    runs = grid({"l0": [5, 6, 7, 8, 9, 10, 11, 12], "alpha0": [0.1, 0.2, 0.3, 0.4]})
+    whole = sweep(
+        seed_fmu,
+        [{name: float(value) for name, value in one.items()} for one in runs],
+        stop_time=2.0,
+        output_interval=0.1,
+        outputs=["energy", "bob2_x"],
+        scheduler=cluster.scheduler_address,
+        progress=False,
+        out=tmp_path / "whole",
+    )
+    pd.testing.assert_frame_equal(SweepResults(out).to_pandas(), whole.to_pandas())
+
+
+def test_a_sweep_with_other_arguments_is_not_resumed(seed_fmu, native_seed_fmu, cluster, tmp_path):
+    out = tmp_path / "s.parquet"
+    runs = grid({"l0": [5.0, 6.0]})
+    settings = {
+        "stop_time": 0.5,
+        "output_interval": 0.25,
+        "outputs": ["energy"],
+        "progress": False,
+        "resume": True,
+    }
+    sweep(seed_fmu, runs, out=out, scheduler=cluster.scheduler_address, **settings)
+    before = sorted(path.name for path in out.iterdir())
+    for fmu, other_runs, changed, message in [
+        (
+            native_seed_fmu,
+            runs,
+            {},
+            r"another FMU \(ConicalPendulum sha256 \w{12} there, ConicalPendulum \w{12} here\)",
+        ),
+        (seed_fmu, runs, {"stop_time": 1.0}, "stop time 0.5 there, 1.0 here"),
+        (seed_fmu, runs, {"outputs": ["energy", "bob2_x"]}, "outputs energy there, energy,bob2_x here"),
+        (
+            seed_fmu,
+            grid({"l0": [5.0, 7.0]}),
+            {},
+            r"other values of the runs \(another grid, ranges, samples or seed\)",
+        ),
+        (seed_fmu, grid({"l0": [5.0, 6.0, 7.0]}), {}, "runs 2 there, 3 here"),
+        (seed_fmu, grid({"g": [9.0, 9.5]}), {}, "variables set l0 there, g here"),
+    ]:
+        with pytest.raises(ValueError, match=f"out: {out} holds another sweep, not resumed: {message}"):
+            sweep(fmu, other_runs, out=out, **{**settings, **changed})
+    assert sorted(path.name for path in out.iterdir()) == before  # never mixed, nothing removed
+    overwritten = sweep(
+        seed_fmu,
+        runs,
+        out=out,
+        scheduler=cluster.scheduler_address,
+        **{**settings, "resume": False, "overwrite": True, "stop_time": 1.0},
+    )
+    assert overwritten.attrs["stop_time"] == 1.0 and overwritten.rows() == 10
+
+
+def test_the_command_refuses_an_existing_sweep_and_says_how_to_go_on(seed_fmu, tmp_path):
+    (tmp_path / "s.parquet").mkdir()
+    (tmp_path / "s.parquet" / "_sweep.json").write_text("{}")
+    run = command(seed_fmu, "--grid", "l0=5", "--out", "s.parquet", cwd=tmp_path)
+    assert run.returncode == 2 and run.stderr.count("\n") == 1
+    assert (
+        "out: s.parquet holds a sweep already; --resume (resume=True) finishes it, --overwrite" in run.stderr
+    )
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "notes.txt").write_text("mine")
+    run = command(seed_fmu, "--grid", "l0=5", "--out", "other", "--overwrite", cwd=tmp_path)
+    assert (
+        run.returncode == 2 and "out: other is a folder that holds no sweep; give another name" in run.stderr
+    )
+    assert (tmp_path / "other" / "notes.txt").read_text() == "mine"

@@ -1,9 +1,11 @@
-"""`conical-pendulum sweep`: many runs of an FMU as Dask tasks, into one Parquet file
-(analysis/sweep.py; the sweep extra)."""
+"""`conical-pendulum sweep`: many runs of an FMU as Dask tasks, streamed into a Parquet
+dataset (analysis/sweep.py; the sweep extra)."""
 
 from __future__ import annotations
 
 import argparse
+import shlex
+import sys
 import time
 from pathlib import Path
 
@@ -49,11 +51,13 @@ def positive_int(text: str) -> int:
 
 
 EPILOG = """Variables: the FMU's parameters (l0, m0, M0, Ixx0, g, rtol, solver, ...) and state
-start values (alpha0, beta0, omega0, delta0, ...). The file has one row per run and
-time: run, the inputs (a state's start value as <name>_start), status ('ok' or
-'failed'), message, time, the outputs.
-Exit status: 0 when every run succeeded, 1 when some failed (they are in the file),
-2 for bad options or when the sweep could not run."""
+start values (alpha0, beta0, omega0, delta0, ...). The output is a folder of Parquet
+files (pandas.read_parquet, dask, duckdb read it), one row per run and time: run, the
+inputs (a state's start value as <name>_start), status ('ok' or 'failed'), message,
+time, the outputs. An interrupted sweep (Ctrl-C, a killed command, a lost cluster)
+keeps what it wrote: the same command with --resume runs only what is missing.
+Exit status: 0 when every run succeeded, 1 when some failed (they are in the output),
+2 for bad options or when the sweep could not run, 130 on Ctrl-C."""
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -107,8 +111,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "be compiled) or fmpy's own; the same results",
     )
     parser.add_argument(
-        "--out", type=Path, default=Path("sweep.parquet"), help="Parquet file (sweep.parquet)"
+        "--out",
+        type=Path,
+        default=Path("sweep.parquet"),
+        help="the Parquet dataset, a folder (sweep.parquet); an existing one is refused unless "
+        "--resume or --overwrite",
     )
+    existing = parser.add_mutually_exclusive_group()
+    existing.add_argument(
+        "--resume",
+        action="store_true",
+        help="finish the interrupted sweep in --out: only the runs it misses (the same arguments)",
+    )
+    existing.add_argument("--overwrite", action="store_true", help="replace the sweep in --out")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
 
 
@@ -149,19 +164,32 @@ def run(args) -> int:
             progress=not args.no_progress,
             timeout=args.connect_timeout,
             loop=args.loop,
+            resume=args.resume,
+            overwrite=args.overwrite,
         )
     except (ValueError, ConnectionError) as exc:
         raise UserError(str(exc)) from None
+    except KeyboardInterrupt:
+        if (args.out / sweeps.SETTINGS_FILE).exists():  # begun: what is done is kept
+            print(f"sweep: stopped; the runs done are kept in {args.out}: {resume_hint()}", file=sys.stderr)
+        raise
     seconds = time.perf_counter() - start
-    by_run = results.drop_duplicates("run").set_index("run")
-    failed = by_run[by_run["status"] == "failed"]
+    failed = results.failed()
+    total = results.attrs["runs"]
+    earlier = f", {total - results.ran} done before" if results.ran < total else ""
     print(
-        f"wrote {args.out}: {len(by_run)} runs ({len(failed)} failed), {len(results)} rows, "
-        f"in {seconds:.1f} s ({len(by_run) / seconds:.1f} runs/s)"
+        f"wrote {args.out}: {total} runs ({len(failed)} failed), {results.rows()} rows, "
+        f"in {seconds:.1f} s ({results.ran / seconds:.1f} runs/s{earlier})"
     )
     for number, row in failed.head(5).iterrows():
         values = ", ".join(f"{name} = {row[name]:g}" for name in results.attrs["inputs"])
         print(f"  run {number} ({values}) failed: {row['message']}")
     if len(failed) > 5:
-        print(f"  ... and {len(failed) - 5} more: status == 'failed' in the file")
+        print(f"  ... and {len(failed) - 5} more: status == 'failed' in the output")
     return 1 if len(failed) else 0
+
+
+def resume_hint() -> str:
+    """How to finish an interrupted sweep: this command again, with --resume."""
+    command = [arg for arg in sys.argv[1:] if arg != "--overwrite"]
+    return shlex.join(["conical-pendulum", *command, *([] if "--resume" in command else ["--resume"])])
