@@ -299,6 +299,33 @@ def test_runs_are_made_reproducibly():
     assert all(5 <= run["l0"] < 15 and 9 <= run["g"] < 10 for run in samples)
 
 
+def test_runs_are_held_as_columns(seed_fmu):
+    """A million runs cost the client 8 bytes a value, as dicts or as columns, with the same
+    table; what is not a number or not whole for an Integer is refused naming its run."""
+    from fmpy import read_model_description
+
+    md = read_model_description(str(seed_fmu))
+    samples = random_samples({"l0": (5, 15), "alpha0": (0, 0.5)}, 10**6, seed=1)
+    table = sweep_module._run_table(md, samples)
+    assert table.memory_usage(index=False).sum() == 2 * 8 * 10**6
+    assert sum(values.nbytes for values in samples.columns.values()) == 2 * 8 * 10**6
+    as_dicts = sweep_module._run_table(md, list(samples[:1000]) + [{"l0": 7.0}])
+    start = float(next(v.start for v in md.modelVariables if v.name == "alpha0"))
+    assert as_dicts.iloc[:1000].equals(table.iloc[:1000])
+    assert as_dicts.iloc[1000].to_dict() == {"l0": 7.0, "alpha0": start}  # left alone: its start
+    solvers = sweep_module._run_table(md, grid({"solver": [1, 2], "l0": [5.0]}))
+    assert solvers["solver"].dtype == np.int64 and list(solvers["solver"]) == [1, 2]
+    for runs, message in [
+        ([{"l0": 5.0}, {"l0": "x"}], "run 1: l0 = 'x' is not a number"),
+        ([{"l0": 5.0}, (("l0", 5.0),)], "run 1: .* is not a mapping"),
+        (grid({"solver": [1.0, 1.5]}), "run 1: solver = 1.5: solver is an Integer variable"),
+        (sweep_module.Runs({"l0": np.array(["5"])}), "runs: l0 holds <U1 values, not numbers"),
+        ([], "no runs to do"),
+    ]:
+        with pytest.raises(ValueError, match=message):
+            sweep_module._run_table(md, runs)
+
+
 def command(*args, cwd):
     """`conical-pendulum sweep ...`, the installed command."""
     return subprocess.run(

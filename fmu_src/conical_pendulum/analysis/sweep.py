@@ -25,7 +25,6 @@ import contextlib
 import faulthandler
 import hashlib
 import io
-import itertools
 import json
 import logging
 import math
@@ -68,24 +67,64 @@ PART_SECONDS, PART_BYTES = 5.0, 256 << 20  # a part file is closed after this lo
 LOST_TIMES = 4  # a run lost with its worker this often, no note saying it was running, fails
 
 
-def grid(axes: Mapping[str, Sequence[float]]) -> list[dict]:
+class Runs(Sequence):
+    """Runs held as columns, one array per variable, every run setting each: 8 bytes a
+    value, where a list of dicts takes some 250 bytes a run. A sequence of dicts to the
+    reader; `+` with other runs gives a list of dicts."""
+
+    def __init__(self, columns: Mapping[str, Sequence[float]]):
+        self.columns = {name: np.asarray(values) for name, values in columns.items()}
+        lengths = {len(values) for values in self.columns.values()}
+        if len(lengths) > 1:
+            raise ValueError(f"runs: columns of different lengths {sorted(lengths)}")
+        self._length = lengths.pop() if lengths else 0
+
+    def __len__(self):
+        return self._length
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return Runs({name: values[index] for name, values in self.columns.items()})
+        if not -self._length <= index < self._length:
+            raise IndexError(f"run {index} of {self._length}")
+        return {name: values[index].item() for name, values in self.columns.items()}
+
+    def __add__(self, other):
+        return [*self, *other]
+
+    def __radd__(self, other):
+        return [*other, *self]
+
+    def __eq__(self, other):
+        return isinstance(other, Sequence) and len(self) == len(other) and all(map(dict.__eq__, self, other))
+
+    def __repr__(self):
+        return f"Runs({len(self)} runs of {', '.join(self.columns) or 'nothing'})"
+
+
+def grid(axes: Mapping[str, Sequence[float]]) -> Runs:
     """Every combination of the values given per variable (the last varies fastest), as runs."""
     empty = [name for name, values in axes.items() if len(values) == 0]
+    if not axes:
+        raise ValueError("grid: no variables")
     if empty:
         raise ValueError(f"grid: no values for {', '.join(empty)}")
-    return [dict(zip(axes, combination)) for combination in itertools.product(*axes.values())]
+    mesh = np.meshgrid(*(np.asarray(values) for values in axes.values()), indexing="ij")
+    return Runs({name: values.ravel() for name, values in zip(axes, mesh)})
 
 
-def random_samples(ranges: Mapping[str, tuple[float, float]], n: int, seed=None) -> list[dict]:
+def random_samples(ranges: Mapping[str, tuple[float, float]], n: int, seed=None) -> Runs:
     """n runs drawn uniformly from [low, high) per variable; the same seed gives the same runs."""
     if n < 1:
         raise ValueError(f"random samples: n = {n}: must be at least 1")
+    if not ranges:
+        raise ValueError("random samples: no ranges")
     for name, (low, high) in ranges.items():
         if not (math.isfinite(low) and math.isfinite(high) and low <= high):
             raise ValueError(f"random samples: {name} range {low}:{high} must be finite with low <= high")
     lows, highs = zip(*ranges.values()) if ranges else ((), ())
     draws = np.random.default_rng(seed).uniform(lows, highs, size=(n, len(ranges)))
-    return [dict(zip(ranges, map(float, row))) for row in draws]
+    return Runs({name: draws[:, column] for column, name in enumerate(ranges)})
 
 
 class LoadedFmu:
@@ -308,36 +347,64 @@ def _run_batch(
     return summary, np.concatenate(kept) if kept else None
 
 
-def _check_runs(md, runs: Iterable[Mapping]) -> list[dict]:
-    """The runs with values as the FMU's types; unknown or unsettable names and non-numbers refused."""
-    runs = [dict(run) for run in runs]
-    if not runs:
+INTEGERS = ("Integer", "Enumeration")  # FMI types whose values a run gives as whole numbers
+
+
+def _run_table(md, runs: Iterable[Mapping]) -> pd.DataFrame:
+    """The runs as one column per variable any run sets, values as the FMU's types, so that
+    the client holds 8 bytes a value, not a dict a run; a run that leaves a variable alone
+    gets the FMU's start value, what it runs with. Unknown or unsettable names and
+    non-numbers are refused, naming the run."""
+    if isinstance(runs, Runs):
+        columns = dict(runs.columns)
+        for name, values in columns.items():
+            if values.dtype == bool or not np.issubdtype(values.dtype, np.number):
+                raise ValueError(f"runs: {name} holds {values.dtype} values, not numbers")
+        count = len(runs)
+    else:
+        columns, count = {}, 0
+        for count, run in enumerate(runs, start=1):
+            if not isinstance(run, Mapping):
+                raise ValueError(f"run {count - 1}: {run!r} is not a mapping of variable names to values")
+            for name, value in run.items():
+                if isinstance(value, bool) or not isinstance(value, numbers.Real):
+                    raise ValueError(f"run {count - 1}: {name} = {value!r} is not a number")
+                columns.setdefault(name, [None] * (count - 1)).append(value)
+            for values in columns.values():
+                if len(values) < count:
+                    values.append(None)
+    if not count:
         raise ValueError("no runs to do")
     variables = {v.name: v for v in md.modelVariables}
-    names = set().union(*runs)
-    unknown = sorted(names - variables.keys())
+    unknown = sorted(columns.keys() - variables.keys())
     if unknown:
         raise ValueError(f"unknown variable(s) {', '.join(unknown)}: {md.modelName} has no such variable")
     fixed = sorted(
         name
-        for name in names
+        for name in columns
         if not (settable_in_instantiated(variables[name]) or settable_in_initialization_mode(variables[name]))
     )
     if fixed:
         raise ValueError(
             f"{', '.join(fixed)} cannot be set (calculated); a run sets parameters and start values"
         )
-    for index, run in enumerate(runs):
-        for name, value in run.items():
-            if isinstance(value, bool) or not isinstance(value, numbers.Real):
-                raise ValueError(f"run {index}: {name} = {value!r} is not a number")
-            if variables[name].type == "Integer":
-                if not float(value).is_integer():
-                    raise ValueError(f"run {index}: {name} = {value!r}: {name} is an Integer variable")
-                run[name] = int(value)
-            else:
-                run[name] = float(value)
-    return runs
+    table = {}
+    for name, values in columns.items():
+        variable = variables[name]
+        if not isinstance(values, np.ndarray):
+            start = float(variable.start)
+            values = np.array([start if value is None else value for value in values], dtype=float)
+        if variable.type in INTEGERS:
+            fractional = np.flatnonzero(values != np.round(values))
+            if len(fractional):
+                run = fractional[0]
+                raise ValueError(
+                    f"run {run}: {name} = {values[run].item()!r}: {name} is an {variable.type} variable"
+                )
+            table[name] = values.astype(np.int64)
+        else:
+            table[name] = values.astype(float)
+    return pd.DataFrame(table, index=pd.RangeIndex(count, name="run"))
 
 
 def _check_outputs(md, outputs: Sequence[str] | None) -> list[str]:
@@ -354,19 +421,11 @@ def _check_outputs(md, outputs: Sequence[str] | None) -> list[str]:
     return outputs
 
 
-def _inputs(md, runs: list[dict]):
-    """One row per run with every variable any run sets; a run that leaves one alone gets
-    the FMU's start value (what it ran with). A state's start value is `<name>_start`,
-    apart from its recorded trajectory."""
-    variables = {v.name: v for v in md.modelVariables}
-    names = list(dict.fromkeys(itertools.chain.from_iterable(runs)))
-    columns = {}
-    for name in names:
-        variable = variables[name]
-        start = (int if variable.type == "Integer" else float)(variable.start)
-        column = f"{name}_start" if variable.causality == "output" else name
-        columns[column] = [run.get(name, start) for run in runs]
-    return pd.DataFrame(columns, index=pd.RangeIndex(len(runs), name="run"))
+def _inputs(md, table: pd.DataFrame) -> pd.DataFrame:
+    """The run table's columns as the dataset names them: a state's start value is
+    `<name>_start`, apart from its recorded trajectory."""
+    outputs = {v.name for v in md.modelVariables if v.causality == "output"}
+    return table.rename(columns={name: f"{name}_start" for name in table.columns if name in outputs})
 
 
 def _schema(md, inputs: pd.DataFrame, outputs: list[str], settings: dict) -> pa.Schema:
@@ -795,7 +854,7 @@ def sweep(
         raise ValueError(f"{path}: cannot read the FMU ({getattr(exc, 'strerror', None) or exc})") from None
     if md.fmiVersion != "2.0" or md.coSimulation is None:
         raise ValueError(f"{path}: not an FMI 2.0 co-simulation FMU")
-    runs = _check_runs(md, runs)
+    table = _run_table(md, runs)
     outputs = _check_outputs(md, outputs)
     if not (
         math.isfinite(stop_time) and stop_time > 0 and math.isfinite(output_interval) and output_interval > 0
@@ -807,13 +866,14 @@ def sweep(
         raise ValueError(f"batch = {batch}: must be at least 1")
     if resume and overwrite:
         raise ValueError("resume and overwrite exclude each other")
-    inputs = _inputs(md, runs)
+    inputs = _inputs(md, table)
     settings = _settings(md, data, inputs, stop_time, output_interval, outputs)
     out = Path(out)
     done, replace = _check_out(out, settings, resume, overwrite)
     schema = _schema(md, inputs, outputs, settings)
     columns = {name: inputs[name].to_numpy() for name in inputs.columns}
-    shown = _Progress(len(runs), int(done.sum()), progress)
+    values = dict(zip(table.columns, columns.values()))  # by the names the FMU knows
+    shown = _Progress(len(table), int(done.sum()), progress)
     with _client(scheduler, n_workers, timeout) as client:
         parts = _Parts(out, schema, _begin(out, settings, replace))
         plugin = f"conical-pendulum-sweep-{uuid.uuid4().hex}"
@@ -827,13 +887,16 @@ def sweep(
                         "sweep: worker %s runs fmpy's loop, not the compiled runner: %s", worker, reason
                     )
             threads = sum(client.nthreads().values())
-            size = batch or max(1, min(25, math.ceil(len(runs) / (4 * threads))))
+            size = batch or max(1, min(25, math.ceil(len(table) / (4 * threads))))
             todo, running, finished = _batches(np.flatnonzero(~done), size), {}, as_completed()
 
             def submit():
                 while todo and len(running) < 3 * threads:  # bounded: the client's memory stays flat
                     first, last = todo.popleft()
-                    numbered = [(index, runs[index]) for index in range(first, last + 1)]
+                    numbered = [
+                        (index, {name: column[index].item() for name, column in values.items()})
+                        for index in range(first, last + 1)
+                    ]
                     task = client.submit(
                         _run_batch, plugin, numbered, stop_time, output_interval, outputs, pure=False
                     )
