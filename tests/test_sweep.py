@@ -3,6 +3,7 @@ messages, a Parquet dataset that pandas, pyarrow, dask and duckdb read, the FMU 
 per worker, a run that crashes its worker costing one row, interrupted sweeps resumed to
 the same dataset, and a command that refuses what it cannot run."""
 
+import contextlib
 import hashlib
 import logging
 import math
@@ -324,6 +325,40 @@ def test_runs_are_held_as_columns(seed_fmu):
     ]:
         with pytest.raises(ValueError, match=message):
             sweep_module._run_table(md, runs)
+
+
+def test_dask_keeps_no_history_of_the_runs(seed_fmu, cluster, tmp_path, monkeypatch):
+    """Dask keeps the last messages of each stream for debugging, 1000 by default: the
+    batches' runs and rows, which grew the client up to 25,000 runs. The sweep's client and
+    its local scheduler keep LOW_LEVEL_LOG, on a local cluster and on a running one."""
+    kept = []
+    made = sweep_module._client
+
+    @contextlib.contextmanager
+    def watched(*args, **kwargs):
+        with made(*args, **kwargs) as client:
+            yield client
+            logs = [client.scheduler_comm.recent_message_log]
+            if client.cluster is not None:  # the local cluster's scheduler, in this process
+                scheduler = client.cluster.scheduler
+                streams = [*scheduler.stream_comms.values(), *scheduler.client_comms.values()]
+                logs += [stream.recent_message_log for stream in streams]
+                logs += [scheduler.transition_log]
+            kept.append([log.maxlen for log in logs])
+
+    monkeypatch.setattr(sweep_module, "_client", watched)
+    runs = grid({"l0": [5.0, 6.0, 7.0]})
+    sweep(seed_fmu, runs, out=tmp_path / "local.parquet", stop_time=0.1, progress=False)
+    sweep(
+        seed_fmu,
+        runs,
+        out=tmp_path / "running.parquet",
+        stop_time=0.1,
+        progress=False,
+        scheduler=cluster.scheduler_address,
+    )
+    assert len(kept[0]) > 2 and len(kept[1]) == 1
+    assert all(maxlen == sweep_module.LOW_LEVEL_LOG for logs in kept for maxlen in logs)
 
 
 def command(*args, cwd):
