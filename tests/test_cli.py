@@ -207,7 +207,7 @@ def test_page_serves_until_interrupted(seed_fmu, tmp_path):
         ),
         (
             ["page", "FMU", "--out", "page", "--start", "solver=0.5"],
-            "--start solver=0.5: solver is an Integer",
+            "--start solver=0.5: solver is an Enumeration",
         ),
         (["page", "FMU"], "conical-pendulum page: the following arguments are required: --out"),
         (["page", "FMU", "--out", "page", "--port", "70000"], "--port: 70000 is not a port number"),

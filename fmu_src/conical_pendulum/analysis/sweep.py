@@ -58,7 +58,7 @@ from fmpy.simulation import settable_in_initialization_mode, settable_in_instant
 
 from ..progress import bar
 from . import runner
-from .fmpy_runs import logging_callbacks, run_fmu
+from .fmpy_runs import WHOLE_TYPES, logging_callbacks, run_fmu
 
 logger = logging.getLogger(__name__)
 LOOPS = ("runner", "fmpy")  # sweep()'s loop: analysis.runner's compiled loop, or fmpy's own
@@ -348,9 +348,6 @@ def _run_batch(
     return summary, np.concatenate(kept) if kept else None
 
 
-INTEGERS = ("Integer", "Enumeration")  # FMI types whose values a run gives as whole numbers
-
-
 def _run_table(md, runs: Iterable[Mapping]) -> pd.DataFrame:
     """The runs as one column per variable any run sets, values as the FMU's types, so that
     the client holds 8 bytes a value, not a dict a run; a run that leaves a variable alone
@@ -395,7 +392,7 @@ def _run_table(md, runs: Iterable[Mapping]) -> pd.DataFrame:
         if not isinstance(values, np.ndarray):
             start = float(variable.start)
             values = np.array([start if value is None else value for value in values], dtype=float)
-        if variable.type in INTEGERS:
+        if variable.type in WHOLE_TYPES:
             fractional = np.flatnonzero(values != np.round(values))
             if len(fractional):
                 run = fractional[0]
