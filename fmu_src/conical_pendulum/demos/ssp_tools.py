@@ -44,7 +44,9 @@ TOOLS = ("ecospy", "ecos", "libcosim", "fmpy", "omsimulator")
 OUTSIDE_PIP = ("omsimulator",)  # tools no pip extra installs
 # OMSimulator as ../shared/hosts/omsimulator holds it beside a source checkout (no registry
 # offers it), when it is not on PATH
-OMSIMULATOR_HOST = Path(__file__).parents[3].parent / "shared" / "hosts" / "omsimulator" / "bin" / "OMSimulator"
+OMSIMULATOR_HOST = (
+    Path(__file__).parents[3].parent / "shared" / "hosts" / "omsimulator" / "bin" / "OMSimulator"
+)
 ECOS_MIN_STEPS = 10  # ecos 0.7.2's command line reports progress every (steps // 10) steps
 
 
@@ -264,7 +266,7 @@ def run_omsimulator(package: Path, scheme: str, work: Path) -> ToolRun:
             f'oms_importFile("{package}")\n'
             f'oms_activateVariant("{default}", "{model}")\n'
             f'oms_setResultFile("{model}", "{result.name}", 1)\n'
-            f"oms_setStopTime(\"{model}\", {stop_time!r})\n"
+            f'oms_setStopTime("{model}", {stop_time!r})\n'
             + "".join(f'oms_{call}("{model}")\n' for call in ("instantiate", "initialize", "simulate"))
             + f'oms_terminate("{model}")\noms_delete("{model}")\n'
         )
@@ -286,7 +288,9 @@ def run_omsimulator(package: Path, scheme: str, work: Path) -> ToolRun:
     if child.returncode or not values or len(values["time"]) < 2:
         why = "; ".join(errors) or f"exit {child.returncode}, no result: {printed[-500:]}"
         return ToolRun("omsimulator", scheme, {}, seconds, warnings, why)
-    return ToolRun("omsimulator", scheme, values, seconds, warnings + errors, None, errors[0] if errors else None)
+    return ToolRun(
+        "omsimulator", scheme, values, seconds, warnings + errors, None, errors[0] if errors else None
+    )
 
 
 RUNNERS = {
