@@ -604,3 +604,19 @@ def test_system_without_omsimulator_says_where_it_looks(monkeypatch, capsys, tmp
         "../shared/hosts/omsimulator; no package registry offers it)"
     )
     assert not out and not list(tmp_path.iterdir())
+
+
+def test_build_without_the_arm_cross_compiler_says_what_to_install(monkeypatch, capsys, tmp_path):
+    which = shutil.which
+    monkeypatch.setattr(
+        shutil, "which", lambda cmd, *a, **k: None if "aarch64" in cmd else which(cmd, *a, **k)
+    )
+    status, _, err = run_main(
+        capsys, "build", "--native", "--fmi", "3", "--aarch64", "--no-check", "--output", tmp_path / "A.fmu"
+    )
+    assert status == 2
+    assert one_line(err, "build") == (
+        "the aarch64-linux binary needs the compiler aarch64-linux-gnu-gcc "
+        "(Debian: apt-get install gcc-aarch64-linux-gnu)"
+    )
+    assert not (tmp_path / "A.fmu").exists()

@@ -76,7 +76,8 @@ def build_fmu(
 ) -> FmuBuild:
     """The scene's FMU at `output`: the pythonfmu slave (the default), or with
     backend="native" the same C with FMI glue in C (builder.native), with a binary for each
-    of `platforms` ("linux64", and "win64" cross-compiled; the pythonfmu FMU is linux64 only).
+    of `platforms` ("linux64", and cross-compiled "win64" and, FMI 3.0 only, "aarch64-linux";
+    the pythonfmu FMU is linux64 only).
     fmi_version=3 (native only): an FMI 3.0 FMU (builder.fmi3) instead of FMI 2.0; with
     arrays=False its per-link quantities are scalars with FMI 2.0's names, for tools that read
     no FMI 3.0 arrays (OMSimulator reads each array as its first element)."""

@@ -77,6 +77,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --native: also a Windows binary, cross-compiled (needs mingw-w64)",
     )
     parser.add_argument(
+        "--aarch64",
+        action="store_true",
+        help="with --native --fmi 3: also a Linux binary for 64-bit ARM (binaries/aarch64-linux), "
+        "cross-compiled (needs gcc-aarch64-linux-gnu)",
+    )
+    parser.add_argument(
         "--no-check",
         action="store_true",
         help="only build; skip the fmpy run against the native integrator, its plot and its animation",
@@ -131,6 +137,12 @@ def choose_scene(args) -> Scene:
     )
 
 
+def platforms(args) -> tuple[str, ...]:
+    """The platforms whose binaries the FMU carries: Linux x86-64, and those the options add."""
+    extra = {"win64": args.win64, "aarch64-linux": args.aarch64}
+    return ("linux64", *(platform for platform, wanted in extra.items() if wanted))
+
+
 def run(args) -> int:
     try:
         scene = choose_scene(args)
@@ -140,6 +152,11 @@ def run(args) -> int:
         raise UserError("--win64: only the native FMU carries a Windows binary; add --native")
     if args.fmi == 3 and not args.native:
         raise UserError("--fmi 3: only the native FMU is FMI 3.0; add --native")
+    if args.aarch64 and args.fmi != 3:
+        raise UserError(
+            "--aarch64: only the FMI 3.0 FMU carries an ARM binary (FMI 2.0 tools disagree on its "
+            "folder: docs/native.md#platforms); add --native --fmi 3"
+        )
     if args.scalars and args.fmi != 3:
         raise UserError("--scalars: only the FMI 3.0 FMU has arrays; add --native --fmi 3")
     output = args.output or default_output(args.native, args.fmi, args.scalars)
@@ -148,7 +165,7 @@ def run(args) -> int:
             scene,
             output,
             backend="native" if args.native else "pythonfmu",
-            platforms=("linux64", "win64") if args.win64 else ("linux64",),
+            platforms=platforms(args),
             fmi_version=args.fmi,
             arrays=not args.scalars,
         )
