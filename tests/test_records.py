@@ -88,9 +88,20 @@ def test_a_value_is_checked_by_its_records_rule_not_its_name():
 
 def test_model_structure_lists_outputs_derivatives_and_initial_unknowns():
     structure = model_structure(variables(Scene.uniform(2), SETTINGS, "native"))
-    assert structure.outputs[0].name == "alpha0" and all(v.causality == "output" for v in structure.outputs)
-    assert [v.derivative_of for v in structure.derivatives][:2] == ["alpha0", "alpha1"]
-    assert {v.initial for v in structure.initial_unknowns} == {"calculated"}
+    outputs = [u.variable for u in structure.outputs]
+    assert outputs[0].name == "alpha0" and all(v.causality == "output" for v in outputs)
+    assert [u.variable.derivative_of for u in structure.derivatives][:2] == ["alpha0", "alpha1"]
+    assert {u.variable.initial for u in structure.initial_unknowns} == {"calculated"}
+    # every entry names its knowns: an output the states (Model Exchange's knowns), at
+    # initialization the parameters too; an angle's derivative its rate, whatever the list
+    names = {u.variable.name: [k.name for k in u.dependencies] for u in structure.initial_unknowns}
+    assert names["der(alpha1)"] == ["omega1"]
+    assert names["bob0_y"] == ["l0", "alpha0", "beta0"] and names["bob0_x"] == ["l0", "alpha0"]
+    assert {u.variable.name: [k.name for k in u.dependencies] for u in structure.outputs}["bob0_y"] == [
+        "alpha0",
+        "beta0",
+    ]
+    assert names["n_rhs"] == []  # a count of the solver's work: no function of the knowns
 
 
 def test_c_literals():

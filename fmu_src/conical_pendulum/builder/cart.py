@@ -60,7 +60,10 @@ F_X_ORDER = (
     "communication points (for F_free_x only: F_pivot_x answers the acceleration and diverges "
     "so); Co-Simulation only"
 )
-KNOWNS = (*STATES, *INPUTS)  # what a (and so der(v)) depends on
+# What a (and so der(v)) depends on: (m_cart + M_x) a = F_x - k_cart x - c_cart v; the cart's
+# C is written by hand, so this is declared with it and held to its directional derivatives
+# and to differences (tests/test_structure.py).
+KNOWNS = (*PARAMETERS, *STATES, *INPUTS)
 
 
 def _members(*members):

@@ -8,7 +8,7 @@ import time
 import xml.etree.ElementTree as ET
 
 from .native_model import LOG_CATEGORIES, Description, Standard
-from .variables import Variable, model_structure
+from .variables import Structure, Variable, model_structure
 
 
 def model_description(described: Description) -> bytes:
@@ -84,16 +84,25 @@ def _model_variables(variables: ET.Element, records: list[Variable], index: dict
 
 def _model_structure(element: ET.Element, records: list[Variable], index: dict[str, str]) -> None:
     """ModelStructure by index: builder.variables.model_structure's unknowns, each list in the
-    order of ModelVariables, as FMI 2.0 asks."""
-    structure = model_structure(records)
-    for tag, unknowns in (("Outputs", structure.outputs), ("Derivatives", structure.derivatives)):
+    order of ModelVariables and each entry with its dependencies, as FMI 2.0 asks."""
+    write_structure(element, model_structure(records), index)
+
+
+def write_structure(element: ET.Element, structure: Structure, index: dict[str, str]) -> None:
+    """The lists of an FMI 2.0 ModelStructure (Derivatives only where there are some), every
+    Unknown with its dependencies by index (builder.model_description writes the pythonfmu
+    FMU's with this too)."""
+    for tag, unknowns in (
+        ("Outputs", structure.outputs),
+        ("Derivatives", structure.derivatives),
+        ("InitialUnknowns", structure.initial_unknowns),
+    ):
+        if not unknowns:
+            continue
         listed = ET.SubElement(element, tag)
-        for v in unknowns:
-            dependencies = " ".join(index[name] for name in v.depends_on)
-            ET.SubElement(listed, "Unknown", index=index[v.name], dependencies=dependencies)
-    initial = ET.SubElement(element, "InitialUnknowns")
-    for v in structure.initial_unknowns:
-        ET.SubElement(initial, "Unknown", index=index[v.name])
+        for unknown in unknowns:
+            dependencies = " ".join(index[v.name] for v in unknown.dependencies)
+            ET.SubElement(listed, "Unknown", index=index[unknown.variable.name], dependencies=dependencies)
 
 
 FMI2 = Standard(

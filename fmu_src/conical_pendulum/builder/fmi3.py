@@ -218,21 +218,28 @@ def _model_structure(
     """ModelStructure by value reference: builder.variables.model_structure's unknowns."""
     structure = model_structure(records)
     # FMI 3.0's order: Output, ContinuousStateDerivative, InitialUnknown, each by value
-    # reference; an array is an unknown where its first element is
-    for tag, unknowns, dependencies in (
-        ("Output", structure.outputs, True),
-        ("ContinuousStateDerivative", structure.derivatives, True),
-        ("InitialUnknown", structure.initial_unknowns, False),
+    # reference; an array is an unknown where its first element is, and depends on what any
+    # of its elements does (providesPerElementDependencies is false)
+    for tag, unknowns in (
+        ("Output", structure.outputs),
+        ("ContinuousStateDerivative", structure.derivatives),
+        ("InitialUnknown", structure.initial_unknowns),
     ):
-        listed = {v.value_reference for v in unknowns}
+        listed = {u.variable.name: u for u in unknowns}
         for variable in variables_:
-            if variable.value_reference not in listed:
+            members = [listed[m.name] for m in variable.members if m.name in listed]
+            if not members:
                 continue
-            attributes = {"valueReference": str(variable.value_reference)}
-            if dependencies:
-                names = [name for m in variable.members for name in m.depends_on]
-                attributes["dependencies"] = " ".join(dict.fromkeys(vr[name] for name in names))
-            ET.SubElement(element, tag, attributes)
+            known = sorted(
+                {vr[k.name]: k.value_reference for u in members for k in u.dependencies}.items(),
+                key=lambda item: item[1],
+            )
+            ET.SubElement(
+                element,
+                tag,
+                valueReference=str(variable.value_reference),
+                dependencies=" ".join(reference for reference, _ in known),
+            )
 
 
 def build_description(sources: list[str], model_identifier: str) -> bytes:

@@ -7,6 +7,7 @@ import zipfile
 from pathlib import Path
 
 from ..scene import Scene
+from .fmi2 import write_structure
 from .variables import Variable, model_structure
 
 
@@ -48,18 +49,8 @@ def complete(fmu: Path, described: list[Variable], library: Path) -> None:
     element = root.find("ModelStructure")
     for child in list(element):
         element.remove(child)
-    structure = model_structure(described)
     index = {v.name: str(v.value_reference + 1) for v in described}  # its place in ModelVariables
-    inputs = {v.name for v in described if v.causality == "input"}
-    outputs = ET.SubElement(element, "Outputs")
-    for v in structure.outputs:  # Co-Simulation only: the state is not a known
-        direct = [index[name] for name in v.depends_on if name in inputs]
-        kinds = {"dependenciesKind": " ".join(["dependent"] * len(direct))} if direct else {}
-        ET.SubElement(outputs, "Unknown", index=index[v.name], dependencies=" ".join(direct), **kinds)
-    if structure.initial_unknowns:
-        initial = ET.SubElement(element, "InitialUnknowns")
-        for v in structure.initial_unknowns:
-            ET.SubElement(initial, "Unknown", index=index[v.name])
+    write_structure(element, model_structure(described), index)  # Co-Simulation: no state a known
     ET.indent(root)
     entries["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
     with zipfile.ZipFile(fmu, "w") as archive:

@@ -23,7 +23,8 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields
 
 from ..runtime.rules import SETTINGS, STATISTICS, rule_of
-from ..scene import PIVOT_OUTPUTS, Scalar, Scene
+from ..scene import Scalar, Scene
+from .structure import dependencies
 
 BACKENDS = ("pythonfmu", "native")
 
@@ -43,7 +44,7 @@ class Variable:
     start: float | int | None
     rule: str  # runtime.rules.RULES's key: the values it takes
     description: str
-    depends_on: tuple[str, ...] = ()  # an unknown's dependencies on knowns (ModelStructure)
+    depends_on: tuple[str, ...] = ()  # an unknown's knowns (parameters, inputs, states): ModelStructure
     group: str = ""  # the GROUPS entry it belongs to
     derivative_of: str | None = None  # der(x): the state x
     quantity: str = ""  # what it is whatever its link (l for l0, bob_x for bob2_x): its rule's key
@@ -226,11 +227,15 @@ def _states(scene, settings):  # a state is an output of its own value
     return _described(scene.state_scalars(), scene.state_defaults(), lambda s: (s.name,))
 
 
-def _outputs(scene, settings):  # functions of the state; the pivot force of the inputs too
-    states, inputs = tuple(scene.state_names()), tuple(scene.input_names())
-    return _described(
-        scene.output_scalars(), None, lambda s: states + (inputs if s.name in PIVOT_OUTPUTS else ())
-    )
+def _in_order(scene: Scene, names) -> tuple[str, ...]:
+    """The knowns `names` in value-reference order (parameters, inputs, states)."""
+    order = scene.core_parameter_names() + scene.state_names()
+    return tuple(sorted(names, key=order.index))
+
+
+def _outputs(scene, settings):  # what each depends on, read from the model (builder.structure)
+    found = dependencies(scene)
+    return _described(scene.output_scalars(), None, lambda s: _in_order(scene, found[s.name]))
 
 
 def _statistics(scene, settings):  # counts of what the solver did, not functions of the knowns
@@ -248,20 +253,19 @@ def _settings(integer):
     return members
 
 
-def _derivatives(scene, settings):  # x = (angles, rates): an angle's derivative is its rate
-    states, inputs = scene.state_scalars(), tuple(scene.input_names())
-    names = [s.name for s in states]
-    n_dof = len(states) // 2
+def _derivatives(scene, settings):  # what each depends on, read from the model (builder.structure)
+    found = dependencies(scene)
     return [
         Member(
-            Scalar(f"der({s.stem}", s.link, f"{s.suffix})"),
+            scalar,
             None,
             describe(f"der({s.quantity})", s.link),
-            (names[n_dof + k],) if k < n_dof else tuple(names) + inputs,
+            _in_order(scene, found[scalar.name]),
             s.name,
             per_second(unit_of(s.quantity)),
         )
-        for k, s in enumerate(states)
+        for s in scene.state_scalars()
+        for scalar in [Scalar(f"der({s.stem}", s.link, f"{s.suffix})")]
     ]
 
 
@@ -372,24 +376,57 @@ def first_references(records: list[Variable], in_order) -> dict[str, int]:
 
 
 @dataclass(frozen=True)
+class Unknown:
+    """One entry of a ModelStructure list: the variable and the knowns of that list it depends
+    on, in value-reference order."""
+
+    variable: Variable
+    dependencies: tuple[Variable, ...]
+
+
+@dataclass(frozen=True)
 class Structure:
     """A model description's ModelStructure, written once for every writer (builder.fmi2,
-    builder.fmi3, model_description.complete): its unknowns, each list in value-reference
-    order; an unknown's dependencies are its record's depends_on."""
+    builder.fmi3, model_description.complete), each list in value-reference order and every
+    entry with its dependencies written out (FMI reads none as "every known", OMSimulator as
+    "nothing"): of the records' depends_on, those that are knowns of that list."""
 
-    outputs: list[Variable]
-    derivatives: list[Variable]
-    initial_unknowns: list[Variable]  # no dependencies listed: they may depend on every known
+    outputs: list[Unknown]
+    derivatives: list[Unknown]
+    initial_unknowns: list[Unknown]
 
 
 def model_structure(records: list[Variable]) -> Structure:
     """The unknowns of the variables `records`: the outputs, the state derivatives, and those
-    of both calculated at initialization."""
-    outputs = [v for v in records if v.causality == "output"]
-    derivatives = [v for v in records if v.derivative_of]
-    initial = [
-        v
-        for v in records
-        if v.initial in ("approx", "calculated") and (v.causality == "output" or v.derivative_of)
-    ]
-    return Structure(outputs, derivatives, initial)
+    of both calculated at initialization. The knowns of the outputs and derivatives are the
+    inputs and the continuous states (none where no derivative is exposed: Co-Simulation
+    only); at initialization, the inputs, the parameters and whatever starts exactly at its
+    start value (the states)."""
+    by_name = {v.name: v for v in records}
+    states = {v.derivative_of for v in records if v.derivative_of}
+    continuous = {v.name for v in records if v.causality == "input" or v.name in states}
+    initial = {v.name for v in records if v.causality in ("input", "parameter") or v.initial == "exact"}
+
+    def unknowns(variables, knowns):
+        return [
+            Unknown(
+                v,
+                tuple(
+                    sorted((by_name[k] for k in v.depends_on if k in knowns), key=lambda k: k.value_reference)
+                ),
+            )
+            for v in variables
+        ]
+
+    return Structure(
+        unknowns([v for v in records if v.causality == "output"], continuous),
+        unknowns([v for v in records if v.derivative_of], continuous),
+        unknowns(
+            [
+                v
+                for v in records
+                if v.initial in ("approx", "calculated") and (v.causality == "output" or v.derivative_of)
+            ],
+            initial,
+        ),
+    )
