@@ -188,7 +188,9 @@ def run_fmpy(package: Path, scheme: str, work: Path) -> ToolRun:
     the component as its set_parameters matches them, and the step and stop time as
     arguments. Its rows carry the time a step started and the values after it: they are
     put at the time the values hold. Its loop adds the step to the time while time <
-    stop_time, so rounding can give it one step more than asked: that row is left out."""
+    stop_time, so rounding can give it one step more than asked: that row is left out. When
+    an FMU refuses a step (a diverging run), simulate_ssp raises and gives back none of it."""
+    from fmpy.fmi1 import FMICallException
     from fmpy.ssp.simulation import simulate_ssp
     from fmpy.ssp.ssd import read_ssv
 
@@ -203,7 +205,10 @@ def run_fmpy(package: Path, scheme: str, work: Path) -> ToolRun:
     for parameter in parameters.parameters:
         parameter.name = f"cart.{parameter.name}"
     start = time.perf_counter()
-    rows = simulate_ssp(str(source), stop_time=stop_time, step_size=step, parameter_set=parameters)
+    try:
+        rows = simulate_ssp(str(source), stop_time=stop_time, step_size=step, parameter_set=parameters)
+    except FMICallException as exc:  # an FMU refused a step (a diverging run): none of its rows come back
+        return ToolRun("fmpy", scheme, {}, time.perf_counter() - start, refused=f"simulate_ssp raised: {exc}")
     seconds = time.perf_counter() - start
     values = {"time": rows["time"] + step}
     values.update({name.split(".")[-1]: rows[name] for name in rows.dtype.names if name != "time"})
@@ -244,12 +249,13 @@ def _oms_values(result: Path, model: str) -> dict:
     return values
 
 
-def run_omsimulator(package: Path, scheme: str, work: Path) -> ToolRun:
+def run_omsimulator(package: Path, scheme: str, work: Path, options: tuple[str, ...] = ()) -> ToolRun:
     """The package as written: its default variant from the command line, another one
     activated by a Lua script (this OMSimulator's scripting; its command line runs
-    SystemStructure.ssd only). It exits 0 whether or not the run failed: what it printed
-    says, `error:` lines. A run that stopped after its start keeps its rows, with the first
-    error as why it ended."""
+    SystemStructure.ssd only); `options`, its command line's (--inputExtrapolation=true, ...),
+    apply to both. It exits 0 whether or not the run failed: what it printed says, `error:`
+    lines. A run that stopped before the stop time keeps its rows, with the first error as
+    why it ended; one that reached it despite errors lists them with its warnings."""
     _, stop_time = ssp.experiment(package)
     home = work / f"omsimulator-{scheme}"
     if home.exists():
@@ -273,7 +279,7 @@ def run_omsimulator(package: Path, scheme: str, work: Path) -> ToolRun:
         command = [script.name]
     start = time.perf_counter()
     child = subprocess.run(
-        [str(omsimulator()), *command, f"--tempDir={home}"],
+        [str(omsimulator()), *command, *options, f"--tempDir={home}"],
         cwd=home,
         check=False,
         capture_output=True,
@@ -288,9 +294,9 @@ def run_omsimulator(package: Path, scheme: str, work: Path) -> ToolRun:
     if child.returncode or not values or len(values["time"]) < 2:
         why = "; ".join(errors) or f"exit {child.returncode}, no result: {printed[-500:]}"
         return ToolRun("omsimulator", scheme, {}, seconds, warnings, why)
-    return ToolRun(
-        "omsimulator", scheme, values, seconds, warnings + errors, None, errors[0] if errors else None
-    )
+    step, _ = ssp.experiment(package)
+    ended = errors[0] if errors and values["time"][-1] < stop_time - step / 2 else None
+    return ToolRun("omsimulator", scheme, values, seconds, warnings + errors, None, ended)
 
 
 RUNNERS = {
