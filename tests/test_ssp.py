@@ -1,5 +1,5 @@
 """The coupled demo as an SSP 1.0 package (demos/ssp.py) and its runs in the tools that read
-SSP (demos/ssp_tools.py): ecospy, ecos' command line, libcosim, FMPy's simulate_ssp."""
+SSP (demos/ssp_tools.py): ecospy, ecos' command line, libcosim, FMPy's simulate_ssp, OMSimulator."""
 
 import math
 import zipfile
