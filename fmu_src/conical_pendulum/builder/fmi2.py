@@ -7,7 +7,9 @@ from __future__ import annotations
 import time
 import xml.etree.ElementTree as ET
 
+from ..runtime.rules import RULES
 from .native_model import LOG_CATEGORIES, Description, Standard
+from .units import attributes, enumerations, unit_definitions
 from .variables import Structure, Variable, model_structure
 
 
@@ -51,6 +53,8 @@ def model_description(described: Description) -> bytes:
         files = ET.SubElement(interface, "SourceFiles")
         for name in described.sources:
             ET.SubElement(files, "File", name=name)
+    unit_definitions(root, records)
+    type_definitions(root, records)
     categories = ET.SubElement(root, "LogCategories")
     for name, text in LOG_CATEGORIES.items():
         ET.SubElement(categories, "Category", name=name, description=text)
@@ -79,7 +83,29 @@ def _model_variables(variables: ET.Element, records: list[Variable], index: dict
             value["start"] = v.start_text()
         if v.derivative_of:
             value["derivative"] = index[v.derivative_of]
-        ET.SubElement(ET.SubElement(variables, "ScalarVariable", attributes), v.type, value)
+        ET.SubElement(ET.SubElement(variables, "ScalarVariable", attributes), *typed(v, value))
+
+
+def typed(v: Variable, value: dict[str, str]) -> tuple[str, dict[str, str]]:
+    """A variable's type element (Real, Integer, or Enumeration of its declared type) and its
+    attributes: builder.units's (quantity, unit, range, nominal), then `value`'s (start,
+    derivative)."""
+    rule = RULES[v.rule]
+    if rule.items:
+        return "Enumeration", {"declaredType": rule.type_name, **value}
+    return v.type, {**attributes(v), **value}
+
+
+def type_definitions(root: ET.Element, records: list[Variable]) -> None:
+    """<TypeDefinitions>: the enumerations the records use (builder.units.enumerations)."""
+    found = enumerations(records)
+    if not found:
+        return
+    table = ET.SubElement(root, "TypeDefinitions")
+    for name, items in found.items():
+        listed = ET.SubElement(ET.SubElement(table, "SimpleType", name=name), "Enumeration")
+        for value, (item, text) in enumerate(items):
+            ET.SubElement(listed, "Item", name=item, value=str(value), description=text)
 
 
 def _model_structure(element: ET.Element, records: list[Variable], index: dict[str, str]) -> None:

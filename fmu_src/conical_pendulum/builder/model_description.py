@@ -7,12 +7,16 @@ import zipfile
 from pathlib import Path
 
 from ..scene import Scene
-from .fmi2 import write_structure
+from .fmi2 import type_definitions, typed, write_structure
+from .units import unit_definitions
 from .variables import Variable, model_structure
 
 
 def complete(fmu: Path, described: list[Variable], library: Path) -> None:
-    """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only,
+    """Complete ModelStructure as FMI 2.0 requires; exact start values; the units, ranges and
+    the solver's enumeration builder.fmi2 writes (pythonfmu 0.7 has no Enumeration variable:
+    its slave registers solver an Integer, which a host sets with fmi2SetInteger as it sets
+    an enumeration, so only the description changes); this platform only,
     its binary `library` (pythonfmu's export library as built here, builder.pythonfmu_export);
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
@@ -22,7 +26,7 @@ def complete(fmu: Path, described: list[Variable], library: Path) -> None:
     model_structure; each output's dependencies on the inputs, its direct feedthrough, so a
     master knows where an algebraic loop can be) are theirs.
 
-    pythonfmu lists no InitialUnknowns, writes Real starts with 16 digits (a double
+    pythonfmu writes no units and lists no InitialUnknowns, writes Real starts with 16 digits (a double
     needs 17 to round-trip), and packs binaries for every platform it has, while the
     compiled core runs only on the platform that built it.
     """
@@ -42,10 +46,17 @@ def complete(fmu: Path, described: list[Variable], library: Path) -> None:
     root = ET.fromstring(entries["modelDescription.xml"])
     variables = root.find("ModelVariables").findall("ScalarVariable")
     _check_described(variables, described)
-    for var, v in zip(variables, described):
-        real = var.find("Real")
-        if real is not None and real.get("start") is not None:
-            real.set("start", v.start_text())
+    for var, v in zip(variables, described):  # builder.fmi2's type element, pythonfmu's start exact
+        (written,) = list(var)
+        value = {"start": v.start_text()} if written.get("start") is not None else {}
+        var.remove(written)
+        ET.SubElement(var, *typed(v, value))
+    where = [child.tag for child in root].index("CoSimulation") + 1  # FMI 2.0's order of elements
+    definitions = ET.Element("definitions")
+    unit_definitions(definitions, described)
+    type_definitions(definitions, described)
+    for offset, element in enumerate(definitions):
+        root.insert(where + offset, element)
     element = root.find("ModelStructure")
     for child in list(element):
         element.remove(child)

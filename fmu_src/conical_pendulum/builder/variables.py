@@ -19,10 +19,11 @@ The statistics' order is runtime.rules.STATISTICS's, which the C indexes by name
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 
-from ..runtime.rules import SETTINGS, STATISTICS, rule_of
+from ..runtime.rules import RULES, SETTINGS, STATISTICS, rule_of
 from ..scene import Scalar, Scene
 from .structure import dependencies
 
@@ -49,7 +50,8 @@ class Variable:
     derivative_of: str | None = None  # der(x): the state x
     quantity: str = ""  # what it is whatever its link (l for l0, bob_x for bob2_x): its rule's key
     link: int | None = None  # the link it belongs to, if any
-    unit: str | None = None  # SI, as the description writes it (m, rad/s, kg m2, N s/m)
+    unit: str | None = None  # SI, as the description writes it (m, rad/s, kg.m2): builder.units's
+    nominal: float | None = None  # a continuous state's scale (FMI's nominal), if it is one
     array: str | None = None  # the FMI 3.0 FMU's array holding it (one element per link), if any
     index: int | None = None  # its 0-based place in that array
     what: str = ""  # what a refusal of a value calls it ("a length"): its rule's words
@@ -57,6 +59,25 @@ class Variable:
     def start_text(self) -> str:
         """The start as a model description writes it: a Real with the digits that round-trip."""
         return repr(float(self.start)) if self.type == "Real" else str(self.start)
+
+    def bounds(self) -> dict[str, str]:
+        """min and max as a model description declares them, from its rule: FMI's are
+        inclusive (min <= value <= max), so an open low end (a "positive" value) declares its
+        bound, min = 0, which the FMU still refuses, and an open high end the largest value
+        below it; an enumeration's range is its items."""
+        rule = RULES[self.rule]
+        if rule.items:
+            return {}
+        whole = self.type == "Integer" or rule.whole
+        found = {}
+        if math.isfinite(rule.low):
+            found["min"] = rule.low
+        if math.isfinite(rule.high):
+            found["max"] = rule.high - 1 if whole else math.nextafter(rule.high, -math.inf)
+        return {
+            key: str(int(value)) if self.type == "Integer" else repr(float(value))
+            for key, value in found.items()
+        }
 
     def to_dict(self) -> dict:
         data = asdict(self)
@@ -87,6 +108,7 @@ class Member:
     depends_on: tuple[str, ...] = ()
     derivative_of: str | None = None
     unit: str | None = None
+    nominal: float | None = None
 
     @property
     def name(self) -> str:
@@ -130,9 +152,9 @@ DESCRIBED = {
     "l": Described("m", "length of link {link} [{unit}]"),
     "m": Described("kg", "mass of bob {link} [{unit}]"),
     "M": Described("kg", "mass of link {link} [{unit}]"),
-    "Ixx": Described("kg m2", "central inertia of link {link} about its x axis [{unit}]"),
-    "Iyy": Described("kg m2", "central inertia of link {link} about its own (y) axis [{unit}]"),
-    "Izz": Described("kg m2", "central inertia of link {link} about its z axis [{unit}]"),
+    "Ixx": Described("kg.m2", "central inertia of link {link} about its x axis [{unit}]"),
+    "Iyy": Described("kg.m2", "central inertia of link {link} about its own (y) axis [{unit}]"),
+    "Izz": Described("kg.m2", "central inertia of link {link} about its z axis [{unit}]"),
     "alpha": Described("rad", "angle of joint {link} about the parent's z axis [{unit}]"),
     "beta": Described("rad", "angle of joint {link} about the parent's x axis [{unit}]"),
     "omega": Described("rad/s", "{of}' [{unit}]", "alpha"),
@@ -176,7 +198,7 @@ DESCRIBED = {
         {f"link_{c}": c for c in "xyz"},
     ),
     **{
-        f"link_q{c}": Described(None, f"link {{link}} orientation quaternion, {c} component")
+        f"link_q{c}": Described("1", f"link {{link}} orientation quaternion, {c} component")
         for c in ("w", "x", "y", "z")
     },
 }
@@ -224,7 +246,27 @@ def _inputs(scene, settings):  # at rest; held over each communication step
 
 
 def _states(scene, settings):  # a state is an output of its own value
-    return _described(scene.state_scalars(), scene.state_defaults(), lambda s: (s.name,))
+    return [
+        replace(member, nominal=NOMINAL[member.scalar.quantity](scene))
+        for member in _described(scene.state_scalars(), scene.state_defaults(), lambda s: (s.name,))
+    ]
+
+
+def _frequency(scene: Scene) -> float:
+    """The chain's natural angular frequency, hanging straight at the scene's numbers
+    (sqrt(g / total length)): the scale of its rates (1 where g = 0)."""
+    return math.sqrt(abs(scene.gravity) / sum(link.length for link in scene.links)) or 1.0
+
+
+# The states' nominal values (FMI's scale, e.g. absoluteTolerance = nominal * tolerance * 0.01):
+# an angle's scale is a radian; a rate's, a radian at the chain's natural frequency (one value
+# per quantity, so that an FMI 3.0 array has one).
+NOMINAL = {
+    "alpha": lambda scene: 1.0,
+    "beta": lambda scene: 1.0,
+    "omega": _frequency,
+    "delta": _frequency,
+}
 
 
 def _in_order(scene: Scene, names) -> tuple[str, ...]:
@@ -239,7 +281,7 @@ def _outputs(scene, settings):  # what each depends on, read from the model (bui
 
 
 def _statistics(scene, settings):  # counts of what the solver did, not functions of the knowns
-    return [Member(Scalar(name), None, text) for name, text in STATISTICS.items()]
+    return [Member(Scalar(name), None, text, unit="1") for name, text in STATISTICS.items()]
 
 
 def _settings(integer):
@@ -312,8 +354,12 @@ def groups(backend: str = "pythonfmu") -> list[Group]:
 def variables(scene: Scene, settings: dict, backend: str = "pythonfmu") -> list[Variable]:
     """Every variable of the scene's FMU for `backend`, in value-reference order.
 
-    settings: every solver setting's start value (builder.fmu.checked_settings)."""
-    return variables_of(groups(backend), scene, settings)
+    settings: every solver setting's start value (builder.fmu.checked_settings). The native
+    FMU's solver takes only the solvers in C (its rule "native-solver")."""
+    found = variables_of(groups(backend), scene, settings)
+    if backend == "native":
+        found = [replace(v, rule="native-solver") if v.rule == "solver" else v for v in found]
+    return found
 
 
 def variables_of(in_order, scene: Scene | None = None, settings: dict | None = None) -> list[Variable]:
@@ -346,6 +392,7 @@ def variables_of(in_order, scene: Scene | None = None, settings: dict | None = N
                     quantity=scalar.quantity,
                     link=scalar.link,
                     unit=member.unit,
+                    nominal=member.nominal,
                     array=scalar.quantity if in_array else None,
                     index=scalar.link if in_array else None,
                     what=what,
