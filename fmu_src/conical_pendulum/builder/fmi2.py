@@ -134,6 +134,8 @@ def write_structure(element: ET.Element, structure: Structure, index: dict[str, 
 FMI2 = Standard(
     version=2,
     model_description=model_description,
+    # x86 only: FMI 2.0.4 names other platforms by FMI 3.0's tuples (aarch64-linux), FMPy and
+    # OpenModelica load an ARM Linux binary from linux64 (docs/native.md#platforms)
     platform_folders={"linux64": "linux64", "win64": "win64"},
     headers=lambda described: {},
     files=lambda described: {},

@@ -284,7 +284,7 @@ def build_description(sources: list[str], model_identifier: str) -> bytes:
 
 
 # FMI 3.0's platform tuples for builder.native's platforms (section 2.5.1.1).
-PLATFORM_FOLDERS = {"linux64": "x86_64-linux", "win64": "x86_64-windows"}
+PLATFORM_FOLDERS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux"}
 
 FMI3 = Standard(
     version=3,

@@ -36,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=numbers,
         default=[ssp.STEP],
         metavar="DT,DT,...",
-        help=f"the packages' communication step [s] (the OSP annotation), comma-separated; each must "
+        help=f"the packages' communication step [s] (the OSP and OMSimulator annotations), comma-separated; each must "
         f"divide the stop time and be a multiple of the smallest ({ssp.STEP:g})",
     )
     parser.add_argument(
@@ -67,7 +67,8 @@ def run(args) -> int:
     for tool in args.tools:
         lacking = ssp_tools.missing(tool)
         if lacking:  # before the builds, which take a while
-            raise UserError(f"--run {tool}: {needs(lacking, 'cosim')}")
+            hint = f"needs {lacking}" if tool in ssp_tools.OUTSIDE_PIP else needs(lacking, "cosim")
+            raise UserError(f"--run {tool}: {hint}")
     output_folder(args.out)
     from ..builder.fmu import build_fmu
 

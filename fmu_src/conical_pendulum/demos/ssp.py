@@ -12,14 +12,19 @@ default experiment:
     resources/apparent-mass.ssv   c_cart, F_x_order; bound to the cart by its variant
 
 Each variant binds one parameter set (so SSP's rule, every binding applies, and the OSP
-tools' reading, each binding a named set, agree). The default experiment carries the step
-as the annotation `com.opensimulationplatform` (osp:FixedStepAlgorithm baseStepSize),
-which libcosim reads; ecos takes its step from its caller, FMPy from its arguments. The
-connectors' units are those the FMUs declare (their modelDescription.xml's units and
+tools' reading, each binding a named set, agree). The step is written twice, once per
+tool family that reads it from the package: the default experiment's annotation
+`com.opensimulationplatform` (osp:FixedStepAlgorithm baseStepSize), which libcosim reads,
+and the system's annotation `org.openmodelica` (oms:SimulationInformation/oms:FixedStepMaster
+stepSize), from which OMSimulator takes its master algorithm and step; ecos takes its
+step from its caller, FMPy from its arguments. Each SSD's name is an identifier
+(`PendulumOnCart_explicit`): OMSimulator names its model after it and refuses any other.
+The connectors' units are those the FMUs declare (their modelDescription.xml's units and
 UnitDefinitions: builder.units), written as SSP 1.0's ssc:Units.
 
-The XML uses the prefixes ssd:, ssc:, ssv: and osp: throughout: ecos (pugixml) and
-libcosim (boost property_tree) match element names with their prefixes, not namespaces.
+The XML uses the prefixes ssd:, ssc:, ssv:, osp: and oms: throughout: ecos (pugixml),
+libcosim (boost property_tree) and OMSimulator (pugixml) match element names with their
+prefixes, not namespaces.
 """
 
 from __future__ import annotations
@@ -42,11 +47,15 @@ NS = {
     "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
     "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
     "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations",
+    "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd",
 }
 VARIANTS = {"explicit": "SystemStructure.ssd", "apparent-mass": "ApparentMass.ssd"}  # scheme -> SSD
 FMUS = {"p": "resources/ConicalPendulum.fmu", "cart": "resources/Cart.fmu"}  # instance -> file
 SYSTEM = "PendulumOnCart"
 STEP = 0.01  # [s] the default experiment's communication step
+# OMSimulator's master: fixed steps, algebraic loops between FMUs solved at every step (KINSOL);
+# the tolerance of those loops, which its command line replaces with its --tolerance (1e-4 too)
+OMS_MASTER = {"description": "oms-ma", "relativeTolerance": "0.0001"}
 
 
 def parameter_file(scheme: str) -> str:
@@ -111,11 +120,16 @@ def _units(root, prefix: str, used: set[str], declared: dict[str, dict[str, str]
         _element(_element(table, "ssc", "Unit", name=unit), "ssc", "BaseUnit", **declared[unit])
 
 
+def model_name(scheme: str) -> str:
+    """The name of a scheme's SSD, an identifier: OMSimulator's model (and variant) name."""
+    return f"{SYSTEM}_{scheme.replace('-', '_')}"
+
+
 def _ssd(scheme: str, variables: dict, units: dict, step: float, stop_time: float) -> bytes:
     root = etree.Element(
         _q("ssd", "SystemStructureDescription"),
-        {"version": "1.0", "name": f"{SYSTEM} ({scheme})", "generationTool": "conical-pendulum-fmu"},
-        nsmap={prefix: NS[prefix] for prefix in ("ssd", "ssc", "osp")},
+        {"version": "1.0", "name": model_name(scheme), "generationTool": "conical-pendulum-fmu"},
+        nsmap={prefix: NS[prefix] for prefix in ("ssd", "ssc", "osp", "oms")},
     )
     connections, _ = SCHEMES[scheme]
     system = _element(
@@ -151,6 +165,16 @@ def _ssd(scheme: str, variables: dict, units: dict, step: float, stop_time: floa
             endElement=end_element,
             endConnector=end_connector,
         )
+    information = _element(
+        _element(
+            _element(_element(system, "ssd", "Annotations"), "ssc", "Annotation", type="org.openmodelica"),
+            "oms",
+            "Annotations",
+        ),
+        "oms",
+        "SimulationInformation",
+    )
+    _element(information, "oms", "FixedStepMaster", **OMS_MASTER, stepSize=repr(step))
     _units(root, "ssd", used, units)
     experiment = _element(root, "ssd", "DefaultExperiment", startTime=0.0, stopTime=repr(float(stop_time)))
     annotation = _element(
