@@ -50,6 +50,7 @@ class Link:
     bob_mass: float = 5.0
     bob_radius: float = 1.0
     moments: tuple[float, float, float] | None = None  # (Ixx, Iyy, Izz); None: a cylinder's
+    damping: float = 0.0  # joint damping coefficient c (torque -c w_rel), with Scene.joint_damping
 
     def inertia(self) -> tuple[float, float, float]:
         """Central inertia (Ixx, Iyy, Izz): as given, or a solid cylinder along the link's y axis."""
@@ -91,6 +92,7 @@ class Scene:
     gravity: float = 9.8
     coupling: bool = False  # pivot acceleration inputs and pivot force outputs
     formulation: str = "auto"  # "expanded" equations, "recursive" loops, or by the number of links
+    joint_damping: bool = False  # a viscous torque -c w_rel at each joint, c per joint a parameter
 
     def __post_init__(self):
         unknown = [g for g in self.outputs if g not in OUTPUT_GROUPS]
@@ -160,6 +162,20 @@ class Scene:
                 "coupling: the pivot's inputs and force need kinematics 'consistent'; "
                 f"the published {self.kinematics!r} equations have no moving support"
             )
+        if not isinstance(self.joint_damping, bool):
+            raise SceneError(f"joint_damping: expected true or false, got {self.joint_damping!r}")
+        if self.joint_damping and self.kinematics != "consistent":
+            raise SceneError(
+                "joint_damping: the joints' damping needs kinematics 'consistent'; the published "
+                f"{self.kinematics!r} equations have no relative angular velocity to damp"
+            )
+        if not self.joint_damping:
+            for i, link in enumerate(self.links):
+                if link.damping != 0:
+                    raise SceneError(
+                        f"link[{i}].damping: {link.damping!r} given, but the scene has no joint "
+                        "damping: set joint_damping = true"
+                    )
         if not math.isfinite(self.gravity):
             raise SceneError(f"gravity: must be finite, got {self.gravity!r}")
         # A joint whose angles move no mass has an undetermined acceleration.
@@ -182,13 +198,16 @@ class Scene:
         return "recursive"
 
     def structure(self) -> dict:
-        """What the generated code depends on, and nothing else."""
+        """What the generated code depends on, and nothing else (an option left out is not
+        named, so a scene without options keeps today's key)."""
+        options = {name: True for name in ("joint_damping",) if getattr(self, name)}
         return {
             "links": [[link.has_mass, link.has_bob] for link in self.links],
             "outputs": list(self.outputs),
             "kinematics": self.kinematics,
             "coupling": self.coupling,
             "formulation": self.resolved_formulation(),
+            **options,
         }
 
     def key(self, salt: str = "") -> str:
@@ -198,7 +217,8 @@ class Scene:
     # --- names: the FMU's contract, in the order of the compiled core's arrays ---
 
     def parameter_scalars(self) -> list[Scalar]:
-        """Parameters in the seed's order: l, m (bobs), M (links), Ixx, Iyy, Izz, g."""
+        """Parameters in the seed's order: l, m (bobs), M (links), Ixx, Iyy, Izz, then the
+        joints' damping c (with joint_damping), then g."""
         n = range(self.n)
         massive = [i for i in n if self.links[i].has_mass]
         bobs = [i for i in n if self.links[i].has_bob]
@@ -207,6 +227,7 @@ class Scene:
             + [Scalar("m", i) for i in bobs]
             + [Scalar("M", i) for i in massive]
             + [Scalar(axis, i) for axis in ("Ixx", "Iyy", "Izz") for i in massive]
+            + ([Scalar("c", i) for i in n] if self.joint_damping else [])
             + [Scalar("g")]
         )
 
@@ -220,6 +241,7 @@ class Scene:
             values[f"m{i}"] = link.bob_mass
             values[f"M{i}"] = link.mass
             values[f"Ixx{i}"], values[f"Iyy{i}"], values[f"Izz{i}"] = link.inertia()
+            values[f"c{i}"] = link.damping
         values["g"] = self.gravity
         return [float(values[name]) for name in self.parameter_names()]
 
@@ -238,14 +260,22 @@ class Scene:
         return _names(self.core_parameter_scalars())
 
     def state_scalars(self) -> list[Scalar]:
-        """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order."""
-        return [Scalar(s, i) for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)]
+        """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order; then
+        the energy's books, the work of each force a scene adds since the start (work_names)."""
+        return [Scalar(s, i) for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)] + [
+            Scalar(name) for name in self.work_names()
+        ]
+
+    def work_names(self) -> list[str]:
+        """The energy's books: states integrating the power of each non-conservative force
+        the scene has, so that energy minus their sum stays constant."""
+        return ["W_damping"] if self.joint_damping else []
 
     def state_names(self) -> list[str]:
         return _names(self.state_scalars())
 
     def state_defaults(self) -> list[float]:
-        return [SEED_ANGLE] * (2 * self.n) + [0.0] * (2 * self.n)
+        return [SEED_ANGLE] * (2 * self.n) + [0.0] * (2 * self.n) + [0.0] * len(self.work_names())
 
     def output_scalars(self) -> list[Scalar]:
         """Calculated outputs besides the state, in the compiled core's order."""
@@ -319,8 +349,8 @@ def load_scene(path) -> Scene:
 DEFAULT_LINK = Link()
 FILE_NAMES = {"bob_mass": "bob.mass", "bob_radius": "bob.radius"}  # Link fields as a file names them
 MASSLESS_HINT = " (or 0 for a massless link: has_mass=False)"
-SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs", "coupling", "formulation"}
-LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob"}
+SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs", "coupling", "formulation", "joint_damping"}
+LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob", "damping"}
 BOB_FIELDS = {"mass", "radius"}
 
 
@@ -346,7 +376,7 @@ def scene_from_dict(data: dict) -> Scene:
             "has_bob": bob is not None,
             "mass": mass if mass != 0 else DEFAULT_LINK.mass,
         }
-        fields.update({name: entry[name] for name in ("length", "radius") if name in entry})
+        fields.update({name: entry[name] for name in ("length", "radius", "damping") if name in entry})
         fields.update({f"bob_{name}": value for name, value in (bob or {}).items()})
         if "inertia" in entry:
             fields["moments"] = (
@@ -357,9 +387,11 @@ def scene_from_dict(data: dict) -> Scene:
         except TypeError as exc:
             raise SceneError(f"{where}: {exc}") from None
     scene_fields = {"links": tuple(made)}
-    for name in ("kinematics", "gravity", "outputs", "coupling", "formulation"):
+    for name in ("kinematics", "gravity", "outputs", "coupling", "formulation", "joint_damping"):
         if name in data:
             scene_fields[name] = tuple(data[name]) if name == "outputs" else data[name]
+    if "joint_damping" not in data and any("damping" in entry for entry in links):
+        scene_fields["joint_damping"] = True  # a link's damping asks for it
     if "gravity" in data and not isinstance(data["gravity"], (int, float)):
         raise SceneError(f"gravity: expected a number, got {data['gravity']!r}")
     return Scene(**scene_fields)

@@ -21,7 +21,7 @@ from sympy.printing.c import C99CodePrinter
 from ..runtime.rules import STATISTICS
 from ..scene import Scene
 from . import c_literals as c
-from .model import Equations, joint_kinematics
+from .model import Equations, joint_kinematics, work_rates
 
 # Functions whose complex version (by <tgmath.h>) continues the real one analytically
 # wherever the real one is defined: complex-step differentiation of the generated code is
@@ -90,6 +90,39 @@ def _function(signature, eqs: Equations, targets, prologue=(), epilogue=()):
     return "\n".join(lines)
 
 
+WORK_SIGNATURE = "void cp_work_rates(const cp_real *x, const cp_real *p, cp_real *dW)"
+
+
+def _books(scene: Scene) -> list[str]:
+    """model.h's lines for the energy's books, if the scene keeps any (none: no line)."""
+    if not scene.work_names():
+        return []
+    return [
+        c.define("CP_NWORK", len(scene.work_names())),
+        "/* dW: the power of each force of the energy's books, the rates of the states after",
+        "   the angles and rates (Scene.work_names). */",
+        WORK_SIGNATURE + ";",
+    ]
+
+
+def _work_function(scene: Scene, eqs: Equations | None = None) -> list[str]:
+    """model.c's cp_work_rates, if the scene keeps books (none: no function)."""
+    rates = work_rates(scene)
+    if not rates:
+        return []
+    eqs = eqs or Equations(
+        scene,
+        [sm.Symbol(name) for name in scene.state_names()],
+        [sm.Symbol(name) for name in scene.core_parameter_names()],
+        [],
+        [],
+        sm.Matrix(),
+        sm.Matrix(),
+        [],
+    )
+    return [_function(WORK_SIGNATURE, eqs, [(f"dW[{k}]", rate) for k, rate in enumerate(rates)])]
+
+
 def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: list[str]) -> str:
     """model.h: the sizes and names every formulation shares, then its own lines."""
     ndof = 2 * scene.n
@@ -98,7 +131,7 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
         sizes="\n".join(
             [
                 c.define("CP_NDOF", ndof),
-                c.define("CP_NSTATE", 2 * ndof),
+                c.define("CP_NSTATE", 2 * ndof + len(scene.work_names())),
                 c.define("CP_NPARAM", nparam),
                 c.define("CP_NINPUT", len(scene.input_names())),
                 c.define("CP_NOUTPUT", noutput),
@@ -115,7 +148,7 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
                 c.define("CP_NSTAT", len(STATISTICS)),
             ]
         ),
-        formulation="\n".join(lines),
+        formulation="\n".join(lines + _books(scene)),
     )
 
 
@@ -151,6 +184,7 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
             c.define("CP_NLINK", scene.n),
             c.define("CP_G_INDEX", index("g")),
             c.define("CP_PIVOT_INDEX", pivot),
+            *([c.define("CP_DAMPING_INDEX", index("c", 0))] if scene.joint_damping else []),
             *(
                 c.define(f"CP_OUTPUT_{group.upper()}", int(group in scene.outputs))
                 for group in ("bobs", "poses", "energy")
@@ -184,6 +218,7 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
             *body,
             "}",
             "",
+            *(f"{function}\n" for function in _work_function(scene)),
         ]
     )
     return {"model.h": header, "model.c": _analytic(source)}
@@ -234,7 +269,7 @@ def generate(eqs: Equations) -> dict[str, str]:
         else ["    (void)dx;"]
     )
     outputs = _function(signature, eqs, [(f"y[{k}]", e) for k, e in enumerate(eqs.outputs)], prologue=unused)
-    functions = [mass, outputs]
+    functions = [mass, outputs, *_work_function(eqs.scene, eqs)]
     if eqs.momentum is not None:
         functions.append(
             _function(

@@ -22,7 +22,7 @@ running the seed's own KanesMethod derivation (see builder.kane).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import sympy as sm
 import sympy.physics.mechanics as me
@@ -52,6 +52,8 @@ class Equations:
     # total mass, so that F_pivot = F_free - (m I - P M^-1 P^T) a_pivot
     momentum: sm.Matrix | None = None
     total_mass: sm.Expr | None = None
+    # The energy's books: the power of each force of Scene.work_names (x' of those states)
+    work_rates: list[sm.Expr] = field(default_factory=list)
 
     def lambdify(self):
         """Numpy functions (x, p) -> M, F and (x, p, u') -> outputs of these very
@@ -81,6 +83,31 @@ def joint_kinematics():
     sa, sb = sm.symbols("a b")
     plain = {a: sa, b: sb}
     return sa, sb, dcm.xreplace(plain), jac.xreplace(plain)
+
+
+def joint_damping(scene: Scene) -> tuple[list[sm.Expr], sm.Expr]:
+    """The joints' damping torques -c_i w_rel_i (w_rel_i = J_i u_i, link i's angular velocity
+    relative to its parent, u_i = (omega_i, delta_i); +c_i w_rel_i on the parent) as
+    generalized forces, one per speed, and their power. The torque's partial angular
+    velocity is J_i's columns, so the forces are -c_i J_i^T J_i u_i and the power
+    -c_i u_i^T J_i^T J_i u_i, with J_i^T J_i from sympy's joint (the identity for 'Space'
+    'ZXY': the joint's axes are orthonormal, which runtime/csrc/core/chain.c relies on)."""
+    a, b, _, jac = joint_kinematics()
+    gram = (jac.T * jac).applyfunc(sm.simplify)
+    n = scene.n
+    forces, power = [sm.S.Zero] * (2 * n), sm.S.Zero
+    for i in range(n):
+        c = sm.Symbol(f"c{i}")
+        u = Vec(sm.symbols(f"omega{i} delta{i}"))
+        torque = -c * gram.xreplace({a: sm.Symbol(f"alpha{i}"), b: sm.Symbol(f"beta{i}")}) * u
+        forces[i], forces[n + i] = torque
+        power += u.dot(torque)
+    return forces, power
+
+
+def work_rates(scene: Scene) -> list[sm.Expr]:
+    """The power of each force of the energy's books (Scene.work_names), in their order."""
+    return [joint_damping(scene)[1]] if scene.joint_damping else []
 
 
 class _Builder:
@@ -366,6 +393,8 @@ def derive(scene: Scene) -> Equations:
         if link.has_mass:
             _add_link_rotation(b, sums, sym, i, frame)
         parent = _Parent(frame, lower, quaternion)
+    if scene.joint_damping:
+        sums.force_terms = [f + q for f, q in zip(sums.force_terms, joint_damping(scene)[0])]
     mass_matrix, forcing = _mass_matrix_and_forcing(scene, sums, sym.dim)
     return Equations(
         scene=scene,
@@ -378,6 +407,7 @@ def derive(scene: Scene) -> Equations:
         outputs=_outputs(scene, sums, bobs, poses),
         momentum=sm.Matrix.hstack(*sums.momentum) if scene.coupling else None,
         total_mass=sums.total_mass if scene.coupling else None,
+        work_rates=work_rates(scene),
     )
 
 

@@ -137,6 +137,16 @@ DESCRIBED = {
     "omega": Described("rad/s", "{of}' [{unit}]", "alpha"),
     "delta": Described("rad/s", "{of}' [{unit}]", "beta"),
     "g": Described("m/s2", "gravitational acceleration along -Y [{unit}]"),
+    "c": Described(
+        "N m s/rad",
+        "viscous damping coefficient of joint {link}: a torque -c w_rel on link {link}, w_rel its "
+        "angular velocity relative to its parent (and +c w_rel on the parent) [{unit}]",
+    ),
+    "W_damping": Described(
+        "J",
+        "work done on the chain by the joints' damping since the start (<= 0): energy - W_damping "
+        "stays constant while nothing else does work [{unit}]",
+    ),
     "energy": Described(
         "J", "total mechanical energy relative to the pivot (kinetic + potential, zero at Y = 0) [{unit}]"
     ),
@@ -248,10 +258,10 @@ def _settings(integer):
     return members
 
 
-def _derivatives(scene, settings):  # x = (angles, rates): an angle's derivative is its rate
+def _derivatives(scene, settings):  # x = (angles, rates, works): an angle's derivative is its rate
     states, inputs = scene.state_scalars(), tuple(scene.input_names())
     names = [s.name for s in states]
-    n_dof = len(states) // 2
+    n_dof = 2 * scene.n  # the angles; the rates and the energy's books depend on every state
     return [
         Member(
             Scalar(f"der({s.stem}", s.link, f"{s.suffix})"),

@@ -193,6 +193,11 @@ static int articulate(cp_model *model, const cp_real *x, Link *links)
                 k->uu[r] -= k->E[j * 2 + r] * k->pA[j];
             }
         }
+#ifdef CP_DAMPING_INDEX
+        /* the joint's damping torque -c w_rel: generalized forces -c (omega, delta), as the
+           joint's axes are orthonormal (builder.model.joint_damping) */
+        for (int r = 0; r < 2; r++) k->uu[r] -= p[CP_DAMPING_INDEX + i] * x[(2 + r) * n + i];
+#endif
         /* LDL^T pivots of this joint's 2x2 articulated inertia: a cheap condition estimate,
            of the real parts (real.h) */
         const double d1 = CP_RE(D[0]),
@@ -349,6 +354,10 @@ void cp_mass_forcing(const cp_real *x, const cp_real *p, cp_real *M, cp_real *F)
         ud[c] = 0.0;
         for (int r = 0; r < CP_NDOF; r++) M[r * CP_NDOF + c] = tau[r] + F[r];
     }
+#ifdef CP_DAMPING_INDEX
+    /* the joints' damping, -c (omega, delta) (articulate) */
+    for (int k = 0; k < CP_NDOF; k++) F[k] -= p[CP_DAMPING_INDEX + k % CP_NLINK] * x[CP_NDOF + k];
+#endif
 }
 
 #if CP_OUTPUT_POSES

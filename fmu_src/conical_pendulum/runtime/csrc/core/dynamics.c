@@ -88,12 +88,17 @@ static int expanded_rates(cp_model *model, const cp_real *x, cp_real *dx, cp_rea
 int cp_rhs(void *ctx, const cp_real *x, cp_real *dx)
 {
 #if CP_RECURSIVE
-    return cp_chain_rhs((cp_model *)ctx, x, dx);
+    int status = cp_chain_rhs((cp_model *)ctx, x, dx);
 #else
     cp_real M[CP_NDOF * CP_NDOF];
     int perm[CP_NDOF];
-    return expanded_rates((cp_model *)ctx, x, dx, M, perm);
+    int status = expanded_rates((cp_model *)ctx, x, dx, M, perm);
 #endif
+#ifdef CP_NWORK
+    /* the energy's books: each added force's power, the rate of its work */
+    if (!status) cp_work_rates(x, ((cp_model *)ctx)->p, dx + 2 * CP_NDOF);
+#endif
+    return status;
 }
 
 #if CP_NINPUT
