@@ -26,6 +26,8 @@ PIVOT_OUTPUTS = ("F_pivot_x", "F_pivot_y", "F_pivot_z")
 # M_app a_pivot: the force at a_pivot = 0, and the chain's apparent mass (its upper triangle).
 FREE_FORCE = ("F_free_x", "F_free_y", "F_free_z")
 APPARENT_MASS = ("M_pivot_xx", "M_pivot_xy", "M_pivot_xz", "M_pivot_yy", "M_pivot_yz", "M_pivot_zz")
+# The energy's books: states with the work of each non-conservative force since the start
+WORKS = ("W_damping",)
 FORMULATIONS = ("auto", "expanded", "recursive")
 MAX_LINKS = 100
 MAX_EXPANDED_LINKS = 20  # the expanded equations' C grows like n^3: minutes to compile at 20
@@ -103,13 +105,24 @@ class Scene:
         self.validate()
 
     @classmethod
-    def uniform(cls, n_links: int = 3, *, massless_links: bool = False, bobs: bool = True, **kwargs) -> Scene:
-        """The seed's chain generalized to n identical links."""
+    def uniform(
+        cls,
+        n_links: int = 3,
+        *,
+        massless_links: bool = False,
+        bobs: bool = True,
+        damping: float | None = None,
+        **kwargs,
+    ) -> Scene:
+        """The seed's chain generalized to n identical links; damping: each joint's
+        coefficient, with joint_damping."""
         if isinstance(n_links, bool) or not isinstance(n_links, int):
             raise SceneError(f"links: expected a whole number of links, got {n_links!r}")
         if not 1 <= n_links <= MAX_LINKS:
             raise SceneError(f"links: {n_links} is out of range; a chain has 1 to {MAX_LINKS} links")
-        link = Link(has_mass=not massless_links, has_bob=bobs)
+        link = Link(has_mass=not massless_links, has_bob=bobs, damping=damping or 0.0)
+        if damping is not None:
+            kwargs["joint_damping"] = True
         return cls(links=(link,) * n_links, **kwargs)
 
     @property
@@ -269,7 +282,7 @@ class Scene:
     def work_names(self) -> list[str]:
         """The energy's books: states integrating the power of each non-conservative force
         the scene has, so that energy minus their sum stays constant."""
-        return ["W_damping"] if self.joint_damping else []
+        return [name for name, kept in zip(WORKS, (self.joint_damping,)) if kept]
 
     def state_names(self) -> list[str]:
         return _names(self.state_scalars())

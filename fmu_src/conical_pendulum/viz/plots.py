@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import UserError
 from ..progress import WIDTH, bar
+from ..scene import WORKS
 
 NO_CHAIN = (
     "the results have neither link poses (link<i>_x/y/z, the scene's output 'poses') "
@@ -225,13 +226,24 @@ def figure(results: dict):
         if not stretched:
             above.set_aspect("equal", adjustable="datalim")
     if "energy" in results:
-        energy = results["energy"]
-        drift.plot(t, (energy - energy[0]) / abs(energy[0]))
-        drift.set(xlabel="time [s]", ylabel="(E - E0) / |E0|", title="energy drift")
+        drift.plot(t, books_drift(results))
+        works = [name for name in WORKS if name in results]
+        drift.set(
+            xlabel="time [s]",
+            ylabel="(B - B0) / |E0|, B = E" + "".join(f" - {name}" for name in works),
+            title="energy drift" + (", less the forces' work (the energy's books)" if works else ""),
+        )
     else:
         drift.set_axis_off()
         drift.text(0.5, 0.5, "no energy output", ha="center", transform=drift.transAxes)
     return fig
+
+
+def books_drift(results) -> np.ndarray:
+    """(B - B0) / |E0| with B the energy less the work of the forces the results keep books of
+    (W_damping, ...): constant to the solver's accuracy, where the energy alone is not."""
+    books = results["energy"] - sum((results[name] for name in WORKS if name in results), 0.0)
+    return (books - books[0]) / abs(results["energy"][0])
 
 
 def chain_figure(points: np.ndarray, size: float = 5.0):
