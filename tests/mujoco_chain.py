@@ -14,9 +14,10 @@ from conical_pendulum import Scene
 
 def body_inertial(link) -> str:
     """Link and bob as one rigid body: mass, centre (on the link's -y axis) and central
-    inertia, diagonal in the link's axes."""
+    inertia, diagonal in the link's axes. A bob with an applied force is a body of its own
+    (bob_body)."""
     bodies = ([(link.mass, -link.length / 2)] if link.has_mass else []) + (
-        [(link.bob_mass, -link.length)] if link.has_bob else []
+        [(link.bob_mass, -link.length)] if link.has_bob and not link.bob_force else []
     )
     mass = sum(m for m, _ in bodies)
     centre = sum(m * y for m, y in bodies) / mass
@@ -25,6 +26,16 @@ def body_inertial(link) -> str:
     return (
         f'<inertial pos="0 {centre!r} 0" mass="{mass!r}" '
         f'diaginertia="{ixx + transverse!r} {max(iyy, 1e-300)!r} {izz + transverse!r}"/>'
+    )
+
+
+def bob_body(i: int, link) -> str:
+    """A bob that takes a force: a body welded to its link (no joint) at the link's end, so
+    that MuJoCo's xfrc_applied, which acts at a body's centre of mass, acts at the bob. Its
+    inertia must be positive in MuJoCo: 1e-12 kg m2, some 1e-15 of the chain's."""
+    return (
+        f'<body name="bob{i}" pos="0 {-link.length!r} 0"><inertial pos="0 0 0" '
+        f'mass="{link.bob_mass!r}" diaginertia="1e-12 1e-12 1e-12"/></body>'
     )
 
 
@@ -37,7 +48,7 @@ def mjcf(scene: Scene, timestep: float) -> str:
         xml = (
             f'<body name="link{i}" pos="{top}">{body_inertial(link)}'
             f'<joint type="hinge" axis="1 0 0"{damping}/><joint type="hinge" axis="0 0 1"{damping}/>'
-            f"{xml}</body>"
+            f"{bob_body(i, link) if link.bob_force else ''}{xml}</body>"
         )
     return (
         f'<mujoco><option gravity="0 {-scene.gravity!r} 0" integrator="RK4" timestep="{timestep!r}">'
@@ -48,7 +59,8 @@ def mjcf(scene: Scene, timestep: float) -> str:
 
 def simulate_mujoco(scene: Scene, state: dict, times, timestep=1e-3, applied=None):
     """The angles (alpha, beta per link, scene order) at `times` (multiples of timestep from
-    0). applied(data, model): sets data.xfrc_applied before each step, if given."""
+    0). applied(t, data, bodies): sets data.xfrc_applied before each step (bodies: the body
+    id of each bob with a force, by link), if given."""
     import mujoco
 
     model = mujoco.MjModel.from_xml_string(mjcf(scene, timestep))
@@ -57,12 +69,13 @@ def simulate_mujoco(scene: Scene, state: dict, times, timestep=1e-3, applied=Non
     n = scene.n
     data.qpos[:] = [x[f"{name}{i}"] for i in range(n) for name in ("beta", "alpha")]
     data.qvel[:] = [x[f"{name}{i}"] for i in range(n) for name in ("delta", "omega")]
+    bodies = {i: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"bob{i}") for i in scene.forced_bobs()}
     steps = np.rint(np.asarray(times) / timestep).astype(int)
     angles, done = [], 0
     for target in steps:
         while done < target:
             if applied:
-                applied(data, model)
+                applied(done * timestep, data, bodies)
             mujoco.mj_step(model, data)
             done += 1
         angles.append(np.concatenate([data.qpos[1::2], data.qpos[0::2]]))

@@ -19,11 +19,16 @@ SCENES = {
     "seed": Scene.uniform(3),  # expanded, no inputs
     "coupled": Scene.uniform(3, coupling=True),  # expanded, a_pivot inputs
     "recursive": Scene.uniform(7, coupling=True),  # chain.c, with inputs
-    # the joints' damping and its work (a state after the rates), in both formulations
+    # the joints' damping, forces on bobs, and the energy's books (states after the rates),
+    # in both formulations
     "damped": Scene(
-        links=(Link(damping=4.0), Link(damping=2.0), Link(damping=1.0)), joint_damping=True, coupling=True
+        links=(Link(damping=4.0, bob_force=True), Link(damping=2.0), Link(damping=1.0, bob_force=True)),
+        joint_damping=True,
+        coupling=True,
     ),
-    "damped_recursive": Scene.uniform(7, coupling=True, joint_damping=True, formulation="recursive"),
+    "damped_recursive": Scene(
+        links=tuple(Link(damping=1.0, bob_force=i == 4) for i in range(7)), joint_damping=True, coupling=True
+    ),
 }
 SEEDS = range(5)
 

@@ -27,7 +27,8 @@ PIVOT_OUTPUTS = ("F_pivot_x", "F_pivot_y", "F_pivot_z")
 FREE_FORCE = ("F_free_x", "F_free_y", "F_free_z")
 APPARENT_MASS = ("M_pivot_xx", "M_pivot_xy", "M_pivot_xz", "M_pivot_yy", "M_pivot_yz", "M_pivot_zz")
 # The energy's books: states with the work of each non-conservative force since the start
-WORKS = ("W_damping",)
+# (the joints' damping, the bobs' applied forces, the moving pivot's inertial force)
+WORKS = ("W_damping", "W_external", "W_pivot")
 FORMULATIONS = ("auto", "expanded", "recursive")
 MAX_LINKS = 100
 MAX_EXPANDED_LINKS = 20  # the expanded equations' C grows like n^3: minutes to compile at 20
@@ -53,6 +54,7 @@ class Link:
     bob_radius: float = 1.0
     moments: tuple[float, float, float] | None = None  # (Ixx, Iyy, Izz); None: a cylinder's
     damping: float = 0.0  # joint damping coefficient c (torque -c w_rel), with Scene.joint_damping
+    bob_force: bool = False  # an applied force on the bob: inputs F_bob<i>_x/y/z, inertial
 
     def inertia(self) -> tuple[float, float, float]:
         """Central inertia (Ixx, Iyy, Izz): as given, or a solid cylinder along the link's y axis."""
@@ -189,6 +191,14 @@ class Scene:
                         f"link[{i}].damping: {link.damping!r} given, but the scene has no joint "
                         "damping: set joint_damping = true"
                     )
+        for i, link in enumerate(self.links):
+            if link.bob_force and not link.has_bob:
+                raise SceneError(f"link[{i}].bob.force: link {i} has no bob to apply a force to")
+            if link.bob_force and self.kinematics != "consistent":
+                raise SceneError(
+                    f"link[{i}].bob.force: applied forces need kinematics 'consistent'; the "
+                    f"published {self.kinematics!r} equations take none"
+                )
         if not math.isfinite(self.gravity):
             raise SceneError(f"gravity: must be finite, got {self.gravity!r}")
         # A joint whose angles move no mass has an undetermined acceleration.
@@ -214,6 +224,8 @@ class Scene:
         """What the generated code depends on, and nothing else (an option left out is not
         named, so a scene without options keeps today's key)."""
         options = {name: True for name in ("joint_damping",) if getattr(self, name)}
+        if self.forced_bobs():
+            options["bob_forces"] = self.forced_bobs()
         return {
             "links": [[link.has_mass, link.has_bob] for link in self.links],
             "outputs": list(self.outputs),
@@ -258,9 +270,15 @@ class Scene:
         values["g"] = self.gravity
         return [float(values[name]) for name in self.parameter_names()]
 
+    def forced_bobs(self) -> list[int]:
+        """The links whose bob takes an applied force (inputs F_bob<i>_x/y/z)."""
+        return [i for i, link in enumerate(self.links) if link.bob_force]
+
     def input_scalars(self) -> list[Scalar]:
-        """Inputs, held constant over a communication step: the pivot's inertial acceleration."""
-        return [Scalar(name) for name in PIVOT_INPUTS] if self.coupling else []
+        """Inputs, held constant over a communication step: the pivot's inertial acceleration,
+        then the forces applied to the bobs the scene names (inertial components)."""
+        pivot = [Scalar(name) for name in PIVOT_INPUTS] if self.coupling else []
+        return pivot + [Scalar("F_bob", i, f"_{c}") for i in self.forced_bobs() for c in "xyz"]
 
     def input_names(self) -> list[str]:
         return _names(self.input_scalars())
@@ -282,7 +300,11 @@ class Scene:
     def work_names(self) -> list[str]:
         """The energy's books: states integrating the power of each non-conservative force
         the scene has, so that energy minus their sum stays constant."""
-        return [name for name, kept in zip(WORKS, (self.joint_damping,)) if kept]
+        forces = (self.joint_damping, bool(self.forced_bobs()))
+        # the moving pivot's work is kept with the other forces' (a coupled scene without
+        # them stays as it was)
+        kept = (*forces, self.coupling and any(forces))
+        return [name for name, keep in zip(WORKS, kept) if keep]
 
     def state_names(self) -> list[str]:
         return _names(self.state_scalars())
@@ -364,7 +386,7 @@ FILE_NAMES = {"bob_mass": "bob.mass", "bob_radius": "bob.radius"}  # Link fields
 MASSLESS_HINT = " (or 0 for a massless link: has_mass=False)"
 SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs", "coupling", "formulation", "joint_damping"}
 LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob", "damping"}
-BOB_FIELDS = {"mass", "radius"}
+BOB_FIELDS = {"mass", "radius", "force"}
 
 
 def scene_from_dict(data: dict) -> Scene:
@@ -391,6 +413,8 @@ def scene_from_dict(data: dict) -> Scene:
         }
         fields.update({name: entry[name] for name in ("length", "radius", "damping") if name in entry})
         fields.update({f"bob_{name}": value for name, value in (bob or {}).items()})
+        if not isinstance(fields.get("bob_force", False), bool):
+            raise SceneError(f"{where}.bob.force: expected true or false, got {fields['bob_force']!r}")
         if "inertia" in entry:
             fields["moments"] = (
                 tuple(entry["inertia"]) if isinstance(entry["inertia"], list) else entry["inertia"]

@@ -19,9 +19,9 @@ import sympy as sm
 from sympy.printing.c import C99CodePrinter
 
 from ..runtime.rules import STATISTICS
-from ..scene import Scene
+from ..scene import WORKS, Scene
 from . import c_literals as c
-from .model import Equations, joint_kinematics, work_rates
+from .model import Equations, joint_kinematics
 
 # Functions whose complex version (by <tgmath.h>) continues the real one analytically
 # wherever the real one is defined: complex-step differentiation of the generated code is
@@ -94,33 +94,33 @@ WORK_SIGNATURE = "void cp_work_rates(const cp_real *x, const cp_real *p, cp_real
 
 
 def _books(scene: Scene) -> list[str]:
-    """model.h's lines for the energy's books, if the scene keeps any (none: no line)."""
-    if not scene.work_names():
+    """model.h's lines for the energy's books, if the scene keeps any (none: no line): their
+    number, each one's slot (CP_WORK_DAMPING, ...; -1: not kept), and the expanded
+    formulation's function giving their rates."""
+    works = scene.work_names()
+    if not works:
         return []
     return [
-        c.define("CP_NWORK", len(scene.work_names())),
-        "/* dW: the power of each force of the energy's books, the rates of the states after",
-        "   the angles and rates (Scene.work_names). */",
-        WORK_SIGNATURE + ";",
+        c.define("CP_NWORK", len(works)),
+        *(c.define(f"CP_WORK_{name.removeprefix('W_').upper()}", _index(works, name)) for name in WORKS),
+        *(
+            []
+            if scene.resolved_formulation() == "recursive"
+            else [
+                "/* dW: the power of each force of the energy's books, the rates of the states after",
+                "   the angles and rates (Scene.work_names). */",
+                WORK_SIGNATURE + ";",
+            ]
+        ),
     ]
 
 
-def _work_function(scene: Scene, eqs: Equations | None = None) -> list[str]:
-    """model.c's cp_work_rates, if the scene keeps books (none: no function)."""
-    rates = work_rates(scene)
-    if not rates:
+def _work_function(eqs: Equations) -> list[str]:
+    """model.c's cp_work_rates, if the scene keeps books (none: no function; the recursive
+    formulation's is chain.c's)."""
+    if not eqs.work_rates:
         return []
-    eqs = eqs or Equations(
-        scene,
-        [sm.Symbol(name) for name in scene.state_names()],
-        [sm.Symbol(name) for name in scene.core_parameter_names()],
-        [],
-        [],
-        sm.Matrix(),
-        sm.Matrix(),
-        [],
-    )
-    return [_function(WORK_SIGNATURE, eqs, [(f"dW[{k}]", rate) for k, rate in enumerate(rates)])]
+    return [_function(WORK_SIGNATURE, eqs, [(f"dW[{k}]", rate) for k, rate in enumerate(eqs.work_rates)])]
 
 
 def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: list[str]) -> str:
@@ -186,6 +186,17 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
             c.define("CP_PIVOT_INDEX", pivot),
             *([c.define("CP_DAMPING_INDEX", index("c", 0))] if scene.joint_damping else []),
             *(
+                [
+                    "#define CP_BOB_FORCES 1",
+                    "/* Where each bob's applied force F_bob<i>_x/y/z starts in p (-1: none). */",
+                    "static const int cp_bob_force[CP_NLINK] = "
+                    + c.initializer(index("F_bob_x", i) for i in range(scene.n))
+                    + ";",
+                ]
+                if scene.forced_bobs()
+                else []
+            ),
+            *(
                 c.define(f"CP_OUTPUT_{group.upper()}", int(group in scene.outputs))
                 for group in ("bobs", "poses", "energy")
             ),
@@ -218,7 +229,6 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
             *body,
             "}",
             "",
-            *(f"{function}\n" for function in _work_function(scene)),
         ]
     )
     return {"model.h": header, "model.c": _analytic(source)}
@@ -269,7 +279,7 @@ def generate(eqs: Equations) -> dict[str, str]:
         else ["    (void)dx;"]
     )
     outputs = _function(signature, eqs, [(f"y[{k}]", e) for k, e in enumerate(eqs.outputs)], prologue=unused)
-    functions = [mass, outputs, *_work_function(eqs.scene, eqs)]
+    functions = [mass, outputs, *_work_function(eqs)]
     if eqs.momentum is not None:
         functions.append(
             _function(

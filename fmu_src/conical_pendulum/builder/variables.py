@@ -23,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields
 
 from ..runtime.rules import SETTINGS, STATISTICS, rule_of
-from ..scene import PIVOT_OUTPUTS, Scalar, Scene
+from ..scene import FREE_FORCE, PIVOT_INPUTS, PIVOT_OUTPUTS, Scalar, Scene
 
 BACKENDS = ("pythonfmu", "native")
 
@@ -144,8 +144,25 @@ DESCRIBED = {
     ),
     "W_damping": Described(
         "J",
-        "work done on the chain by the joints' damping since the start (<= 0): energy - W_damping "
-        "stays constant while nothing else does work [{unit}]",
+        "work done on the chain by the joints' damping since the start (<= 0); energy minus the "
+        "W_ outputs' sum stays constant [{unit}]",
+    ),
+    "W_external": Described(
+        "J",
+        "work done on the chain by the forces applied to the bobs (F_bob) since the start, with "
+        "velocities relative to the pivot; energy minus the W_ outputs' sum stays constant [{unit}]",
+    ),
+    "W_pivot": Described(
+        "J",
+        "work done on the chain by the moving pivot since the start: of the inertial force -m a_pivot "
+        "on every mass, relative to the pivot as the energy is; energy minus the W_ outputs' sum "
+        "stays constant [{unit}]",
+    ),
+    **_axes(
+        "force applied to bob {{link}}, inertial {axis} (Y up) [{unit}]; held constant over each "
+        "communication step",
+        "N",
+        {f"F_bob_{c}": c for c in "xyz"},
     ),
     "energy": Described(
         "J", "total mechanical energy relative to the pivot (kinetic + potential, zero at Y = 0) [{unit}]"
@@ -164,7 +181,8 @@ DESCRIBED = {
     ),
     **_axes(
         "force the pendulum would exert on a support at rest (a_pivot = 0), inertial {axis} (Y up) "
-        "[{unit}]: F_pivot = F_free - M_app a_pivot; depends on the state only",
+        "[{unit}]: F_pivot = F_free - M_app a_pivot; depends on the state (and the bobs' applied "
+        "forces) only",
         "N",
         {f"F_free_{c}": c for c in "xyz"},
     ),
@@ -238,9 +256,14 @@ def _states(scene, settings):  # a state is an output of its own value
 
 def _outputs(scene, settings):  # functions of the state; the pivot force of the inputs too
     states, inputs = tuple(scene.state_names()), tuple(scene.input_names())
-    return _described(
-        scene.output_scalars(), None, lambda s: states + (inputs if s.name in PIVOT_OUTPUTS else ())
-    )
+    forces = tuple(name for name in inputs if name not in PIVOT_INPUTS)  # F_free's too
+
+    def depends(scalar):
+        return states + (
+            inputs if scalar.name in PIVOT_OUTPUTS else forces if scalar.name in FREE_FORCE else ()
+        )
+
+    return _described(scene.output_scalars(), None, depends)
 
 
 def _statistics(scene, settings):  # counts of what the solver did, not functions of the knowns
