@@ -108,12 +108,6 @@ def compare(fmu: Path, scene, stop_time: float = 10.0, interval: float = 1.0 / 6
         f"({time.perf_counter() - start:.1f} s):"
     )
     print(result.report())
-    ok = result.passed()
-    print(result.bound.describe())
-    print(
-        f"angles agree to {result.angle_error():.2e} rad against a bound of {result.bound.value:.2e} rad: "
-        + ("OK" if ok else "FAILED")
-    )
     if "energy" in result.names:
         works = scene.work_names()
         run = {name: result.result[name] for name in result.result.dtype.names}
@@ -122,4 +116,10 @@ def compare(fmu: Path, scene, stop_time: float = 10.0, interval: float = 1.0 / 6
             ("energy" + "".join(f" - {name}" for name in works) if works else "the energy")
             + f" stays constant to {drift:.1e} of the energy (the FMU's run)"
         )
+    ok = result.passed()
+    print(result.bound.describe())
+    print(
+        f"angles agree to {result.angle_error():.2e} rad against a bound of {result.bound.value:.2e} rad: "
+        + ("OK" if ok else "FAILED")
+    )
     return result, ok

@@ -239,6 +239,34 @@ def figure(results: dict):
     return fig
 
 
+def books(results: dict, path) -> None:
+    """The energy's books of a run as a PNG: the energy, the work of each force the results
+    keep books of (W_damping, W_external, W_pivot), and the energy less that work, which
+    stays constant; below, its drift (books_drift)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    works = [name for name in WORKS if name in results]
+    if "energy" not in results or not works:
+        raise UserError("results: the energy's books need the energy and a W_ output (a scene with forces)")
+    t, energy = results["time"], results["energy"]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 7), sharex=True, height_ratios=(3, 1))
+    top.plot(t, energy - energy[0], label="energy E - E0", lw=1.6)
+    for name in works:
+        top.plot(t, results[name], label=f"{name} (work done on the chain)", lw=1.2)
+    kept = energy - sum(results[name] for name in works)
+    top.plot(t, kept - kept[0], "k--", label="E - " + " - ".join(works) + " (less its start)", lw=1.2)
+    top.set(ylabel="[J]", title="the energy's books")
+    top.legend(fontsize=8)
+    bottom.plot(t, books_drift(results), "k", lw=0.8)
+    bottom.set(xlabel="time [s]", ylabel="drift / |E0|")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
 def books_drift(results) -> np.ndarray:
     """(B - B0) / |E0| with B the energy less the work of the forces the results keep books of
     (W_damping, ...): constant to the solver's accuracy, where the energy alone is not."""
