@@ -1,8 +1,8 @@
-"""What a user wants simulated: links, bobs, outputs, kinematics.
+"""What a user wants simulated: links, bobs, outputs, kinematics, the forces on the chain.
 
 The scene is the single input of the build pipeline. Its structure (which bodies
-exist, which outputs are wanted, which kinematics) decides the generated code;
-its numbers (lengths, masses, radii) are only start values of FMU parameters.
+exist, which outputs are wanted, which kinematics, which forces) decides the generated
+code; its numbers (lengths, masses, radii, damping) are only start values of FMU parameters.
 This module imports no sympy: the FMU and the native simulation use it too. Its value
 rules are runtime.rules', the same the FMU applies.
 """
@@ -192,6 +192,8 @@ class Scene:
                         "damping: set joint_damping = true"
                     )
         for i, link in enumerate(self.links):
+            if not isinstance(link.bob_force, bool):
+                raise SceneError(f"link[{i}].bob.force: expected true or false, got {link.bob_force!r}")
             if link.bob_force and not link.has_bob:
                 raise SceneError(f"link[{i}].bob.force: link {i} has no bob to apply a force to")
             if link.bob_force and self.kinematics != "consistent":
