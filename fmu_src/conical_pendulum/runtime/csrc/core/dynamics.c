@@ -133,8 +133,9 @@ static int rates_and_apparent_mass(cp_model *model, const cp_real *x, cp_real *d
 
 /* F_pivot = F_free - M_app a_pivot, exactly affine in the pivot's acceleration (the
  * first inputs, after the parameters in p): F_free is the pivot force at a = 0, so both
- * depend on the state (and F_free on the bobs' applied forces, the inputs after them). out: F_free, then the upper triangle of M_app (of its symmetric mean); NaN where
- * the mass matrix is singular. */
+ * depend on the state (and F_free on the bobs' applied forces, the inputs after them).
+ * out: F_free, then the upper triangle of M_app (of its symmetric mean); NaN where the
+ * mass matrix is singular. */
 static void free_force_and_apparent_mass(const cp_real *x, const cp_real *p, cp_real *out)
 {
     cp_real q[CP_NPARAM], dx[CP_NSTATE], y[CP_NOUTPUT], M[9];
