@@ -53,6 +53,11 @@ def test_builds_the_requested_scene(tmp_path, build):
         (["--kinematics", "seed"], "invalid choice: 'seed'"),
         (["--links", "6", "--kinematics", "pydy-example"], "only reproduced up to 4 links"),
         (["--coupling", "--kinematics", "pydy-example"], "coupling: the pivot's inputs and force need"),
+        (["--joint-damping", "-0.5"], "--joint-damping: must be a finite number >= 0, got -0.5"),
+        (
+            ["--joint-damping", "1", "--kinematics", "pydy-example"],
+            "joint_damping: the joints' damping needs kinematics 'consistent'",
+        ),
         (["--output", "dist/model.zip"], "must end in .fmu"),
         (["--frobnicate"], "unrecognized arguments: --frobnicate"),
         (

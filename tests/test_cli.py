@@ -211,7 +211,7 @@ def test_page_serves_until_interrupted(seed_fmu, tmp_path):
         ),
         (["page", "FMU"], "conical-pendulum page: the following arguments are required: --out"),
         (["page", "FMU", "--out", "page", "--port", "70000"], "--port: 70000 is not a port number"),
-        (["show", "RESULTS"], "conical-pendulum show: give --plot and/or --gif"),
+        (["show", "RESULTS"], "conical-pendulum show: give --plot, --gif and/or --books"),
         (
             ["show", "RESULTS", "--plot", "p.png", "--fps", "0"],
             "conical-pendulum show: --fps: must be positive, got 0",

@@ -18,8 +18,18 @@ from fmu_helpers import Instance
 SCENES = {
     "seed": Scene.uniform(3),  # expanded, no inputs
     "coupled": Scene.uniform(3, coupling=True),  # expanded, a_pivot inputs
-    "recursive": Scene.uniform(7, coupling=True),
-}  # chain.c, with inputs
+    "recursive": Scene.uniform(7, coupling=True),  # chain.c, with inputs
+    # the joints' damping, forces on bobs, and the energy's books (states after the rates),
+    # in both formulations
+    "damped": Scene(
+        links=(Link(damping=4.0, bob_force=True), Link(damping=2.0), Link(damping=1.0, bob_force=True)),
+        joint_damping=True,
+        coupling=True,
+    ),
+    "damped_recursive": Scene(
+        links=tuple(Link(damping=1.0, bob_force=i == 4) for i in range(7)), joint_damping=True, coupling=True
+    ),
+}
 SEEDS = range(5)
 
 
@@ -102,9 +112,10 @@ class Model:
 def random_point(scene, seed):
     """Angles within +-1 rad, rates within +-2 rad/s, support accelerations within +-3 m/s^2."""
     rng = np.random.default_rng(seed)
-    n = len(scene.state_names()) // 2
+    n = 2 * scene.n
     x = np.concatenate([rng.uniform(-1, 1, n), rng.uniform(-2, 2, n)])
-    return x, rng.uniform(-3, 3, len(scene.input_names()))
+    inputs = rng.uniform(-3, 3, len(scene.input_names()))
+    return np.concatenate([x, rng.uniform(-5, 0, len(scene.work_names()))]), inputs
 
 
 @pytest.fixture(scope="module")
@@ -161,7 +172,7 @@ def test_it_is_exact_where_finite_differences_are_not(models, scene):
         assert (np.abs(along - J @ v) <= 1e-13 * bound).all()
 
 
-@pytest.mark.parametrize("scene", ["coupled", "recursive"])
+@pytest.mark.parametrize("scene", ["coupled", "recursive", "damped"])
 def test_it_agrees_with_differences_of_the_compiled_core(models, scene):
     """An independent path: Richardson-extrapolated central differences of the Cython core's
     rhs and outputs (no FMI glue, parameters and inputs in p as the core orders them)."""

@@ -54,7 +54,7 @@ def test_plot_and_animation(results_csv, tmp_path):
     "args, message",
     [
         (["missing.csv", "--plot", "x.png"], "missing.csv"),
-        (["RESULTS"], "give --plot and/or --gif"),
+        (["RESULTS"], "give --plot, --gif and/or --books"),
     ],
 )
 def test_refusals(results_csv, args, message):

@@ -19,6 +19,17 @@ SCENES = {
     "coupled": Scene.uniform(3, coupling=True),
     "mixed": Scene(links=(Link(), Link(has_mass=False), Link(has_bob=False)), coupling=True),
     "recursive": Scene.uniform(7, coupling=True),
+    # joint damping and a force on the middle bob: the energy's books as states
+    "forced": Scene(
+        links=(Link(damping=0.3), Link(damping=0.2, bob_force=True), Link(damping=0.1)),
+        joint_damping=True,
+        coupling=True,
+    ),
+    "forced_recursive": Scene(
+        links=(Link(damping=0.3),) * 3 + (Link(damping=0.1, bob_force=True),) + (Link(damping=0.2),) * 3,
+        joint_damping=True,
+        coupling=True,
+    ),
 }
 
 # Listed pairs that are zero anyway: not by the expressions' structure but by the physics.
@@ -28,10 +39,12 @@ CANCELLED = {
     "coupled": [("M_pivot_xx", "beta0")],
     "mixed": [("M_pivot_xx", "beta0")],
     "recursive": [("M_pivot_xx", "beta0")],
+    "forced": [("M_pivot_xx", "beta0")],
+    "forced_recursive": [("M_pivot_xx", "beta0")],
 }
 
 
-@pytest.mark.parametrize("name", ["seed", "coupled", "mixed"])
+@pytest.mark.parametrize("name", ["seed", "coupled", "mixed", "forced"])
 def test_the_chains_rule_is_what_the_expressions_say(name):
     """The recursive formulation's dependencies (no expressions to read) equal the expanded
     equations' free symbols wherever both formulations exist."""
@@ -39,7 +52,7 @@ def test_the_chains_rule_is_what_the_expressions_say(name):
     assert structure._chain(scene) == structure._symbolic(scene, derive(scene))
 
 
-@pytest.mark.parametrize("name", ["seed", "mixed", "recursive"])
+@pytest.mark.parametrize("name", ["seed", "mixed", "recursive", "forced", "forced_recursive"])
 def test_listed_pairs_are_not_zero_and_the_rest_are(built_fmu, name):
     """fmi2GetDirectionalDerivative at five random points: every pair the Outputs and
     Derivatives lists leave out is exactly zero at each, every listed pair nonzero at one."""

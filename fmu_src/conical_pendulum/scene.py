@@ -1,8 +1,8 @@
-"""What a user wants simulated: links, bobs, outputs, kinematics.
+"""What a user wants simulated: links, bobs, outputs, kinematics, the forces on the chain.
 
 The scene is the single input of the build pipeline. Its structure (which bodies
-exist, which outputs are wanted, which kinematics) decides the generated code;
-its numbers (lengths, masses, radii) are only start values of FMU parameters.
+exist, which outputs are wanted, which kinematics, which forces) decides the generated
+code; its numbers (lengths, masses, radii, damping) are only start values of FMU parameters.
 This module imports no sympy: the FMU and the native simulation use it too. Its value
 rules are runtime.rules', the same the FMU applies.
 """
@@ -26,6 +26,9 @@ PIVOT_OUTPUTS = ("F_pivot_x", "F_pivot_y", "F_pivot_z")
 # M_app a_pivot: the force at a_pivot = 0, and the chain's apparent mass (its upper triangle).
 FREE_FORCE = ("F_free_x", "F_free_y", "F_free_z")
 APPARENT_MASS = ("M_pivot_xx", "M_pivot_xy", "M_pivot_xz", "M_pivot_yy", "M_pivot_yz", "M_pivot_zz")
+# The energy's books: states with the work of each non-conservative force since the start
+# (the joints' damping, the bobs' applied forces, the moving pivot's inertial force)
+WORKS = ("W_damping", "W_external", "W_pivot")
 FORMULATIONS = ("auto", "expanded", "recursive")
 MAX_LINKS = 100
 MAX_EXPANDED_LINKS = 20  # the expanded equations' C grows like n^3: minutes to compile at 20
@@ -50,6 +53,8 @@ class Link:
     bob_mass: float = 5.0
     bob_radius: float = 1.0
     moments: tuple[float, float, float] | None = None  # (Ixx, Iyy, Izz); None: a cylinder's
+    damping: float = 0.0  # joint damping coefficient c (torque -c w_rel), with Scene.joint_damping
+    bob_force: bool = False  # an applied force on the bob: inputs F_bob<i>_x/y/z, inertial
 
     def inertia(self) -> tuple[float, float, float]:
         """Central inertia (Ixx, Iyy, Izz): as given, or a solid cylinder along the link's y axis."""
@@ -91,6 +96,7 @@ class Scene:
     gravity: float = 9.8
     coupling: bool = False  # pivot acceleration inputs and pivot force outputs
     formulation: str = "auto"  # "expanded" equations, "recursive" loops, or by the number of links
+    joint_damping: bool = False  # a viscous torque -c w_rel at each joint, c per joint a parameter
 
     def __post_init__(self):
         unknown = [g for g in self.outputs if g not in OUTPUT_GROUPS]
@@ -101,13 +107,24 @@ class Scene:
         self.validate()
 
     @classmethod
-    def uniform(cls, n_links: int = 3, *, massless_links: bool = False, bobs: bool = True, **kwargs) -> Scene:
-        """The seed's chain generalized to n identical links."""
+    def uniform(
+        cls,
+        n_links: int = 3,
+        *,
+        massless_links: bool = False,
+        bobs: bool = True,
+        damping: float | None = None,
+        **kwargs,
+    ) -> Scene:
+        """The seed's chain generalized to n identical links; damping: each joint's
+        coefficient, with joint_damping."""
         if isinstance(n_links, bool) or not isinstance(n_links, int):
             raise SceneError(f"links: expected a whole number of links, got {n_links!r}")
         if not 1 <= n_links <= MAX_LINKS:
             raise SceneError(f"links: {n_links} is out of range; a chain has 1 to {MAX_LINKS} links")
-        link = Link(has_mass=not massless_links, has_bob=bobs)
+        link = Link(has_mass=not massless_links, has_bob=bobs, damping=damping or 0.0)
+        if damping is not None:
+            kwargs["joint_damping"] = True
         return cls(links=(link,) * n_links, **kwargs)
 
     @property
@@ -160,6 +177,30 @@ class Scene:
                 "coupling: the pivot's inputs and force need kinematics 'consistent'; "
                 f"the published {self.kinematics!r} equations have no moving support"
             )
+        if not isinstance(self.joint_damping, bool):
+            raise SceneError(f"joint_damping: expected true or false, got {self.joint_damping!r}")
+        if self.joint_damping and self.kinematics != "consistent":
+            raise SceneError(
+                "joint_damping: the joints' damping needs kinematics 'consistent'; the published "
+                f"{self.kinematics!r} equations have no relative angular velocity to damp"
+            )
+        if not self.joint_damping:
+            for i, link in enumerate(self.links):
+                if link.damping != 0:
+                    raise SceneError(
+                        f"link[{i}].damping: {link.damping!r} given, but the scene has no joint "
+                        "damping: set joint_damping = true"
+                    )
+        for i, link in enumerate(self.links):
+            if not isinstance(link.bob_force, bool):
+                raise SceneError(f"link[{i}].bob.force: expected true or false, got {link.bob_force!r}")
+            if link.bob_force and not link.has_bob:
+                raise SceneError(f"link[{i}].bob.force: link {i} has no bob to apply a force to")
+            if link.bob_force and self.kinematics != "consistent":
+                raise SceneError(
+                    f"link[{i}].bob.force: applied forces need kinematics 'consistent'; the "
+                    f"published {self.kinematics!r} equations take none"
+                )
         if not math.isfinite(self.gravity):
             raise SceneError(f"gravity: must be finite, got {self.gravity!r}")
         # A joint whose angles move no mass has an undetermined acceleration.
@@ -182,13 +223,18 @@ class Scene:
         return "recursive"
 
     def structure(self) -> dict:
-        """What the generated code depends on, and nothing else."""
+        """What the generated code depends on, and nothing else (an option left out is not
+        named, so a scene without options keeps today's key)."""
+        options = {name: True for name in ("joint_damping",) if getattr(self, name)}
+        if self.forced_bobs():
+            options["bob_forces"] = self.forced_bobs()
         return {
             "links": [[link.has_mass, link.has_bob] for link in self.links],
             "outputs": list(self.outputs),
             "kinematics": self.kinematics,
             "coupling": self.coupling,
             "formulation": self.resolved_formulation(),
+            **options,
         }
 
     def key(self, salt: str = "") -> str:
@@ -198,7 +244,8 @@ class Scene:
     # --- names: the FMU's contract, in the order of the compiled core's arrays ---
 
     def parameter_scalars(self) -> list[Scalar]:
-        """Parameters in the seed's order: l, m (bobs), M (links), Ixx, Iyy, Izz, g."""
+        """Parameters in the seed's order: l, m (bobs), M (links), Ixx, Iyy, Izz, then the
+        joints' damping c (with joint_damping), then g."""
         n = range(self.n)
         massive = [i for i in n if self.links[i].has_mass]
         bobs = [i for i in n if self.links[i].has_bob]
@@ -207,6 +254,7 @@ class Scene:
             + [Scalar("m", i) for i in bobs]
             + [Scalar("M", i) for i in massive]
             + [Scalar(axis, i) for axis in ("Ixx", "Iyy", "Izz") for i in massive]
+            + ([Scalar("c", i) for i in n] if self.joint_damping else [])
             + [Scalar("g")]
         )
 
@@ -220,12 +268,19 @@ class Scene:
             values[f"m{i}"] = link.bob_mass
             values[f"M{i}"] = link.mass
             values[f"Ixx{i}"], values[f"Iyy{i}"], values[f"Izz{i}"] = link.inertia()
+            values[f"c{i}"] = link.damping
         values["g"] = self.gravity
         return [float(values[name]) for name in self.parameter_names()]
 
+    def forced_bobs(self) -> list[int]:
+        """The links whose bob takes an applied force (inputs F_bob<i>_x/y/z)."""
+        return [i for i, link in enumerate(self.links) if link.bob_force]
+
     def input_scalars(self) -> list[Scalar]:
-        """Inputs, held constant over a communication step: the pivot's inertial acceleration."""
-        return [Scalar(name) for name in PIVOT_INPUTS] if self.coupling else []
+        """Inputs, held constant over a communication step: the pivot's inertial acceleration,
+        then the forces applied to the bobs the scene names (inertial components)."""
+        pivot = [Scalar(name) for name in PIVOT_INPUTS] if self.coupling else []
+        return pivot + [Scalar("F_bob", i, f"_{c}") for i in self.forced_bobs() for c in "xyz"]
 
     def input_names(self) -> list[str]:
         return _names(self.input_scalars())
@@ -238,14 +293,26 @@ class Scene:
         return _names(self.core_parameter_scalars())
 
     def state_scalars(self) -> list[Scalar]:
-        """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order."""
-        return [Scalar(s, i) for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)]
+        """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order; then
+        the energy's books, the work of each force a scene adds since the start (work_names)."""
+        return [Scalar(s, i) for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)] + [
+            Scalar(name) for name in self.work_names()
+        ]
+
+    def work_names(self) -> list[str]:
+        """The energy's books: states integrating the power of each non-conservative force
+        the scene has, so that energy minus their sum stays constant."""
+        forces = (self.joint_damping, bool(self.forced_bobs()))
+        # the moving pivot's work is kept with the other forces' (a coupled scene without
+        # them stays as it was)
+        kept = (*forces, self.coupling and any(forces))
+        return [name for name, keep in zip(WORKS, kept) if keep]
 
     def state_names(self) -> list[str]:
         return _names(self.state_scalars())
 
     def state_defaults(self) -> list[float]:
-        return [SEED_ANGLE] * (2 * self.n) + [0.0] * (2 * self.n)
+        return [SEED_ANGLE] * (2 * self.n) + [0.0] * (2 * self.n) + [0.0] * len(self.work_names())
 
     def output_scalars(self) -> list[Scalar]:
         """Calculated outputs besides the state, in the compiled core's order."""
@@ -319,9 +386,9 @@ def load_scene(path) -> Scene:
 DEFAULT_LINK = Link()
 FILE_NAMES = {"bob_mass": "bob.mass", "bob_radius": "bob.radius"}  # Link fields as a file names them
 MASSLESS_HINT = " (or 0 for a massless link: has_mass=False)"
-SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs", "coupling", "formulation"}
-LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob"}
-BOB_FIELDS = {"mass", "radius"}
+SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs", "coupling", "formulation", "joint_damping"}
+LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob", "damping"}
+BOB_FIELDS = {"mass", "radius", "force"}
 
 
 def scene_from_dict(data: dict) -> Scene:
@@ -346,8 +413,10 @@ def scene_from_dict(data: dict) -> Scene:
             "has_bob": bob is not None,
             "mass": mass if mass != 0 else DEFAULT_LINK.mass,
         }
-        fields.update({name: entry[name] for name in ("length", "radius") if name in entry})
+        fields.update({name: entry[name] for name in ("length", "radius", "damping") if name in entry})
         fields.update({f"bob_{name}": value for name, value in (bob or {}).items()})
+        if not isinstance(fields.get("bob_force", False), bool):
+            raise SceneError(f"{where}.bob.force: expected true or false, got {fields['bob_force']!r}")
         if "inertia" in entry:
             fields["moments"] = (
                 tuple(entry["inertia"]) if isinstance(entry["inertia"], list) else entry["inertia"]
@@ -357,9 +426,11 @@ def scene_from_dict(data: dict) -> Scene:
         except TypeError as exc:
             raise SceneError(f"{where}: {exc}") from None
     scene_fields = {"links": tuple(made)}
-    for name in ("kinematics", "gravity", "outputs", "coupling", "formulation"):
+    for name in ("kinematics", "gravity", "outputs", "coupling", "formulation", "joint_damping"):
         if name in data:
             scene_fields[name] = tuple(data[name]) if name == "outputs" else data[name]
+    if "joint_damping" not in data and any("damping" in entry for entry in links):
+        scene_fields["joint_damping"] = True  # a link's damping asks for it
     if "gravity" in data and not isinstance(data["gravity"], (int, float)):
         raise SceneError(f"gravity: expected a number, got {data['gravity']!r}")
     return Scene(**scene_fields)

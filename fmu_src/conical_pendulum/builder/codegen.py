@@ -19,7 +19,7 @@ import sympy as sm
 from sympy.printing.c import C99CodePrinter
 
 from ..runtime.rules import STATISTICS
-from ..scene import Scene
+from ..scene import WORKS, Scene
 from . import c_literals as c
 from .model import Equations, joint_kinematics
 
@@ -90,6 +90,39 @@ def _function(signature, eqs: Equations, targets, prologue=(), epilogue=()):
     return "\n".join(lines)
 
 
+WORK_SIGNATURE = "void cp_work_rates(const cp_real *x, const cp_real *p, cp_real *dW)"
+
+
+def _books(scene: Scene) -> list[str]:
+    """model.h's lines for the energy's books, if the scene keeps any (none: no line): their
+    number, each one's slot (CP_WORK_DAMPING, ...; -1: not kept), and the expanded
+    formulation's function giving their rates."""
+    works = scene.work_names()
+    if not works:
+        return []
+    return [
+        c.define("CP_NWORK", len(works)),
+        *(c.define(f"CP_WORK_{name.removeprefix('W_').upper()}", _index(works, name)) for name in WORKS),
+        *(
+            []
+            if scene.resolved_formulation() == "recursive"
+            else [
+                "/* dW: the power of each force of the energy's books, the rates of the states after",
+                "   the angles and rates (Scene.work_names). */",
+                WORK_SIGNATURE + ";",
+            ]
+        ),
+    ]
+
+
+def _work_function(eqs: Equations) -> list[str]:
+    """model.c's cp_work_rates, if the scene keeps books (none: no function; the recursive
+    formulation's is chain.c's)."""
+    if not eqs.work_rates:
+        return []
+    return [_function(WORK_SIGNATURE, eqs, [(f"dW[{k}]", rate) for k, rate in enumerate(eqs.work_rates)])]
+
+
 def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: list[str]) -> str:
     """model.h: the sizes and names every formulation shares, then its own lines."""
     ndof = 2 * scene.n
@@ -98,7 +131,7 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
         sizes="\n".join(
             [
                 c.define("CP_NDOF", ndof),
-                c.define("CP_NSTATE", 2 * ndof),
+                c.define("CP_NSTATE", 2 * ndof + len(scene.work_names())),
                 c.define("CP_NPARAM", nparam),
                 c.define("CP_NINPUT", len(scene.input_names())),
                 c.define("CP_NOUTPUT", noutput),
@@ -115,7 +148,7 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
                 c.define("CP_NSTAT", len(STATISTICS)),
             ]
         ),
-        formulation="\n".join(lines),
+        formulation="\n".join(lines + _books(scene)),
     )
 
 
@@ -151,6 +184,18 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
             c.define("CP_NLINK", scene.n),
             c.define("CP_G_INDEX", index("g")),
             c.define("CP_PIVOT_INDEX", pivot),
+            *([c.define("CP_DAMPING_INDEX", index("c", 0))] if scene.joint_damping else []),
+            *(
+                [
+                    "#define CP_BOB_FORCES 1",
+                    "/* Where each bob's applied force F_bob<i>_x/y/z starts in p (-1: none). */",
+                    "static const int cp_bob_force[CP_NLINK] = "
+                    + c.initializer(index("F_bob_x", i) for i in range(scene.n))
+                    + ";",
+                ]
+                if scene.forced_bobs()
+                else []
+            ),
             *(
                 c.define(f"CP_OUTPUT_{group.upper()}", int(group in scene.outputs))
                 for group in ("bobs", "poses", "energy")
@@ -234,7 +279,7 @@ def generate(eqs: Equations) -> dict[str, str]:
         else ["    (void)dx;"]
     )
     outputs = _function(signature, eqs, [(f"y[{k}]", e) for k, e in enumerate(eqs.outputs)], prologue=unused)
-    functions = [mass, outputs]
+    functions = [mass, outputs, *_work_function(eqs)]
     if eqs.momentum is not None:
         functions.append(
             _function(

@@ -22,12 +22,12 @@ running the seed's own KanesMethod derivation (see builder.kane).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import sympy as sm
 import sympy.physics.mechanics as me
 
-from ..scene import Scene
+from ..scene import PIVOT_INPUTS, Scene
 from .kane import kanes_method
 
 Vec = sm.Matrix
@@ -52,6 +52,8 @@ class Equations:
     # total mass, so that F_pivot = F_free - (m I - P M^-1 P^T) a_pivot
     momentum: sm.Matrix | None = None
     total_mass: sm.Expr | None = None
+    # The energy's books: the power of each force of Scene.work_names (x' of those states)
+    work_rates: list[sm.Expr] = field(default_factory=list)
 
     def lambdify(self):
         """Numpy functions (x, p) -> M, F and (x, p, u') -> outputs of these very
@@ -81,6 +83,38 @@ def joint_kinematics():
     sa, sb = sm.symbols("a b")
     plain = {a: sa, b: sb}
     return sa, sb, dcm.xreplace(plain), jac.xreplace(plain)
+
+
+def joint_damping(scene: Scene) -> tuple[list[sm.Expr], sm.Expr]:
+    """The joints' damping torques -c_i w_rel_i (w_rel_i = J_i u_i, link i's angular velocity
+    relative to its parent, u_i = (omega_i, delta_i); +c_i w_rel_i on the parent) as
+    generalized forces, one per speed, and their power. The torque's partial angular
+    velocity is J_i's columns, so the forces are -c_i J_i^T J_i u_i and the power
+    -c_i u_i^T J_i^T J_i u_i, with J_i^T J_i from sympy's joint (the identity for 'Space'
+    'ZXY': the joint's axes are orthonormal, which runtime/csrc/core/chain.c relies on)."""
+    a, b, _, jac = joint_kinematics()
+    gram = (jac.T * jac).applyfunc(sm.simplify)
+    n = scene.n
+    forces, power = [sm.S.Zero] * (2 * n), sm.S.Zero
+    for i in range(n):
+        c = sm.Symbol(f"c{i}")
+        u = Vec(sm.symbols(f"omega{i} delta{i}"))
+        torque = -c * gram.xreplace({a: sm.Symbol(f"alpha{i}"), b: sm.Symbol(f"beta{i}")}) * u
+        forces[i], forces[n + i] = torque
+        power += u.dot(torque)
+    return forces, power
+
+
+def _work_rates(scene: Scene, sym: _Symbols, sums: _Sums) -> list[sm.Expr]:
+    """The power of each force of the energy's books (Scene.work_names, in its order): the
+    joints' damping, the bobs' applied forces, and the moving pivot's inertial force
+    -m a_pivot on every mass (velocities are relative to the pivot, as the energy is)."""
+    power = {
+        "W_damping": lambda: joint_damping(scene)[1],
+        "W_external": lambda: sums.external_power,
+        "W_pivot": lambda: -sym.pivot_acc.dot(sums.linear_momentum),
+    }
+    return [power[name]() for name in scene.work_names()]
 
 
 class _Builder:
@@ -138,7 +172,7 @@ def _symbols(scene: Scene) -> _Symbols:
         delta=sm.symbols(f"delta0:{n}"),
         rates=sm.symbols(f"domega0:{n}") + sm.symbols(f"ddelta0:{n}"),
         params=params,
-        pivot_acc=Vec([params[name] for name in scene.input_names()]) if scene.coupling else None,
+        pivot_acc=Vec([params[name] for name in PIVOT_INPUTS]) if scene.coupling else None,
     )
 
 
@@ -197,6 +231,9 @@ class _Sums:
     support_force: sm.Matrix
     momentum: list[sm.Matrix]
     total_mass: sm.Expr
+    # sum m v: the power of the pivot's inertial force -m a_pivot is -a_pivot . sum m v
+    linear_momentum: sm.Matrix = field(default_factory=lambda: ZERO)
+    external_power: sm.Expr = sm.S.Zero  # of the forces applied to the bobs
 
     @classmethod
     def empty(cls, dim: int) -> _Sums:
@@ -281,6 +318,7 @@ def _add_particle(sums: _Sums, sym: _Symbols, mass, point: _Point) -> None:
         sums.support_force += mass * (Vec([0, -g, 0]) - full_acc)
         sums.momentum = [sums.momentum[s] + mass * partials[s] for s in range(dim)]
         sums.total_mass += mass
+        sums.linear_momentum += mass * point.velocity
     for s in range(dim):
         if partials[s] == ZERO:
             continue
@@ -290,6 +328,19 @@ def _add_particle(sums: _Sums, sym: _Symbols, mass, point: _Point) -> None:
                 sums.mass_terms[s][t] += mass * partials[s].dot(partials[t])
     sums.kinetic += mass * point.velocity.dot(point.velocity) / 2
     sums.potential += mass * g * point.position[1]
+
+
+def _add_bob_force(sums: _Sums, sym: _Symbols, i: int, bob: _Point) -> None:
+    """An applied force F (inputs F_bob<i>_x/y/z, inertial) on bob i: F . v_s to F, its power
+    F . v, and with coupling its share of the force on the support (Newton's law for the
+    chain: sum m (g - a) + F)."""
+    force = Vec([sym.params[f"F_bob{i}_{c}"] for c in "xyz"])
+    for s in range(sym.dim):
+        if bob.partials[s] != ZERO:
+            sums.force_terms[s] += bob.partials[s].dot(force)
+    sums.external_power += force.dot(bob.velocity)
+    if sym.pivot_acc is not None:
+        sums.support_force += force
 
 
 def _add_link_rotation(b: _Builder, sums: _Sums, sym: _Symbols, i: int, frame: _Frame) -> None:
@@ -363,9 +414,13 @@ def derive(scene: Scene) -> Equations:
         if link.has_bob:
             _add_particle(sums, sym, sym.params[f"m{i}"], lower)
             bobs.append(lower.position)
+        if link.bob_force:
+            _add_bob_force(sums, sym, i, lower)
         if link.has_mass:
             _add_link_rotation(b, sums, sym, i, frame)
         parent = _Parent(frame, lower, quaternion)
+    if scene.joint_damping:
+        sums.force_terms = [f + q for f, q in zip(sums.force_terms, joint_damping(scene)[0])]
     mass_matrix, forcing = _mass_matrix_and_forcing(scene, sums, sym.dim)
     return Equations(
         scene=scene,
@@ -378,6 +433,7 @@ def derive(scene: Scene) -> Equations:
         outputs=_outputs(scene, sums, bobs, poses),
         momentum=sm.Matrix.hstack(*sums.momentum) if scene.coupling else None,
         total_mass=sums.total_mass if scene.coupling else None,
+        work_rates=_work_rates(scene, sym, sums),
     )
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import functools
 
-from ..scene import APPARENT_MASS, FREE_FORCE, PIVOT_OUTPUTS, Scene
+from ..scene import APPARENT_MASS, FREE_FORCE, PIVOT_INPUTS, PIVOT_OUTPUTS, Scene
 
 Dependencies = dict[str, frozenset[str]]  # computed variable -> the knowns it depends on
 
@@ -72,12 +72,12 @@ def _symbolic(scene: Scene, eqs) -> Dependencies:
     }
     result |= {f"der({names[k]})": frozenset({names[k + dim]}) for k in range(dim)}  # q' = u
     result |= {f"der({names[dim + k]})": rate_of[eqs.rates[k]] for k in range(dim)}
+    result |= {f"der({name})": resolved(rate) for name, rate in zip(scene.work_names(), eqs.work_rates)}
     if scene.coupling:
-        inputs = set(scene.input_names())
         everything = frozenset().union(*rate_of.values())
         momentum = frozenset().union(*(of(entry) for entry in eqs.momentum), of(eqs.total_mass))
         whole_mass = frozenset().union(*(of(mass[i, j]) for i in range(dim) for j in range(dim)))
-        result |= dict.fromkeys(FREE_FORCE, frozenset(everything - inputs))  # F_pivot at a_pivot = 0
+        result |= dict.fromkeys(FREE_FORCE, everything - set(PIVOT_INPUTS))  # F_pivot at a_pivot = 0
         result |= dict.fromkeys(APPARENT_MASS, momentum | whole_mass)  # m I - P M^-1 P^T
     return result
 
@@ -108,7 +108,10 @@ def _chain(scene: Scene) -> Dependencies:
     angles = [frozenset({f"alpha{i}", f"beta{i}"}) for i in range(n)]
     above = [frozenset().union(*angles[: i + 1]) for i in range(n)]  # orientation of link i
     lengths = [frozenset(f"l{k}" for k in range(i + 1)) for i in range(n)]
-    everything = frozenset(scene.state_names()) | parameters | set(scene.input_names())
+    inputs, works = set(scene.input_names()), set(scene.work_names())
+    damping = {s.name for s in scene.parameter_scalars() if s.quantity == "c"}  # joint damping
+    everything = frozenset(scene.state_names()) | parameters | inputs
+    motion = everything - works  # the chain's motion; the energy's books follow it
     result = {}
     for scalar in scene.output_scalars():
         i = scalar.link
@@ -120,15 +123,36 @@ def _chain(scene: Scene) -> Dependencies:
         elif scalar.stem == "link":  # the orientation quaternion
             result[scalar.name] = above[i]
         elif scalar.name == "energy":
-            result[scalar.name] = everything - set(scene.input_names())
+            result[scalar.name] = motion - inputs - damping
         elif scalar.name in PIVOT_OUTPUTS:
-            result[scalar.name] = everything
+            result[scalar.name] = motion
         elif scalar.name in FREE_FORCE:
-            result[scalar.name] = everything - set(scene.input_names())
+            result[scalar.name] = motion - set(PIVOT_INPUTS)
         elif scalar.name in APPARENT_MASS:
-            result[scalar.name] = above[n - 1] | (parameters - {"g"})
+            result[scalar.name] = above[n - 1] | (parameters - {"g"} - damping)
     names = scene.state_names()
     dim = 2 * n
     result |= {f"der({names[k]})": frozenset({names[k + dim]}) for k in range(dim)}
-    result |= {f"der({names[dim + k]})": everything for k in range(dim)}
+    result |= {f"der({names[dim + k]})": motion for k in range(dim)}
+    result |= _work_rates(scene, above, lengths)
     return result
+
+
+def _work_rates(scene: Scene, above, lengths) -> Dependencies:
+    """The energy's books' rates: each force's power, its size times the velocity of where
+    it acts (a point of link i moves with the joints and lengths down to i)."""
+    n = scene.n
+    rates = [frozenset({f"omega{i}", f"delta{i}"}) for i in range(n)]
+    moving = [above[i] | frozenset().union(*rates[: i + 1]) | lengths[i] for i in range(n)]
+
+    def of_kind(*quantities):
+        return {s.name for s in scene.parameter_scalars() if s.quantity in quantities}
+
+    powers = {
+        "W_damping": of_kind("c") | frozenset().union(*rates),  # c w_rel^2: the rates alone
+        "W_external": frozenset().union(
+            *(moving[i] | {f"F_bob{i}_{c}" for c in "xyz"} for i in scene.forced_bobs())
+        ),
+        "W_pivot": moving[n - 1] | of_kind("m", "M") | set(PIVOT_INPUTS),  # -m a_pivot . v
+    }
+    return {f"der({name})": frozenset(powers[name]) for name in scene.work_names()}

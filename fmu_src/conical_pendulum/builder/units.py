@@ -56,8 +56,10 @@ UNITS = {
         Unit("kg.m2", {"kg": 1, "m": 2}, "MomentOfInertia"),
         Unit("N", {"kg": 1, "m": 1, "s": -2}, "Force"),
         Unit("J", {"kg": 1, "m": 2, "s": -2}, "Energy"),
+        Unit("J/s", {"kg": 1, "m": 2, "s": -3}, "Power"),  # the energy's books' rates
         Unit("N/m", {"kg": 1, "s": -2}, "TranslationalSpringConstant"),
         Unit("N.s/m", {"kg": 1, "s": -1}, "TranslationalDampingConstant"),
+        Unit("N.m.s/rad", {"kg": 1, "m": 2, "s": -1, "rad": -1}, "RotationalDampingConstant"),
         Unit("rad", {"rad": 1}, "Angle", DisplayUnit("deg", DEGREES)),
         Unit("rad/s", {"rad": 1, "s": -1}, "AngularVelocity", DisplayUnit("deg/s", DEGREES)),
         Unit("rad/s2", {"rad": 1, "s": -2}, "AngularAcceleration", DisplayUnit("deg/s2", DEGREES)),

@@ -24,7 +24,7 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields, replace
 
 from ..runtime.rules import RULES, SETTINGS, STATISTICS, rule_of
-from ..scene import Scalar, Scene
+from ..scene import WORKS, Scalar, Scene
 from .structure import dependencies
 
 BACKENDS = ("pythonfmu", "native")
@@ -160,6 +160,33 @@ DESCRIBED = {
     "omega": Described("rad/s", "{of}' [{unit}]", "alpha"),
     "delta": Described("rad/s", "{of}' [{unit}]", "beta"),
     "g": Described("m/s2", "gravitational acceleration along -Y [{unit}]"),
+    "c": Described(
+        "N.m.s/rad",
+        "viscous damping coefficient of joint {link}: a torque -c w_rel on link {link}, w_rel its "
+        "angular velocity relative to its parent (and +c w_rel on the parent) [{unit}]",
+    ),
+    "W_damping": Described(
+        "J",
+        "work done on the chain by the joints' damping since the start (<= 0); energy minus the "
+        "W_ outputs' sum stays constant [{unit}]",
+    ),
+    "W_external": Described(
+        "J",
+        "work done on the chain by the forces applied to the bobs (F_bob) since the start, with "
+        "velocities relative to the pivot; energy minus the W_ outputs' sum stays constant [{unit}]",
+    ),
+    "W_pivot": Described(
+        "J",
+        "work done on the chain by the moving pivot since the start: of the inertial force -m a_pivot "
+        "on every mass, relative to the pivot as the energy is; energy minus the W_ outputs' sum "
+        "stays constant [{unit}]",
+    ),
+    **_axes(
+        "force applied to bob {{link}}, inertial {axis} (Y up) [{unit}]; held constant over each "
+        "communication step",
+        "N",
+        {f"F_bob_{c}": c for c in "xyz"},
+    ),
     "energy": Described(
         "J", "total mechanical energy relative to the pivot (kinetic + potential, zero at Y = 0) [{unit}]"
     ),
@@ -177,7 +204,8 @@ DESCRIBED = {
     ),
     **_axes(
         "force the pendulum would exert on a support at rest (a_pivot = 0), inertial {axis} (Y up) "
-        "[{unit}]: F_pivot = F_free - M_app a_pivot; depends on the state only",
+        "[{unit}]: F_pivot = F_free - M_app a_pivot; depends on the state (and the bobs' applied "
+        "forces) only",
         "N",
         {f"F_free_{c}": c for c in "xyz"},
     ),
@@ -258,6 +286,12 @@ def _frequency(scene: Scene) -> float:
     return math.sqrt(abs(scene.gravity) / sum(link.length for link in scene.links)) or 1.0
 
 
+def _weight_times_length(scene: Scene) -> float:
+    """The scale of the energy's books: the chain's weight lifted by its length (1 where g = 0)."""
+    mass = sum(link.bob_mass * link.has_bob + link.mass * link.has_mass for link in scene.links)
+    return abs(scene.gravity) * mass * sum(link.length for link in scene.links) or 1.0
+
+
 # The states' nominal values (FMI's scale, e.g. absoluteTolerance = nominal * tolerance * 0.01):
 # an angle's scale is a radian; a rate's, a radian at the chain's natural frequency (one value
 # per quantity, so that an FMI 3.0 array has one).
@@ -266,6 +300,7 @@ NOMINAL = {
     "beta": lambda scene: 1.0,
     "omega": _frequency,
     "delta": _frequency,
+    **dict.fromkeys(WORKS, _weight_times_length),
 }
 
 

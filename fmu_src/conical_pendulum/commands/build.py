@@ -10,6 +10,7 @@ from fmpy.util import write_csv
 
 from ..builder import fmu as fmus
 from ..errors import UserError
+from ..runtime.rules import LINK_RULES, RULES, satisfies
 from ..scene import KINEMATICS, MAX_LINKS, Scene, SceneError, load_scene
 from ..viz import plots
 from .common import CHECK_BOUND, compare
@@ -45,6 +46,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="inputs a_pivot_x/y/z (the support's acceleration) and outputs "
         "F_pivot_x/y/z (the force on it), with its split F_free_x/y/z, M_pivot_xx..zz",
+    )
+    scene.add_argument(
+        "--joint-damping",
+        type=float,
+        metavar="C",
+        help="a viscous torque -C w_rel at every joint [N m s/rad]: parameters c0.. (start C) and "
+        "the state W_damping, its work, so that energy - W_damping stays constant",
     )
     parser.add_argument(
         "--output",
@@ -121,9 +129,13 @@ def choose_scene(args) -> Scene:
             ("--no-bobs", args.no_bobs),
             ("--kinematics", args.kinematics is not None),
             ("--coupling", args.coupling),
+            ("--joint-damping", args.joint_damping is not None),
         ]
         if given
     ]
+    damping_rule = RULES[LINK_RULES["damping"]]
+    if args.joint_damping is not None and not satisfies(LINK_RULES["damping"], args.joint_damping):
+        raise UserError(f"--joint-damping: must be {damping_rule.wanted}, got {args.joint_damping!r}")
     if args.scene:
         if options:
             raise UserError(f"--scene describes the whole scene; drop {', '.join(options)}")
@@ -134,6 +146,7 @@ def choose_scene(args) -> Scene:
         bobs=not args.no_bobs,
         kinematics=args.kinematics or "consistent",
         coupling=args.coupling,
+        damping=args.joint_damping,
     )
 
 

@@ -8,9 +8,12 @@ import argparse
 import time
 from pathlib import Path
 
+import numpy as np
+
 from ..analysis import compare as comparison
 from ..builder import fmu as fmus
 from ..errors import UserError
+from ..viz.plots import books_drift
 
 # the check's rule, for the commands' help (analysis/compare.py measures the bound)
 CHECK_BOUND = (
@@ -105,6 +108,14 @@ def compare(fmu: Path, scene, stop_time: float = 10.0, interval: float = 1.0 / 6
         f"({time.perf_counter() - start:.1f} s):"
     )
     print(result.report())
+    if "energy" in result.names:
+        works = scene.work_names()
+        run = {name: result.result[name] for name in result.result.dtype.names}
+        drift = np.abs(books_drift(run)).max()
+        print(
+            ("energy" + "".join(f" - {name}" for name in works) if works else "the energy")
+            + f" stays constant to {drift:.1e} of the energy (the FMU's run)"
+        )
     ok = result.passed()
     print(result.bound.describe())
     print(

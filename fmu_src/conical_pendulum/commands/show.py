@@ -18,17 +18,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--plot", type=Path, metavar="PNG", help="PNG of angles, paths from above and energy")
     parser.add_argument("--gif", type=Path, metavar="GIF", help="animated GIF of the chain in 3D")
+    parser.add_argument(
+        "--books",
+        type=Path,
+        metavar="PNG",
+        help="PNG of the energy's books: energy, each force's work, energy less the work (scenes with forces)",
+    )
     parser.add_argument("--fps", type=float, default=30.0, help="frames per simulated second (30)")
 
 
 def run(args) -> int:
     """The plot and/or the animation of a results CSV; what the results cannot give is left
     out, and said in one line."""
-    if not (args.plot or args.gif):
-        raise UserError("give --plot and/or --gif")
+    if not (args.plot or args.gif or args.books):
+        raise UserError("give --plot, --gif and/or --books")
     if not args.fps > 0:
         raise UserError(f"--fps: must be positive, got {args.fps:g}")
-    for option, path in (("--plot", args.plot), ("--gif", args.gif)):
+    for option, path in (("--plot", args.plot), ("--gif", args.gif), ("--books", args.books)):
         if path and path.is_dir():
             raise UserError(f"{option} {path}: is a directory")
         if path and not path.parent.is_dir():
@@ -40,6 +46,9 @@ def run(args) -> int:
         if args.plot:
             plots.plot(results, args.plot)
             print(f"wrote {args.plot}")
+        if args.books:
+            plots.books(results, args.books)
+            print(f"wrote {args.books}")
         if args.gif and "the animation" not in lacking:
             seconds = plots.animate(results, args.gif, fps=args.fps)
             print(f"wrote {args.gif} in {seconds:.1f} s")

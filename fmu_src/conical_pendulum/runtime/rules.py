@@ -104,6 +104,7 @@ QUANTITIES = {
     "Ixx": ("non-negative", "a moment of inertia"),
     "Iyy": ("non-negative", "a moment of inertia"),
     "Izz": ("non-negative", "a moment of inertia"),
+    "c": ("non-negative", "a joint damping coefficient"),  # a negative one would feed energy in
     "rtol": ("relative-tolerance", "a relative tolerance"),
     "atol": ("positive", "a tolerance"),
     "max_step": ("non-negative", "the largest internal step"),
@@ -122,6 +123,7 @@ LINK_RULES = {
     "length": QUANTITIES["l"][0],
     "mass": QUANTITIES["M"][0],
     "bob_mass": QUANTITIES["m"][0],
+    "damping": QUANTITIES["c"][0],
     "radius": "positive",
     "bob_radius": "positive",
 }

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import UserError
 from ..progress import WIDTH, bar
+from ..scene import WORKS
 
 NO_CHAIN = (
     "the results have neither link poses (link<i>_x/y/z, the scene's output 'poses') "
@@ -225,13 +226,52 @@ def figure(results: dict):
         if not stretched:
             above.set_aspect("equal", adjustable="datalim")
     if "energy" in results:
-        energy = results["energy"]
-        drift.plot(t, (energy - energy[0]) / abs(energy[0]))
-        drift.set(xlabel="time [s]", ylabel="(E - E0) / |E0|", title="energy drift")
+        drift.plot(t, books_drift(results))
+        works = [name for name in WORKS if name in results]
+        drift.set(
+            xlabel="time [s]",
+            ylabel="(B - B0) / |E0|, B = E" + "".join(f" - {name}" for name in works),
+            title="energy drift" + (", less the forces' work (the energy's books)" if works else ""),
+        )
     else:
         drift.set_axis_off()
         drift.text(0.5, 0.5, "no energy output", ha="center", transform=drift.transAxes)
     return fig
+
+
+def books(results: dict, path) -> None:
+    """The energy's books of a run as a PNG: the energy, the work of each force the results
+    keep books of (W_damping, W_external, W_pivot), and the energy less that work, which
+    stays constant; below, its drift (books_drift)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    works = [name for name in WORKS if name in results]
+    if "energy" not in results or not works:
+        raise UserError("results: the energy's books need the energy and a W_ output (a scene with forces)")
+    t, energy = results["time"], results["energy"]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 7), sharex=True, height_ratios=(3, 1))
+    top.plot(t, energy - energy[0], label="energy E - E0", lw=1.6)
+    for name in works:
+        top.plot(t, results[name], label=f"{name} (work done on the chain)", lw=1.2)
+    kept = energy - sum(results[name] for name in works)
+    top.plot(t, kept - kept[0], "k--", label="E - " + " - ".join(works) + " (less its start)", lw=1.2)
+    top.set(ylabel="[J]", title="the energy's books")
+    top.legend(fontsize=8)
+    bottom.plot(t, books_drift(results), "k", lw=0.8)
+    bottom.set(xlabel="time [s]", ylabel="drift / |E0|")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def books_drift(results) -> np.ndarray:
+    """(B - B0) / |E0| with B the energy less the work of the forces the results keep books of
+    (W_damping, ...): constant to the solver's accuracy, where the energy alone is not."""
+    books = results["energy"] - sum((results[name] for name in WORKS if name in results), 0.0)
+    return (books - books[0]) / abs(results["energy"][0])
 
 
 def chain_figure(points: np.ndarray, size: float = 5.0):

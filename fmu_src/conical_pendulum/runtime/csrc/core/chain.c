@@ -142,6 +142,13 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
             add_body(k, p[lp->M], half, Ic);
         }
         if (lp->m >= 0) add_body(k, p[lp->m], k->r, NULL);
+#ifdef CP_BOB_FORCES
+        if (cp_bob_force[i] >= 0) {  /* an applied force F at the bob: [r x F; F] less */
+            const cp_real *F = p + cp_bob_force[i];
+            cross(k->r, F, t);
+            for (int j = 0; j < 3; j++) k->b[j] -= t[j], k->b[3 + j] -= F[j];
+        }
+#endif
     }
 }
 
@@ -193,6 +200,11 @@ static int articulate(cp_model *model, const cp_real *x, Link *links)
                 k->uu[r] -= k->E[j * 2 + r] * k->pA[j];
             }
         }
+#ifdef CP_DAMPING_INDEX
+        /* the joint's damping torque -c w_rel: generalized forces -c (omega, delta), as the
+           joint's axes are orthonormal (builder.model.joint_damping) */
+        for (int r = 0; r < 2; r++) k->uu[r] -= p[CP_DAMPING_INDEX + i] * x[(2 + r) * n + i];
+#endif
         /* LDL^T pivots of this joint's 2x2 articulated inertia: a cheap condition estimate,
            of the real parts (real.h) */
         const double d1 = CP_RE(D[0]),
@@ -279,11 +291,58 @@ static int accelerate(cp_model *model, const cp_real *x, const Link *links, cp_r
     return CP_OK;
 }
 
+#ifdef CP_NWORK
+/* The energy's books: each force's power, in Scene.work_names' order (CP_WORK_*: -1 for
+ * those the scene has not), with velocities relative to the pivot as the energy's. */
+static void work_rates(const cp_real *x, const cp_real *p, const Link *links, cp_real *dW)
+{
+    const int n = CP_NLINK;
+    (void)x, (void)p, (void)links, (void)n;
+#if CP_WORK_DAMPING >= 0
+    cp_real damping = 0;  /* -c (omega^2 + delta^2) per joint (articulate) */
+    for (int i = 0; i < n; i++)
+        damping -= p[CP_DAMPING_INDEX + i] * (x[2 * n + i] * x[2 * n + i] + x[3 * n + i] * x[3 * n + i]);
+    dW[CP_WORK_DAMPING] = damping;
+#endif
+#if CP_WORK_EXTERNAL >= 0 || CP_WORK_PIVOT >= 0
+    cp_real momentum[3] = {0, 0, 0};
+#ifdef CP_BOB_FORCES
+    cp_real external = 0;
+#endif
+    for (int i = 0; i < n; i++) {
+        const Link *k = &links[i];
+        const cp_link_params *lp = &cp_links[i];
+        cp_real wr[3];
+        cross(k->w, k->r, wr);
+        for (int j = 0; j < 3; j++) {
+            if (lp->M >= 0) momentum[j] += p[lp->M] * (k->vel[j] + wr[j] / 2);
+            if (lp->m >= 0) momentum[j] += p[lp->m] * (k->vel[j] + wr[j]);
+        }
+#ifdef CP_BOB_FORCES
+        if (cp_bob_force[i] >= 0)
+            for (int j = 0; j < 3; j++) external += p[cp_bob_force[i] + j] * (k->vel[j] + wr[j]);
+#endif
+    }
+#ifdef CP_BOB_FORCES
+    dW[CP_WORK_EXTERNAL] = external;
+#endif
+#if CP_WORK_PIVOT >= 0  /* the inertial force -m a_pivot on every mass */
+    dW[CP_WORK_PIVOT] = -(p[CP_PIVOT_INDEX] * momentum[0] + p[CP_PIVOT_INDEX + 1] * momentum[1]
+                          + p[CP_PIVOT_INDEX + 2] * momentum[2]);
+#endif
+#endif
+}
+#endif
+
 int cp_chain_rhs(cp_model *model, const cp_real *x, cp_real *dx)
 {
     Link links[CP_NLINK];
     int status = articulate(model, x, links);
-    return status ? status : accelerate(model, x, links, dx);
+    if (!status) status = accelerate(model, x, links, dx);
+#ifdef CP_NWORK
+    if (!status) work_rates(x, model->p, links, dx + 2 * CP_NDOF);
+#endif
+    return status;
 }
 
 #if CP_PIVOT_INDEX >= 0
@@ -349,6 +408,10 @@ void cp_mass_forcing(const cp_real *x, const cp_real *p, cp_real *M, cp_real *F)
         ud[c] = 0.0;
         for (int r = 0; r < CP_NDOF; r++) M[r * CP_NDOF + c] = tau[r] + F[r];
     }
+#ifdef CP_DAMPING_INDEX
+    /* the joints' damping, -c (omega, delta) (articulate) */
+    for (int k = 0; k < CP_NDOF; k++) F[k] -= p[CP_DAMPING_INDEX + k % CP_NLINK] * x[CP_NDOF + k];
+#endif
 }
 
 #if CP_OUTPUT_POSES
@@ -436,6 +499,10 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
             for (int j = 0; j < 3; j++) force[j] -= p[index] * (ai[3 + j] + t[j] + wwc[j]);
             force[1] -= p[index] * p[CP_G_INDEX];
         }
+#ifdef CP_BOB_FORCES
+        if (cp_bob_force[i] >= 0)  /* what the bob's applied force passes on to the support */
+            for (int j = 0; j < 3; j++) force[j] += p[cp_bob_force[i] + j];
+#endif
     }
     for (int j = 0; j < 3; j++) *out++ = force[j];
 #endif

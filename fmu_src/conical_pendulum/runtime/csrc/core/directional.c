@@ -17,6 +17,7 @@
 #define cp_outputs cp_outputs_cs
 #define cp_joint cp_joint_cs
 #define cp_momentum cp_momentum_cs
+#define cp_work_rates cp_work_rates_cs
 #define cp_chain_rates_and_apparent_mass cp_chain_rates_and_apparent_mass_cs
 
 #include "model.c"

@@ -88,15 +88,21 @@ static int expanded_rates(cp_model *model, const cp_real *x, cp_real *dx, cp_rea
 int cp_rhs(void *ctx, const cp_real *x, cp_real *dx)
 {
 #if CP_RECURSIVE
-    return cp_chain_rhs((cp_model *)ctx, x, dx);
+    int status = cp_chain_rhs((cp_model *)ctx, x, dx);
 #else
     cp_real M[CP_NDOF * CP_NDOF];
     int perm[CP_NDOF];
-    return expanded_rates((cp_model *)ctx, x, dx, M, perm);
+    int status = expanded_rates((cp_model *)ctx, x, dx, M, perm);
 #endif
+#if defined(CP_NWORK) && !CP_RECURSIVE
+    /* the energy's books: each added force's power, the rate of its work (the recursive
+       formulation's cp_chain_rhs gives them from its own kinematics) */
+    if (!status) cp_work_rates(x, ((cp_model *)ctx)->p, dx + 2 * CP_NDOF);
+#endif
+    return status;
 }
 
-#if CP_NINPUT
+#if CP_FORCE_OUTPUT >= 0
 /* x' and the chain's apparent mass at the pivot, M_app (3x3, row-major): in the expanded
  * formulation m I - P M^-1 P^T (model.h's cp_momentum: u' answers a_pivot through
  * M^-1 (-P^T), the pivot force through -m a_pivot - P u'), in the recursive one from the
@@ -126,14 +132,15 @@ static int rates_and_apparent_mass(cp_model *model, const cp_real *x, cp_real *d
 }
 
 /* F_pivot = F_free - M_app a_pivot, exactly affine in the pivot's acceleration (the
- * inputs, last in p): F_free is the pivot force at a = 0, so both depend on the state
- * only. out: F_free, then the upper triangle of M_app (of its symmetric mean); NaN where
- * the mass matrix is singular. */
+ * first inputs, after the parameters in p): F_free is the pivot force at a = 0, so both
+ * depend on the state (and F_free on the bobs' applied forces, the inputs after them).
+ * out: F_free, then the upper triangle of M_app (of its symmetric mean); NaN where the
+ * mass matrix is singular. */
 static void free_force_and_apparent_mass(const cp_real *x, const cp_real *p, cp_real *out)
 {
     cp_real q[CP_NPARAM], dx[CP_NSTATE], y[CP_NOUTPUT], M[9];
     memcpy(q, p, sizeof q);
-    for (int j = 0; j < CP_NINPUT; j++) q[CP_NPARAM - CP_NINPUT + j] = 0.0;
+    for (int j = 0; j < 3; j++) q[CP_NPARAM - CP_NINPUT + j] = 0.0;
     cp_model model = {q, 1.0, -1};
     if (rates_and_apparent_mass(&model, x, dx, M)) {
         for (int k = 0; k < 9; k++) out[k] = NAN;
@@ -158,7 +165,7 @@ void cp_eval_outputs(const cp_real *x, const cp_real *p, cp_real *y)
 #else
     cp_outputs(x, p, NULL, y);
 #endif
-#if CP_NINPUT
+#if CP_FORCE_OUTPUT >= 0
     free_force_and_apparent_mass(x, p, y + CP_FORCE_OUTPUT + 3);
 #endif
 }

@@ -1,0 +1,72 @@
+"""What each force a scene adds costs a right-hand side, against the same chain without it.
+
+    python benchmarks/force_cost.py
+
+The seed chain (3 links, expanded equations) and a 10-link chain (recursive formulation),
+each without options, with joint damping (joint_damping: the torques and W_damping), with
+forces on every bob (bob_force: the inputs F_bob<i>, their generalized forces and
+W_external), and with both; all with a moving support (coupling), so that the pivot's work
+W_pivot is in the books of every variant with a force. The right-hand side (x', the books'
+rates included) is timed in a C loop (core.seconds_per_call), medians of 7 repeats taken in
+turn, at a state off equilibrium with nonzero inputs. Prints the table docs/model.md shows
+and writes benchmarks/results/force_cost.csv.
+"""
+
+import numpy as np
+
+from conical_pendulum import Link, Scene
+from conical_pendulum.builder.compiler import load_core
+from results_csv import write_rows
+
+CHAINS = {"3 links, expanded": (3, "expanded"), "10 links, recursive": (10, "recursive")}
+OPTIONS = {
+    "none": {},
+    "joint damping": {"damping": 2.0},
+    "bob forces": {"bob_force": True},
+    "damping + bob forces": {"damping": 2.0, "bob_force": True},
+}
+REPEATS, CALLS = 7, 100_000
+
+
+def scene(n: int, formulation: str, option: dict) -> Scene:
+    return Scene(
+        links=(Link(**option),) * n,
+        joint_damping="damping" in option,
+        coupling=True,
+        formulation=formulation,
+    )
+
+
+def main():
+    rows = []
+    for chain, (n, formulation) in CHAINS.items():
+        cases = {}
+        for label, option in OPTIONS.items():
+            s = scene(n, formulation, option)
+            core = load_core(s)
+            x = np.array(s.initial_state()) + np.linspace(0.1, 0.3, core.NSTATE)
+            p = np.array(s.parameters())
+            p[len(s.parameter_names()) :] = np.linspace(1.0, 5.0, len(s.input_names()))
+            cases[label] = (core, x, p, len(s.state_names()))
+        seconds = {label: [] for label in cases}
+        for _ in range(REPEATS):  # in turn, so that the machine's load falls on all alike
+            for label, (core, x, p, _) in cases.items():
+                seconds[label].append(core.seconds_per_call("rhs", x, p, CALLS // n))
+        base = np.median(seconds["none"])
+        for label, (_, _, _, n_state) in cases.items():
+            rhs = float(np.median(seconds[label]))
+            rows.append(
+                {
+                    "chain": chain,
+                    "options": label,
+                    "states": n_state,
+                    "rhs_us": round(rhs * 1e6, 3),
+                    "over_none": round(rhs / base, 2),
+                }
+            )
+            print(f"{chain:<20} {label:<22} {n_state:4d} states {rhs * 1e6:8.3f} us  x{rhs / base:.2f}")
+    write_rows("force_cost", rows)
+
+
+if __name__ == "__main__":
+    main()
