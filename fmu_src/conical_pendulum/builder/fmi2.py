@@ -7,7 +7,7 @@ from __future__ import annotations
 import time
 import xml.etree.ElementTree as ET
 
-from .native_model import LOG_CATEGORIES, Description, Standard
+from .native_model import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
 from .variables import Variable, model_structure
 
 
@@ -42,8 +42,8 @@ def model_description(described: Description) -> bytes:
             "CoSimulation",
             {
                 "canHandleVariableCommunicationStepSize": "true",
-                "canInterpolateInputs": "false",
-                "maxOutputDerivativeOrder": "0",
+                "canInterpolateInputs": "true",
+                "maxOutputDerivativeOrder": str(MAX_DERIVATIVE_ORDER),
             },
         ),
     ):

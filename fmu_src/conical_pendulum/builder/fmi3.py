@@ -18,7 +18,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 from . import c_literals as c
-from .native_model import LOG_CATEGORIES, Description, Standard
+from .native_model import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
 from .variables import Variable, describe, model_structure
 
 TYPES = {"Real": "Float64", "Integer": "Int32"}
@@ -146,7 +146,7 @@ def model_description(described: Description) -> bytes:
         {
             **common,
             "canHandleVariableCommunicationStepSize": "true",
-            "maxOutputDerivativeOrder": "0",
+            "maxOutputDerivativeOrder": str(MAX_DERIVATIVE_ORDER),
             "providesIntermediateUpdate": "false",
             "mightReturnEarlyFromDoStep": "true",
             "canReturnEarlyAfterIntermediateUpdate": "false",
