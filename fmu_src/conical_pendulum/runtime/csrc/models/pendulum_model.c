@@ -32,7 +32,8 @@ struct ModelData {
      * empty array) */
     double input_rates[CP_NINPUT + 1][2];
     /* the first and second time derivatives of the states and outputs (from CP_VR_STATE)
-     * at the current values, when rates_valid */
+     * at the current values: the outputs' to order rates_valid (0, 1 or 2), the states' to 2
+     * once it is 1 */
     double rates[CP_NSTATE + CP_NOUTPUT][2];
     int rates_valid;
 };
@@ -365,33 +366,37 @@ void model_set_input_derivative(ModelData *m, unsigned vr, int order, double val
     *rate = value;
 }
 
-/* The first and second time derivatives of the states and outputs: x' = f, x'' = f' (x', u')
- * and y' = y' (x', u') by one complex step (cp_directional along (x', u')), y'' = y''[(x',
- * u'), (x', u')] + y' (x'', u'') by cp_second_directional. */
-static ModelStatus time_rates(ModelData *m, double time, char *message, size_t size)
+/* The time derivatives of the states and outputs to order (m->rates_valid: the order they are
+ * valid to): x' = f, x'' = f' (x', u') and y' = y' (x', u') by one complex step (cp_directional
+ * along (x', u')); y'' = y''[(x', u'), (x', u')] + y' (x'', u'') by cp_second_directional, only
+ * when asked (two evaluations in long double complex, some 50 times one in double complex). */
+static ModelStatus time_rates(ModelData *m, int order, double time, char *message, size_t size)
 {
-    if (m->rates_valid) return MODEL_OK;
+    if (m->rates_valid >= order) return MODEL_OK;
     ModelStatus status = derivatives(m, time, message, size);
     if (status != MODEL_OK) return status;
-    double vp[CP_NPARAM] = {0}, wp[CP_NPARAM] = {0}, x2[CP_NSTATE], y1[CP_NOUTPUT + 1],
-           y2[CP_NOUTPUT + 1], pivot_ratio;
+    double vp[CP_NPARAM] = {0}, wp[CP_NPARAM] = {0}, x2[CP_NSTATE], y[CP_NOUTPUT + 1],
+           pivot_ratio;
     for (int k = 0; k < CP_NINPUT; k++) {
         vp[CP_VR_INPUT + k] = m->input_rates[k][0];  /* the inputs end p (fmu_config.h) */
         wp[CP_VR_INPUT + k] = m->input_rates[k][1];
     }
-    int bad_dof, found = cp_directional(X(m), m->r, m->dx, vp, x2, y1, &pivot_ratio, &bad_dof);
-    if (found == CP_OK)
-        found = cp_second_directional(X(m), m->r, m->dx, vp, x2, wp, y2, &pivot_ratio, &bad_dof);
+    int bad_dof, found = CP_OK;
+    if (m->rates_valid < 1) {
+        found = cp_directional(X(m), m->r, m->dx, vp, x2, y, &pivot_ratio, &bad_dof);
+        for (int k = 0; found == CP_OK && k < CP_NSTATE; k++) {
+            m->rates[k][0] = m->dx[k];
+            m->rates[k][1] = x2[k];
+        }
+        for (int k = 0; found == CP_OK && k < CP_NOUTPUT; k++) m->rates[CP_NSTATE + k][0] = y[k];
+    }
+    if (found == CP_OK && order >= 2) {
+        for (int k = 0; k < CP_NSTATE; k++) x2[k] = m->rates[k][1];
+        found = cp_second_directional(X(m), m->r, m->dx, vp, x2, wp, y, &pivot_ratio, &bad_dof);
+        for (int k = 0; found == CP_OK && k < CP_NOUTPUT; k++) m->rates[CP_NSTATE + k][1] = y[k];
+    }
     if (found != CP_OK) return no_derivatives(time, found, bad_dof, pivot_ratio, message, size);
-    for (int k = 0; k < CP_NSTATE; k++) {
-        m->rates[k][0] = m->dx[k];
-        m->rates[k][1] = x2[k];
-    }
-    for (int k = 0; k < CP_NOUTPUT; k++) {
-        m->rates[CP_NSTATE + k][0] = y1[k];
-        m->rates[CP_NSTATE + k][1] = y2[k];
-    }
-    m->rates_valid = 1;
+    m->rates_valid = order > m->rates_valid ? order : m->rates_valid;
     return MODEL_OK;
 }
 
@@ -399,7 +404,7 @@ ModelStatus model_get_output_derivative(ModelData *m, unsigned vr, int order, do
                                         double time, char *message, size_t size)
 {
     if (vr < CP_VR_STATE || vr >= CP_VR_STATISTICS) return MODEL_NO_VARIABLE;
-    ModelStatus status = time_rates(m, time, message, size);
+    ModelStatus status = time_rates(m, vr < CP_VR_OUTPUT ? 1 : order, time, message, size);
     if (status == MODEL_OK) *value = m->rates[vr - CP_VR_STATE][order - 1];
     return status;
 }
@@ -447,13 +452,16 @@ ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_ret
 const char *model_invalid(const ModelData *m, char *message, size_t size)
 {
     const struct { const char *name; int value; } flags[] = {
-        {"fsal", m->fsal}, {"dx_valid", m->dx_valid}, {"outputs_valid", m->outputs_valid},
-        {"rates_valid", m->rates_valid}};
+        {"fsal", m->fsal}, {"dx_valid", m->dx_valid}, {"outputs_valid", m->outputs_valid}};
     for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
         if (flags[k].value != 0 && flags[k].value != 1) {
             snprintf(message, size, "%s = %d: must be 0 or 1", flags[k].name, flags[k].value);
             return message;
         }
+    if (m->rates_valid < 0 || m->rates_valid > 2) {
+        snprintf(message, size, "rates_valid = %d: must be 0, 1 or 2", m->rates_valid);
+        return message;
+    }
     for (unsigned vr = 0; vr < CP_NREAL; vr++) {
         if (is_output(vr) && !m->outputs_valid) continue;
         if (real_rule_refusal(vr, m->r[vr], message, size)) return message;
@@ -482,8 +490,8 @@ const char *model_invalid(const ModelData *m, char *message, size_t size)
                                 message, size))
                 return message;
         }
-    for (int k = 0; m->rates_valid && k < CP_NSTATE + CP_NOUTPUT; k++)
-        for (int order = 1; order <= 2; order++) {
+    for (int k = 0; k < CP_NSTATE + CP_NOUTPUT; k++)  /* the states' to 2 once rates_valid */
+        for (int order = 1; order <= (k < CP_NSTATE && m->rates_valid ? 2 : m->rates_valid); order++) {
             snprintf(name, sizeof name, "carried derivative %d of %s", order,
                      cp_variable_name(CP_VR_STATE + k));
             if (cp_real_refusal(name, m->rates[k][order - 1], &cp_rules[CP_FINITE_RULE], "",
