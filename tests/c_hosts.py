@@ -15,7 +15,7 @@ SOURCES = {2: HOSTS / "fmi_host.c", 3: HOSTS / "fmi3_host.c"}
 # binaries/<folder> of a platform, as each standard names it
 FOLDERS = {
     2: {"linux64": "linux64", "win64": "win64"},
-    3: {"linux64": "x86_64-linux", "win64": "x86_64-windows"},
+    3: {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux"},
 }
 # the columns of a row the host prints for host_arguments, after time, by the FMI 2.0 names
 OUTPUTS = {2: ["alpha0", "beta2", "bob2_x", "energy"], 3: ["alpha0", "alpha1", "alpha2", "energy"]}
@@ -43,7 +43,7 @@ def compile_host(fmi_version, compiler, output, *extra):
 
 def binary(fmi_version, folder, platform="linux64"):
     """The pendulum's library in an FMU extracted to `folder`."""
-    suffix = ".so" if platform == "linux64" else ".dll"
+    suffix = ".dll" if platform == "win64" else ".so"
     return Path(folder) / "binaries" / FOLDERS[fmi_version][platform] / f"ConicalPendulum{suffix}"
 
 

@@ -52,21 +52,33 @@ def fmu_cache(tmp_path_factory):
 @pytest.fixture(scope="session")
 def built_fmu(fmu_cache):
     """A scene's FMU, built once per run: the pythonfmu FMU by default, or backend="native"
-    (fmi_version 2 or 3, platforms "linux64" and "win64"), with solver settings changed."""
+    (fmi_version 2 or 3, platforms "linux64", "win64" and "aarch64"; FMI 3.0 with arrays or,
+    arrays=False, scalars), with solver settings changed."""
 
-    def get(scene=SEED, backend="pythonfmu", fmi_version=2, settings=None, platforms=("linux64",)):
+    def get(
+        scene=SEED, backend="pythonfmu", fmi_version=2, settings=None, platforms=("linux64",), arrays=True
+    ):
         key = {
-            "kind": f"{backend} FMI {fmi_version}.0" + " +win64" * ("win64" in platforms),
+            "kind": f"{backend} FMI {fmi_version}.0"
+            + "".join(f" +{p}" for p in platforms if p != "linux64")
+            + " scalars" * (not arrays),
             "scene": scene.to_dict(),
             "settings": settings or {},
             "platforms": list(platforms),
+            **({} if arrays else {"arrays": False}),
         }
         return cached(
             fmu_cache,
             key,
             "ConicalPendulum.fmu",
             lambda path: build_fmu(
-                scene, path, settings, backend=backend, platforms=platforms, fmi_version=fmi_version
+                scene,
+                path,
+                settings,
+                backend=backend,
+                platforms=platforms,
+                fmi_version=fmi_version,
+                arrays=arrays,
             ),
         )
 

@@ -61,6 +61,8 @@ def test_builds_the_requested_scene(tmp_path, build):
         ),
         (["--scene", "missing.toml"], "scene file 'missing.toml': No such file or directory"),
         (["--win64"], "--win64: only the native FMU carries a Windows binary; add --native"),
+        (["--native", "--scalars"], "--scalars: only the FMI 3.0 FMU has arrays; add --native --fmi 3"),
+        (["--native", "--aarch64"], "--aarch64: only the FMI 3.0 FMU carries an ARM binary"),
     ],
 )
 def test_refuses_what_it_cannot_build(tmp_path, build, args, message):

@@ -32,11 +32,15 @@ def test_the_cart_fmu_is_valid_and_says_what_depends_on_what(cart_fmu):
     assert (experiment.startTime, experiment.stopTime, experiment.stepSize) == ("0.0", "10.0", "0.01")
     dependencies = {u.variable.name: [v.name for v in u.dependencies] for u in md.outputs}
     # a state is an output of its own value; only a answers the inputs at once
-    assert dependencies == {"x": ["x"], "v": ["v"], "a": ["x", "v", "F_x", "M_x"]}
+    assert dependencies == {"x": ["x"], "v": ["v"], "a": ["F_x", "M_x", "x", "v"]}
     assert {u.variable.name: [v.name for v in u.dependencies] for u in md.derivatives} == {
         "der(x)": ["v"],
-        "der(v)": ["x", "v", "F_x", "M_x"],
+        "der(v)": ["F_x", "M_x", "x", "v"],
     }
+    # at initialization the parameters are knowns too (and the states, exact at their starts)
+    assert {u.variable.name: [v.name for v in u.dependencies] for u in md.initialUnknowns} == {
+        name: ["m_cart", "k_cart", "c_cart", "F_x", "M_x", "x", "v"] for name in ("a", "der(x)", "der(v)")
+    } | {"der(x)": ["v"]}
     starts = {v.name: v.start for v in md.modelVariables if v.start is not None}
     assert starts == {
         **{name: repr(value) for name, (_, value) in cart.PARAMETERS.items()},

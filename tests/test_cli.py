@@ -232,9 +232,9 @@ def test_page_serves_until_interrupted(seed_fmu, tmp_path):
         (["check", "."], "conical-pendulum check: .: Is a directory"),
         (["check", "RESULTS"], "results.csv: not an FMU built by conical_pendulum"),
         (
-            ["system", "--run", "ecos,omsimulator"],
-            "conical-pendulum system: argument --run: unknown tool(s) 'omsimulator'; "
-            "choose from ecospy, ecos, libcosim, fmpy or all",
+            ["system", "--run", "ecos,openmodelica"],
+            "conical-pendulum system: argument --run: unknown tool(s) 'openmodelica'; "
+            "choose from ecospy, ecos, libcosim, fmpy, omsimulator or all",
         ),
         (
             ["system", "--step", "0.3", "--stop-time", "1"],
@@ -591,3 +591,32 @@ def test_a_failed_ecospy_run_is_the_demos_status_1(monkeypatch, capsys, tmp_path
         "explicit",
     )
     assert status == 1 and one_line(err, "demo") == "ecospy failed (exit 3): boom"
+
+
+def test_system_without_omsimulator_says_where_it_looks(monkeypatch, capsys, tmp_path):
+    """No registry offers OMSimulator: the message says where it was looked for, before any build."""
+    from conical_pendulum.demos import ssp_tools
+
+    monkeypatch.setattr(ssp_tools, "omsimulator", lambda: None)
+    status, out, err = run_main(capsys, "system", "--out", tmp_path / "out", "--run", "omsimulator")
+    assert status == 2 and one_line(err, "system") == (
+        "--run omsimulator: needs OMSimulator (OpenModelica's, not on PATH nor in "
+        "../shared/hosts/omsimulator; no package registry offers it)"
+    )
+    assert not out and not list(tmp_path.iterdir())
+
+
+def test_build_without_the_arm_cross_compiler_says_what_to_install(monkeypatch, capsys, tmp_path):
+    which = shutil.which
+    monkeypatch.setattr(
+        shutil, "which", lambda cmd, *a, **k: None if "aarch64" in cmd else which(cmd, *a, **k)
+    )
+    status, _, err = run_main(
+        capsys, "build", "--native", "--fmi", "3", "--aarch64", "--no-check", "--output", tmp_path / "A.fmu"
+    )
+    assert status == 2
+    assert one_line(err, "build") == (
+        "the aarch64-linux binary needs the compiler aarch64-linux-gnu-gcc "
+        "(Debian: apt-get install gcc-aarch64-linux-gnu)"
+    )
+    assert not (tmp_path / "A.fmu").exists()

@@ -80,13 +80,20 @@ def test_same_variables_and_value_references_as_the_fmi2_fmu_per_link_ones_as_ar
     ours, theirs = (read_model_description(str(path)) for path in fmus)
     elements, _ = fmi3_names(fmus[0])
     by_name = {v.name: v for v in ours.modelVariables}
-    types = {"Real": "Float64", "Integer": "Int32"}
+    types = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Enumeration"}
     n_links = by_name["n_links"]
     assert (n_links.type, n_links.causality, n_links.start) == ("UInt64", "structuralParameter", "3")
     for v in theirs.modelVariables:
         array, k = elements.get(v.name, (v.name, None))
         mine = by_name[array]
         assert (mine.type, mine.causality, mine.variability) == (types[v.type], v.causality, v.variability)
+        assert (mine.unit, mine.displayUnit, mine.min, mine.max, mine.nominal) == (
+            v.unit,
+            v.displayUnit,
+            v.min,
+            v.max,
+            v.nominal,
+        )  # builder.units: the same declarations in both versions
         if k is None:
             assert (mine.valueReference, mine.start, mine.dimensions) == (v.valueReference, v.start, [])
             continue

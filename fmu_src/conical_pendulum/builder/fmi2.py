@@ -7,8 +7,10 @@ from __future__ import annotations
 import time
 import xml.etree.ElementTree as ET
 
+from ..runtime.rules import RULES
 from .native_model import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
-from .variables import Variable, model_structure
+from .units import attributes, enumerations, unit_definitions
+from .variables import Structure, Variable, model_structure
 
 
 def model_description(described: Description) -> bytes:
@@ -51,6 +53,8 @@ def model_description(described: Description) -> bytes:
         files = ET.SubElement(interface, "SourceFiles")
         for name in described.sources:
             ET.SubElement(files, "File", name=name)
+    unit_definitions(root, records)
+    type_definitions(root, records)
     categories = ET.SubElement(root, "LogCategories")
     for name, text in LOG_CATEGORIES.items():
         ET.SubElement(categories, "Category", name=name, description=text)
@@ -79,26 +83,59 @@ def _model_variables(variables: ET.Element, records: list[Variable], index: dict
             value["start"] = v.start_text()
         if v.derivative_of:
             value["derivative"] = index[v.derivative_of]
-        ET.SubElement(ET.SubElement(variables, "ScalarVariable", attributes), v.type, value)
+        ET.SubElement(ET.SubElement(variables, "ScalarVariable", attributes), *typed(v, value))
+
+
+def typed(v: Variable, value: dict[str, str]) -> tuple[str, dict[str, str]]:
+    """A variable's type element (Real, Integer, or Enumeration of its declared type) and its
+    attributes: builder.units's (quantity, unit, range, nominal), then `value`'s (start,
+    derivative)."""
+    rule = RULES[v.rule]
+    if rule.items:
+        return "Enumeration", {"declaredType": rule.type_name, **value}
+    return v.type, {**attributes(v), **value}
+
+
+def type_definitions(root: ET.Element, records: list[Variable]) -> None:
+    """<TypeDefinitions>: the enumerations the records use (builder.units.enumerations)."""
+    found = enumerations(records)
+    if not found:
+        return
+    table = ET.SubElement(root, "TypeDefinitions")
+    for name, items in found.items():
+        listed = ET.SubElement(ET.SubElement(table, "SimpleType", name=name), "Enumeration")
+        for value, (item, text) in enumerate(items):
+            ET.SubElement(listed, "Item", name=item, value=str(value), description=text)
 
 
 def _model_structure(element: ET.Element, records: list[Variable], index: dict[str, str]) -> None:
     """ModelStructure by index: builder.variables.model_structure's unknowns, each list in the
-    order of ModelVariables, as FMI 2.0 asks."""
-    structure = model_structure(records)
-    for tag, unknowns in (("Outputs", structure.outputs), ("Derivatives", structure.derivatives)):
+    order of ModelVariables and each entry with its dependencies, as FMI 2.0 asks."""
+    write_structure(element, model_structure(records), index)
+
+
+def write_structure(element: ET.Element, structure: Structure, index: dict[str, str]) -> None:
+    """The lists of an FMI 2.0 ModelStructure (Derivatives only where there are some), every
+    Unknown with its dependencies by index (builder.model_description writes the pythonfmu
+    FMU's with this too)."""
+    for tag, unknowns in (
+        ("Outputs", structure.outputs),
+        ("Derivatives", structure.derivatives),
+        ("InitialUnknowns", structure.initial_unknowns),
+    ):
+        if not unknowns:
+            continue
         listed = ET.SubElement(element, tag)
-        for v in unknowns:
-            dependencies = " ".join(index[name] for name in v.depends_on)
-            ET.SubElement(listed, "Unknown", index=index[v.name], dependencies=dependencies)
-    initial = ET.SubElement(element, "InitialUnknowns")
-    for v in structure.initial_unknowns:
-        ET.SubElement(initial, "Unknown", index=index[v.name])
+        for unknown in unknowns:
+            dependencies = " ".join(index[v.name] for v in unknown.dependencies)
+            ET.SubElement(listed, "Unknown", index=index[unknown.variable.name], dependencies=dependencies)
 
 
 FMI2 = Standard(
     version=2,
     model_description=model_description,
+    # x86 only: FMI 2.0.4 names other platforms by FMI 3.0's tuples (aarch64-linux), FMPy and
+    # OpenModelica load an ARM Linux binary from linux64 (docs/native.md#platforms)
     platform_folders={"linux64": "linux64", "win64": "win64"},
     headers=lambda described: {},
     files=lambda described: {},

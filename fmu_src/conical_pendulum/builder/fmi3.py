@@ -17,8 +17,10 @@ import time
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
+from ..runtime.rules import RULES
 from . import c_literals as c
 from .native_model import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
+from .units import attributes, enumerations, unit_definitions
 from .variables import Variable, describe, model_structure
 
 TYPES = {"Real": "Float64", "Integer": "Int32"}
@@ -100,6 +102,7 @@ def arrays_header(described: Description) -> str:
         dimension=text,
         n_variables=n_variables,
         hidden=c.initializer("1" if k in hidden else "0" for k in range(n_variables)),
+        enumeration=c.initializer("1" if RULES[v.rule].items else "0" for v in records),
     )
 
 
@@ -153,6 +156,14 @@ def model_description(described: Description) -> bytes:
             "hasEventMode": "false",
         },
     )
+    unit_definitions(root, records)
+    found = enumerations(records)
+    if found:
+        table = ET.SubElement(root, "TypeDefinitions")
+        for name, items in found.items():
+            listed = ET.SubElement(table, "EnumerationType", name=name)
+            for value, (item, text) in enumerate(items):
+                ET.SubElement(listed, "Item", name=item, value=str(value), description=text)
     categories = ET.SubElement(root, "LogCategories")
     for category, text in LOG_CATEGORIES.items():
         ET.SubElement(categories, "Category", name=category, description=text)
@@ -203,13 +214,29 @@ def _model_variables(
         }
         if v.initial:
             attributes["initial"] = v.initial
+        tag, values = _values(variable)
+        attributes |= values
         if v.start is not None:
             attributes["start"] = " ".join(m.start_text() for m in variable.members)
         if v.derivative_of:
             attributes["derivative"] = vr[v.derivative_of]
-        element = ET.SubElement(variables, TYPES[v.type], attributes)
+        element = ET.SubElement(variables, tag, attributes)
         if variable.array:
             ET.SubElement(element, "Dimension", valueReference=str(n_variables + 1))
+
+
+def _values(variable: Fmi3Variable) -> tuple[str, dict[str, str]]:
+    """The variable's type (Float64, Int32, or Enumeration of its declared type) and what
+    builder.units says of its values; an array's elements must say the same (FMI 3.0 has one
+    unit, range and nominal per array)."""
+    v = variable.members[0]
+    rule = RULES[v.rule]
+    if rule.items:
+        return "Enumeration", {"declaredType": rule.type_name}
+    said = {m.name: attributes(m) for m in variable.members}
+    if len({tuple(sorted(a.items())) for a in said.values()}) > 1:
+        raise ValueError(f"the elements of {variable.name} differ in unit, range or nominal: {said}")
+    return TYPES[v.type], said[v.name]
 
 
 def _model_structure(
@@ -218,21 +245,28 @@ def _model_structure(
     """ModelStructure by value reference: builder.variables.model_structure's unknowns."""
     structure = model_structure(records)
     # FMI 3.0's order: Output, ContinuousStateDerivative, InitialUnknown, each by value
-    # reference; an array is an unknown where its first element is
-    for tag, unknowns, dependencies in (
-        ("Output", structure.outputs, True),
-        ("ContinuousStateDerivative", structure.derivatives, True),
-        ("InitialUnknown", structure.initial_unknowns, False),
+    # reference; an array is an unknown where its first element is, and depends on what any
+    # of its elements does (providesPerElementDependencies is false)
+    for tag, unknowns in (
+        ("Output", structure.outputs),
+        ("ContinuousStateDerivative", structure.derivatives),
+        ("InitialUnknown", structure.initial_unknowns),
     ):
-        listed = {v.value_reference for v in unknowns}
+        listed = {u.variable.name: u for u in unknowns}
         for variable in variables_:
-            if variable.value_reference not in listed:
+            members = [listed[m.name] for m in variable.members if m.name in listed]
+            if not members:
                 continue
-            attributes = {"valueReference": str(variable.value_reference)}
-            if dependencies:
-                names = [name for m in variable.members for name in m.depends_on]
-                attributes["dependencies"] = " ".join(dict.fromkeys(vr[name] for name in names))
-            ET.SubElement(element, tag, attributes)
+            known = sorted(
+                {vr[k.name]: k.value_reference for u in members for k in u.dependencies}.items(),
+                key=lambda item: item[1],
+            )
+            ET.SubElement(
+                element,
+                tag,
+                valueReference=str(variable.value_reference),
+                dependencies=" ".join(reference for reference, _ in known),
+            )
 
 
 def build_description(sources: list[str], model_identifier: str) -> bytes:
@@ -248,7 +282,7 @@ def build_description(sources: list[str], model_identifier: str) -> bytes:
 
 
 # FMI 3.0's platform tuples for builder.native's platforms (section 2.5.1.1).
-PLATFORM_FOLDERS = {"linux64": "x86_64-linux", "win64": "x86_64-windows"}
+PLATFORM_FOLDERS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux"}
 
 FMI3 = Standard(
     version=3,

@@ -17,7 +17,7 @@ import sys
 import tempfile
 import time
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..runtime.files import MODEL_FILE, MODEL_NAME
@@ -41,15 +41,21 @@ class FmuBuild:
     seconds: float
 
 
-def model_data(scene: Scene, core: CoreBuild, settings: dict, backend: str = "pythonfmu") -> dict:
+def model_data(
+    scene: Scene, core: CoreBuild, settings: dict, backend: str = "pythonfmu", arrays: bool = True
+) -> dict:
     """What the slave reads from MODEL_FILE: the FMU's variables in value-reference order
     (builder.variables, as dicts), the core's file, the settings' start values, and the
-    scene itself (see fmu_scene)."""
+    scene itself (see fmu_scene). arrays=False: no variable in an FMI 3.0 array, each
+    element a scalar of its own (alpha0, alpha1, ...), as in FMI 2.0."""
+    found = variables(scene, settings, backend)
+    if not arrays:
+        found = [replace(v, array=None, index=None) for v in found]
     return {
         "model": MODEL_NAME,
         "description": model_description_text(scene),
         "core": {"module": core.module_name, "file": core.library.name},
-        "variables": [v.to_dict() for v in variables(scene, settings, backend)],
+        "variables": [v.to_dict() for v in found],
         "settings": settings,
         "scene": scene.to_dict(),
     }
@@ -66,13 +72,19 @@ def build_fmu(
     backend: str = "pythonfmu",
     platforms: tuple[str, ...] = ("linux64",),
     fmi_version: int = 2,
+    arrays: bool = True,
 ) -> FmuBuild:
     """The scene's FMU at `output`: the pythonfmu slave (the default), or with
     backend="native" the same C with FMI glue in C (builder.native), with a binary for each
-    of `platforms` ("linux64", and "win64" cross-compiled; the pythonfmu FMU is linux64 only).
-    fmi_version=3 (native only): an FMI 3.0 FMU (builder.fmi3) instead of FMI 2.0."""
+    of `platforms` ("linux64", and cross-compiled "win64" and, FMI 3.0 only, "aarch64-linux";
+    the pythonfmu FMU is linux64 only).
+    fmi_version=3 (native only): an FMI 3.0 FMU (builder.fmi3) instead of FMI 2.0; with
+    arrays=False its per-link quantities are scalars with FMI 2.0's names, for tools that read
+    no FMI 3.0 arrays (OMSimulator reads each array as its first element)."""
     if fmi_version not in (2, 3):
         raise ValueError(f"fmi_version: {fmi_version!r} is not 2 or 3")
+    if not arrays and fmi_version != 3:
+        raise ValueError("arrays: only an FMI 3.0 FMU has arrays; arrays=False needs fmi_version=3")
     if fmi_version == 3 and backend != "native":
         raise ValueError("fmi_version: the pythonfmu FMU is FMI 2.0 only; FMI 3.0 needs backend='native'")
     if backend != "native" and tuple(platforms) != ("linux64",):
@@ -87,7 +99,7 @@ def build_fmu(
     if backend == "native":
         pendulum.check_settings(settings)  # before the core's build
     core = build_core(scene, cache)
-    data = model_data(scene, core, settings, backend)
+    data = model_data(scene, core, settings, backend, arrays)
     if backend == "native":
         pendulum.write_native_fmu(scene, core, data, output, platforms, fmi_version)
         return FmuBuild(output, core, MODEL_NAME, time.perf_counter() - start)

@@ -7,11 +7,16 @@ import zipfile
 from pathlib import Path
 
 from ..scene import Scene
+from .fmi2 import type_definitions, typed, write_structure
+from .units import unit_definitions
 from .variables import Variable, model_structure
 
 
 def complete(fmu: Path, described: list[Variable], library: Path) -> None:
-    """Complete ModelStructure as FMI 2.0 requires; exact start values; this platform only,
+    """Complete ModelStructure as FMI 2.0 requires; exact start values; the units, ranges and
+    the solver's enumeration builder.fmi2 writes (pythonfmu 0.7 has no Enumeration variable:
+    its slave registers solver an Integer, which a host sets with fmi2SetInteger as it sets
+    an enumeration, so only the description changes); this platform only,
     its binary `library` (pythonfmu's export library as built here, builder.pythonfmu_export);
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
@@ -21,7 +26,7 @@ def complete(fmu: Path, described: list[Variable], library: Path) -> None:
     model_structure; each output's dependencies on the inputs, its direct feedthrough, so a
     master knows where an algebraic loop can be) are theirs.
 
-    pythonfmu lists no InitialUnknowns, writes Real starts with 16 digits (a double
+    pythonfmu writes no units and lists no InitialUnknowns, writes Real starts with 16 digits (a double
     needs 17 to round-trip), and packs binaries for every platform it has, while the
     compiled core runs only on the platform that built it.
     """
@@ -41,25 +46,22 @@ def complete(fmu: Path, described: list[Variable], library: Path) -> None:
     root = ET.fromstring(entries["modelDescription.xml"])
     variables = root.find("ModelVariables").findall("ScalarVariable")
     _check_described(variables, described)
-    for var, v in zip(variables, described):
-        real = var.find("Real")
-        if real is not None and real.get("start") is not None:
-            real.set("start", v.start_text())
+    for var, v in zip(variables, described):  # builder.fmi2's type element, pythonfmu's start exact
+        (written,) = list(var)
+        value = {"start": v.start_text()} if written.get("start") is not None else {}
+        var.remove(written)
+        ET.SubElement(var, *typed(v, value))
+    where = [child.tag for child in root].index("CoSimulation") + 1  # FMI 2.0's order of elements
+    definitions = ET.Element("definitions")
+    unit_definitions(definitions, described)
+    type_definitions(definitions, described)
+    for offset, element in enumerate(definitions):
+        root.insert(where + offset, element)
     element = root.find("ModelStructure")
     for child in list(element):
         element.remove(child)
-    structure = model_structure(described)
     index = {v.name: str(v.value_reference + 1) for v in described}  # its place in ModelVariables
-    inputs = {v.name for v in described if v.causality == "input"}
-    outputs = ET.SubElement(element, "Outputs")
-    for v in structure.outputs:  # Co-Simulation only: the state is not a known
-        direct = [index[name] for name in v.depends_on if name in inputs]
-        kinds = {"dependenciesKind": " ".join(["dependent"] * len(direct))} if direct else {}
-        ET.SubElement(outputs, "Unknown", index=index[v.name], dependencies=" ".join(direct), **kinds)
-    if structure.initial_unknowns:
-        initial = ET.SubElement(element, "InitialUnknowns")
-        for v in structure.initial_unknowns:
-            ET.SubElement(initial, "Unknown", index=index[v.name])
+    write_structure(element, model_structure(described), index)  # Co-Simulation: no state a known
     ET.indent(root)
     entries["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
     with zipfile.ZipFile(fmu, "w") as archive:

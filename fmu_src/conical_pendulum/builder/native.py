@@ -56,12 +56,15 @@ def fmi_headers() -> Path:
     return Path(fmpy.__file__).parent / "c-code"
 
 
-# How each platform's binary is compiled from the FMU's sources: Linux natively, Windows
-# cross-compiled with Debian's mingw-w64 (gcc-mingw-w64-x86-64).
+# How each platform's binary is compiled from the FMU's sources: Linux x86-64 natively,
+# Windows and Linux on 64-bit ARM cross-compiled with Debian's compilers (CROSS_PACKAGES).
+_LINUX = (".so", ["-lm", "-Wl,-z,defs"])
 COMPILERS = {
-    "linux64": (["cc", "-fPIC", "-fvisibility=hidden"], ".so", ["-lm", "-Wl,-z,defs"]),
+    "linux64": (["cc", "-fPIC", "-fvisibility=hidden"], *_LINUX),
     "win64": (["x86_64-w64-mingw32-gcc"], ".dll", ["-static-libgcc"]),
+    "aarch64-linux": (["aarch64-linux-gnu-gcc", "-fPIC", "-fvisibility=hidden"], *_LINUX),
 }
+CROSS_PACKAGES = {"win64": "gcc-mingw-w64-x86-64", "aarch64-linux": "gcc-aarch64-linux-gnu"}
 
 
 def compile_binary(
@@ -93,7 +96,7 @@ def compile_binary(
     if shutil.which(compiler[0]) is None:
         raise UserError(
             f"the {platform} binary needs the compiler {compiler[0]}"
-            + (" (Debian: apt-get install gcc-mingw-w64-x86-64)" if platform == "win64" else "")
+            + (f" (Debian: apt-get install {CROSS_PACKAGES[platform]})" if platform in CROSS_PACKAGES else "")
         )
     run = subprocess.run(command, check=False, capture_output=True, text=True)
     if run.returncode:
@@ -137,6 +140,12 @@ def write_model_fmu(
     buildDescription.xml) from data's variables, a binary per platform, and model.json in its
     resources."""
     standard = STANDARDS[fmi_version]
+    for platform in platforms:
+        if platform not in standard.platform_folders:
+            raise ValueError(
+                f"platforms: FMI {fmi_version}.0 names no binaries folder for {platform!r} "
+                f"(it has {', '.join(standard.platform_folders)}): docs/native.md#platforms"
+            )
     shipped = glue_sources(model, fmi_version)
     described = Description(model, data, records(data), guid_of(model, data, fmi_version), shipped)
     output.parent.mkdir(parents=True, exist_ok=True)

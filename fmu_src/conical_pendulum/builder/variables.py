@@ -19,11 +19,13 @@ The statistics' order is runtime.rules.STATISTICS's, which the C indexes by name
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 
-from ..runtime.rules import SETTINGS, STATISTICS, rule_of
-from ..scene import PIVOT_OUTPUTS, Scalar, Scene
+from ..runtime.rules import RULES, SETTINGS, STATISTICS, rule_of
+from ..scene import Scalar, Scene
+from .structure import dependencies
 
 BACKENDS = ("pythonfmu", "native")
 
@@ -43,12 +45,13 @@ class Variable:
     start: float | int | None
     rule: str  # runtime.rules.RULES's key: the values it takes
     description: str
-    depends_on: tuple[str, ...] = ()  # an unknown's dependencies on knowns (ModelStructure)
+    depends_on: tuple[str, ...] = ()  # an unknown's knowns (parameters, inputs, states): ModelStructure
     group: str = ""  # the GROUPS entry it belongs to
     derivative_of: str | None = None  # der(x): the state x
     quantity: str = ""  # what it is whatever its link (l for l0, bob_x for bob2_x): its rule's key
     link: int | None = None  # the link it belongs to, if any
-    unit: str | None = None  # SI, as the description writes it (m, rad/s, kg m2, N s/m)
+    unit: str | None = None  # SI, as the description writes it (m, rad/s, kg.m2): builder.units's
+    nominal: float | None = None  # a continuous state's scale (FMI's nominal), if it is one
     array: str | None = None  # the FMI 3.0 FMU's array holding it (one element per link), if any
     index: int | None = None  # its 0-based place in that array
     what: str = ""  # what a refusal of a value calls it ("a length"): its rule's words
@@ -56,6 +59,25 @@ class Variable:
     def start_text(self) -> str:
         """The start as a model description writes it: a Real with the digits that round-trip."""
         return repr(float(self.start)) if self.type == "Real" else str(self.start)
+
+    def bounds(self) -> dict[str, str]:
+        """min and max as a model description declares them, from its rule: FMI's are
+        inclusive (min <= value <= max), so an open low end (a "positive" value) declares its
+        bound, min = 0, which the FMU still refuses, and an open high end the largest value
+        below it; an enumeration's range is its items."""
+        rule = RULES[self.rule]
+        if rule.items:
+            return {}
+        whole = self.type == "Integer" or rule.whole
+        found = {}
+        if math.isfinite(rule.low):
+            found["min"] = rule.low
+        if math.isfinite(rule.high):
+            found["max"] = rule.high - 1 if whole else math.nextafter(rule.high, -math.inf)
+        return {
+            key: str(int(value)) if self.type == "Integer" else repr(float(value))
+            for key, value in found.items()
+        }
 
     def to_dict(self) -> dict:
         data = asdict(self)
@@ -86,6 +108,7 @@ class Member:
     depends_on: tuple[str, ...] = ()
     derivative_of: str | None = None
     unit: str | None = None
+    nominal: float | None = None
 
     @property
     def name(self) -> str:
@@ -129,9 +152,9 @@ DESCRIBED = {
     "l": Described("m", "length of link {link} [{unit}]"),
     "m": Described("kg", "mass of bob {link} [{unit}]"),
     "M": Described("kg", "mass of link {link} [{unit}]"),
-    "Ixx": Described("kg m2", "central inertia of link {link} about its x axis [{unit}]"),
-    "Iyy": Described("kg m2", "central inertia of link {link} about its own (y) axis [{unit}]"),
-    "Izz": Described("kg m2", "central inertia of link {link} about its z axis [{unit}]"),
+    "Ixx": Described("kg.m2", "central inertia of link {link} about its x axis [{unit}]"),
+    "Iyy": Described("kg.m2", "central inertia of link {link} about its own (y) axis [{unit}]"),
+    "Izz": Described("kg.m2", "central inertia of link {link} about its z axis [{unit}]"),
     "alpha": Described("rad", "angle of joint {link} about the parent's z axis [{unit}]"),
     "beta": Described("rad", "angle of joint {link} about the parent's x axis [{unit}]"),
     "omega": Described("rad/s", "{of}' [{unit}]", "alpha"),
@@ -175,7 +198,7 @@ DESCRIBED = {
         {f"link_{c}": c for c in "xyz"},
     ),
     **{
-        f"link_q{c}": Described(None, f"link {{link}} orientation quaternion, {c} component")
+        f"link_q{c}": Described("1", f"link {{link}} orientation quaternion, {c} component")
         for c in ("w", "x", "y", "z")
     },
 }
@@ -223,18 +246,42 @@ def _inputs(scene, settings):  # at rest; held over each communication step
 
 
 def _states(scene, settings):  # a state is an output of its own value
-    return _described(scene.state_scalars(), scene.state_defaults(), lambda s: (s.name,))
+    return [
+        replace(member, nominal=NOMINAL[member.scalar.quantity](scene))
+        for member in _described(scene.state_scalars(), scene.state_defaults(), lambda s: (s.name,))
+    ]
 
 
-def _outputs(scene, settings):  # functions of the state; the pivot force of the inputs too
-    states, inputs = tuple(scene.state_names()), tuple(scene.input_names())
-    return _described(
-        scene.output_scalars(), None, lambda s: states + (inputs if s.name in PIVOT_OUTPUTS else ())
-    )
+def _frequency(scene: Scene) -> float:
+    """The chain's natural angular frequency, hanging straight at the scene's numbers
+    (sqrt(g / total length)): the scale of its rates (1 where g = 0)."""
+    return math.sqrt(abs(scene.gravity) / sum(link.length for link in scene.links)) or 1.0
+
+
+# The states' nominal values (FMI's scale, e.g. absoluteTolerance = nominal * tolerance * 0.01):
+# an angle's scale is a radian; a rate's, a radian at the chain's natural frequency (one value
+# per quantity, so that an FMI 3.0 array has one).
+NOMINAL = {
+    "alpha": lambda scene: 1.0,
+    "beta": lambda scene: 1.0,
+    "omega": _frequency,
+    "delta": _frequency,
+}
+
+
+def _in_order(scene: Scene, names) -> tuple[str, ...]:
+    """The knowns `names` in value-reference order (parameters, inputs, states)."""
+    order = scene.core_parameter_names() + scene.state_names()
+    return tuple(sorted(names, key=order.index))
+
+
+def _outputs(scene, settings):  # what each depends on, read from the model (builder.structure)
+    found = dependencies(scene)
+    return _described(scene.output_scalars(), None, lambda s: _in_order(scene, found[s.name]))
 
 
 def _statistics(scene, settings):  # counts of what the solver did, not functions of the knowns
-    return [Member(Scalar(name), None, text) for name, text in STATISTICS.items()]
+    return [Member(Scalar(name), None, text, unit="1") for name, text in STATISTICS.items()]
 
 
 def _settings(integer):
@@ -248,20 +295,19 @@ def _settings(integer):
     return members
 
 
-def _derivatives(scene, settings):  # x = (angles, rates): an angle's derivative is its rate
-    states, inputs = scene.state_scalars(), tuple(scene.input_names())
-    names = [s.name for s in states]
-    n_dof = len(states) // 2
+def _derivatives(scene, settings):  # what each depends on, read from the model (builder.structure)
+    found = dependencies(scene)
     return [
         Member(
-            Scalar(f"der({s.stem}", s.link, f"{s.suffix})"),
+            scalar,
             None,
             describe(f"der({s.quantity})", s.link),
-            (names[n_dof + k],) if k < n_dof else tuple(names) + inputs,
+            _in_order(scene, found[scalar.name]),
             s.name,
             per_second(unit_of(s.quantity)),
         )
-        for k, s in enumerate(states)
+        for s in scene.state_scalars()
+        for scalar in [Scalar(f"der({s.stem}", s.link, f"{s.suffix})")]
     ]
 
 
@@ -308,8 +354,12 @@ def groups(backend: str = "pythonfmu") -> list[Group]:
 def variables(scene: Scene, settings: dict, backend: str = "pythonfmu") -> list[Variable]:
     """Every variable of the scene's FMU for `backend`, in value-reference order.
 
-    settings: every solver setting's start value (builder.fmu.checked_settings)."""
-    return variables_of(groups(backend), scene, settings)
+    settings: every solver setting's start value (builder.fmu.checked_settings). The native
+    FMU's solver takes only the solvers in C (its rule "native-solver")."""
+    found = variables_of(groups(backend), scene, settings)
+    if backend == "native":
+        found = [replace(v, rule="native-solver") if v.rule == "solver" else v for v in found]
+    return found
 
 
 def variables_of(in_order, scene: Scene | None = None, settings: dict | None = None) -> list[Variable]:
@@ -342,6 +392,7 @@ def variables_of(in_order, scene: Scene | None = None, settings: dict | None = N
                     quantity=scalar.quantity,
                     link=scalar.link,
                     unit=member.unit,
+                    nominal=member.nominal,
                     array=scalar.quantity if in_array else None,
                     index=scalar.link if in_array else None,
                     what=what,
@@ -372,24 +423,57 @@ def first_references(records: list[Variable], in_order) -> dict[str, int]:
 
 
 @dataclass(frozen=True)
+class Unknown:
+    """One entry of a ModelStructure list: the variable and the knowns of that list it depends
+    on, in value-reference order."""
+
+    variable: Variable
+    dependencies: tuple[Variable, ...]
+
+
+@dataclass(frozen=True)
 class Structure:
     """A model description's ModelStructure, written once for every writer (builder.fmi2,
-    builder.fmi3, model_description.complete): its unknowns, each list in value-reference
-    order; an unknown's dependencies are its record's depends_on."""
+    builder.fmi3, model_description.complete), each list in value-reference order and every
+    entry with its dependencies written out (FMI reads none as "every known", OMSimulator as
+    "nothing"): of the records' depends_on, those that are knowns of that list."""
 
-    outputs: list[Variable]
-    derivatives: list[Variable]
-    initial_unknowns: list[Variable]  # no dependencies listed: they may depend on every known
+    outputs: list[Unknown]
+    derivatives: list[Unknown]
+    initial_unknowns: list[Unknown]
 
 
 def model_structure(records: list[Variable]) -> Structure:
     """The unknowns of the variables `records`: the outputs, the state derivatives, and those
-    of both calculated at initialization."""
-    outputs = [v for v in records if v.causality == "output"]
-    derivatives = [v for v in records if v.derivative_of]
-    initial = [
-        v
-        for v in records
-        if v.initial in ("approx", "calculated") and (v.causality == "output" or v.derivative_of)
-    ]
-    return Structure(outputs, derivatives, initial)
+    of both calculated at initialization. The knowns of the outputs and derivatives are the
+    inputs and the continuous states (none where no derivative is exposed: Co-Simulation
+    only); at initialization, the inputs, the parameters and whatever starts exactly at its
+    start value (the states)."""
+    by_name = {v.name: v for v in records}
+    states = {v.derivative_of for v in records if v.derivative_of}
+    continuous = {v.name for v in records if v.causality == "input" or v.name in states}
+    initial = {v.name for v in records if v.causality in ("input", "parameter") or v.initial == "exact"}
+
+    def unknowns(variables, knowns):
+        return [
+            Unknown(
+                v,
+                tuple(
+                    sorted((by_name[k] for k in v.depends_on if k in knowns), key=lambda k: k.value_reference)
+                ),
+            )
+            for v in variables
+        ]
+
+    return Structure(
+        unknowns([v for v in records if v.causality == "output"], continuous),
+        unknowns([v for v in records if v.derivative_of], continuous),
+        unknowns(
+            [
+                v
+                for v in records
+                if v.initial in ("approx", "calculated") and (v.causality == "output" or v.derivative_of)
+            ],
+            initial,
+        ),
+    )

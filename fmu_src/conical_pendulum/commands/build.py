@@ -66,9 +66,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --native: the FMI version, 2 (2.0) or 3 (3.0; Co-Simulation and Model Exchange) (2)",
     )
     parser.add_argument(
+        "--scalars",
+        action="store_true",
+        help="with --native --fmi 3: per-link quantities as scalars with FMI 2.0's names (alpha0, ...) "
+        "instead of arrays, for tools that read no FMI 3.0 arrays (OMSimulator)",
+    )
+    parser.add_argument(
         "--win64",
         action="store_true",
         help="with --native: also a Windows binary, cross-compiled (needs mingw-w64)",
+    )
+    parser.add_argument(
+        "--aarch64",
+        action="store_true",
+        help="with --native --fmi 3: also a Linux binary for 64-bit ARM (binaries/aarch64-linux), "
+        "cross-compiled (needs gcc-aarch64-linux-gnu)",
     )
     parser.add_argument(
         "--no-check",
@@ -81,14 +93,17 @@ DEFAULT_OUTPUTS = {  # one name per kind of FMU: the README's builds, in turn, l
     "pythonfmu (default)": Path("dist/ConicalPendulum.fmu"),
     "--native": Path("dist/ConicalPendulum_native.fmu"),
     "--native --fmi 3": Path("dist/ConicalPendulum_fmi3.fmu"),
+    "--native --fmi 3 --scalars": Path("dist/ConicalPendulum_fmi3_scalars.fmu"),
 }
 
 
-def default_output(native: bool, fmi: int) -> Path:
+def default_output(native: bool, fmi: int, scalars: bool = False) -> Path:
     """Where a build writes without --output: a name that says the kind of FMU."""
-    return DEFAULT_OUTPUTS[
-        "pythonfmu (default)" if not native else "--native" if fmi == 2 else "--native --fmi 3"
-    ]
+    if not native:
+        return DEFAULT_OUTPUTS["pythonfmu (default)"]
+    if fmi == 2:
+        return DEFAULT_OUTPUTS["--native"]
+    return DEFAULT_OUTPUTS["--native --fmi 3 --scalars" if scalars else "--native --fmi 3"]
 
 
 def run_files(fmu: Path) -> tuple[Path, Path, Path]:
@@ -122,6 +137,12 @@ def choose_scene(args) -> Scene:
     )
 
 
+def platforms(args) -> tuple[str, ...]:
+    """The platforms whose binaries the FMU carries: Linux x86-64, and those the options add."""
+    extra = {"win64": args.win64, "aarch64-linux": args.aarch64}
+    return ("linux64", *(platform for platform, wanted in extra.items() if wanted))
+
+
 def run(args) -> int:
     try:
         scene = choose_scene(args)
@@ -131,14 +152,22 @@ def run(args) -> int:
         raise UserError("--win64: only the native FMU carries a Windows binary; add --native")
     if args.fmi == 3 and not args.native:
         raise UserError("--fmi 3: only the native FMU is FMI 3.0; add --native")
-    output = args.output or default_output(args.native, args.fmi)
+    if args.aarch64 and args.fmi != 3:
+        raise UserError(
+            "--aarch64: only the FMI 3.0 FMU carries an ARM binary (FMI 2.0 tools disagree on its "
+            "folder: docs/native.md#platforms); add --native --fmi 3"
+        )
+    if args.scalars and args.fmi != 3:
+        raise UserError("--scalars: only the FMI 3.0 FMU has arrays; add --native --fmi 3")
+    output = args.output or default_output(args.native, args.fmi, args.scalars)
     try:
         build = fmus.build_fmu(
             scene,
             output,
             backend="native" if args.native else "pythonfmu",
-            platforms=("linux64", "win64") if args.win64 else ("linux64",),
+            platforms=platforms(args),
             fmi_version=args.fmi,
+            arrays=not args.scalars,
         )
     except ValueError as exc:
         raise UserError(str(exc)) from None

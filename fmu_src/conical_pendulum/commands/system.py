@@ -67,7 +67,8 @@ def run(args) -> int:
     for tool in args.tools:
         lacking = ssp_tools.missing(tool)
         if lacking:  # before the builds, which take a while
-            raise UserError(f"--run {tool}: {needs(lacking, 'cosim')}")
+            hint = f"needs {lacking}" if tool in ssp_tools.OUTSIDE_PIP else needs(lacking, "cosim")
+            raise UserError(f"--run {tool}: {hint}")
     output_folder(args.out)
     from ..builder.fmu import build_fmu
 

@@ -12,29 +12,33 @@ default experiment:
     resources/apparent-mass.ssv   c_cart, F_x_order; bound to the cart by its variant
 
 Each variant binds one parameter set (so SSP's rule, every binding applies, and the OSP
-tools' reading, each binding a named set, agree). The default experiment carries the step
-as the annotation `com.opensimulationplatform` (osp:FixedStepAlgorithm baseStepSize),
-which libcosim reads; ecos takes its step from its caller, FMPy from its arguments. The
-connectors' units come from the FMUs' own variable records (resources/model.json's `unit`).
+tools' reading, each binding a named set, agree). The step is written twice, once per
+tool family that reads it from the package: the default experiment's annotation
+`com.opensimulationplatform` (osp:FixedStepAlgorithm baseStepSize), which libcosim reads,
+and the system's annotation `org.openmodelica` (oms:SimulationInformation/oms:FixedStepMaster
+stepSize), from which OMSimulator takes its master algorithm and step; ecos takes its
+step from its caller, FMPy from its arguments. Each SSD's name is an identifier
+(`PendulumOnCart_explicit`): OMSimulator names its model after it and refuses any other.
+The connectors' units are those the FMUs declare (their modelDescription.xml's units and
+UnitDefinitions: builder.units), written as SSP 1.0's ssc:Units.
 
-The XML uses the prefixes ssd:, ssc:, ssv: and osp: throughout: ecos (pugixml) and
-libcosim (boost property_tree) match element names with their prefixes, not namespaces.
+The XML uses the prefixes ssd:, ssc:, ssv:, osp: and oms: throughout: ecos (pugixml),
+libcosim (boost property_tree) and OMSimulator (pugixml) match element names with their
+prefixes, not namespaces.
 """
 
 from __future__ import annotations
 
 import functools
-import json
-import re
 import shutil
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 from lxml import etree
 
-from ..builder.variables import Variable, records
+from ..builder.units import BASE_UNITS
 from ..errors import UserError
-from ..runtime.files import MODEL_FILE
 from .coupled import EXCHANGED, SCHEMES, STOP_TIME
 from .monolithic import cart_parameters
 
@@ -43,19 +47,15 @@ NS = {
     "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
     "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
     "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations",
+    "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd",
 }
 VARIANTS = {"explicit": "SystemStructure.ssd", "apparent-mass": "ApparentMass.ssd"}  # scheme -> SSD
 FMUS = {"p": "resources/ConicalPendulum.fmu", "cart": "resources/Cart.fmu"}  # instance -> file
 SYSTEM = "PendulumOnCart"
 STEP = 0.01  # [s] the default experiment's communication step
-# SI base-unit exponents of the unit symbols the FMUs' records use
-BASE_UNITS = {
-    "m": {"m": 1},
-    "s": {"s": 1},
-    "kg": {"kg": 1},
-    "rad": {"rad": 1},
-    "N": {"kg": 1, "m": 1, "s": -2},
-}
+# OMSimulator's master: fixed steps, algebraic loops between FMUs solved at every step (KINSOL);
+# the tolerance of those loops, which its command line replaces with its --tolerance (1e-4 too)
+OMS_MASTER = {"description": "oms-ma", "relativeTolerance": "0.0001"}
 
 
 def parameter_file(scheme: str) -> str:
@@ -70,20 +70,6 @@ def _element(parent, prefix: str, tag: str, **attributes):
     return etree.SubElement(parent, _q(prefix, tag), {k: str(v) for k, v in attributes.items()})
 
 
-def base_unit(unit: str) -> dict[str, int]:
-    """SI exponents of a unit as the FMUs write it ("m/s2", "N s/m", "kg m2")."""
-    exponents: dict[str, int] = {}
-    numerator, _, denominator = unit.partition("/")
-    for sign, part in ((1, numerator), (-1, denominator)):
-        for token in part.split():
-            symbol, power = re.fullmatch(r"([A-Za-z]+)(-?\d*)", token).groups()
-            if symbol not in BASE_UNITS:
-                raise ValueError(f"unit {unit!r}: unknown symbol {symbol!r}")
-            for base, exponent in BASE_UNITS[symbol].items():
-                exponents[base] = exponents.get(base, 0) + sign * int(power or 1) * exponent
-    return {base: exponent for base, exponent in exponents.items() if exponent}
-
-
 def connectors(scheme: str) -> dict[str, list[str]]:
     """{instance: connector names}: the variables the scheme connects, and the outputs the
     demo records. No input is left unconnected: FMPy's simulate_ssp would connect it to
@@ -96,27 +82,54 @@ def connectors(scheme: str) -> dict[str, list[str]]:
     return wanted
 
 
-def _variables(fmu: Path) -> dict[str, Variable]:
-    """The FMU's variables by name: the records its model.json carries (builder.variables),
-    each with its type, causality and unit."""
-    with zipfile.ZipFile(fmu) as archive:
-        data = json.loads(archive.read(f"resources/{MODEL_FILE}"))
-    return {v.name: v for v in records(data)}
+@dataclass(frozen=True)
+class Declared:
+    """A variable as its FMU's model description declares it."""
+
+    causality: str
+    type: str  # Real, Integer, or Enumeration
+    unit: str | None  # a name of the FMU's UnitDefinitions
 
 
-def _units(root, prefix: str, units: set[str]) -> None:
-    if not units:
+def _declared(fmu: Path) -> tuple[dict[str, Declared], dict[str, dict[str, str]]]:
+    """The FMU's variables by name, and its units (name -> BaseUnit's attributes), as its
+    modelDescription.xml declares them: what an SSP connector says of one."""
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmu))
+    units = {}
+    for unit in md.unitDefinitions:
+        base = unit.baseUnit
+        exponents = {name: str(getattr(base, name)) for name in BASE_UNITS if getattr(base, name)}
+        scale = {"factor": repr(base.factor)} if base.factor != 1 else {}
+        shift = {"offset": repr(base.offset)} if base.offset != 0 else {}
+        units[unit.name] = exponents | scale | shift
+    variables = {
+        v.name: Declared(v.causality, v.type, v.unit or (v.declaredType.unit if v.declaredType else None))
+        for v in md.modelVariables
+    }
+    return variables, units
+
+
+def _units(root, prefix: str, used: set[str], declared: dict[str, dict[str, str]]) -> None:
+    """ssc:Units: each unit the connectors or parameters use, as its FMU declares it."""
+    if not used:
         return
     table = _element(root, prefix, "Units")
-    for unit in sorted(units):
-        _element(_element(table, "ssc", "Unit", name=unit), "ssc", "BaseUnit", **base_unit(unit))
+    for unit in sorted(used):
+        _element(_element(table, "ssc", "Unit", name=unit), "ssc", "BaseUnit", **declared[unit])
 
 
-def _ssd(scheme: str, variables: dict, step: float, stop_time: float) -> bytes:
+def model_name(scheme: str) -> str:
+    """The name of a scheme's SSD, an identifier: OMSimulator's model (and variant) name."""
+    return f"{SYSTEM}_{scheme.replace('-', '_')}"
+
+
+def _ssd(scheme: str, variables: dict, units: dict, step: float, stop_time: float) -> bytes:
     root = etree.Element(
         _q("ssd", "SystemStructureDescription"),
-        {"version": "1.0", "name": f"{SYSTEM} ({scheme})", "generationTool": "conical-pendulum-fmu"},
-        nsmap={prefix: NS[prefix] for prefix in ("ssd", "ssc", "osp")},
+        {"version": "1.0", "name": model_name(scheme), "generationTool": "conical-pendulum-fmu"},
+        nsmap={prefix: NS[prefix] for prefix in ("ssd", "ssc", "osp", "oms")},
     )
     connections, _ = SCHEMES[scheme]
     system = _element(
@@ -127,7 +140,7 @@ def _ssd(scheme: str, variables: dict, step: float, stop_time: float) -> bytes:
         description=f"the three-link pendulum hanging from a cart on a spring; the {scheme} exchange",
     )
     elements = _element(system, "ssd", "Elements")
-    units = set()
+    used = set()
     for instance, names in connectors(scheme).items():
         component = _element(elements, "ssd", "Component", name=instance, source=FMUS[instance])
         table = _element(component, "ssd", "Connectors")
@@ -136,7 +149,7 @@ def _ssd(scheme: str, variables: dict, step: float, stop_time: float) -> bytes:
             connector = _element(table, "ssd", "Connector", name=name, kind=variable.causality)
             unit = variable.unit
             _element(connector, "ssc", variable.type, **({"unit": unit} if unit else {}))
-            units |= {unit} - {None}
+            used |= {unit} - {None}
         if instance == "cart":
             bindings = _element(component, "ssd", "ParameterBindings")
             _element(bindings, "ssd", "ParameterBinding", source=parameter_file(scheme))
@@ -152,7 +165,17 @@ def _ssd(scheme: str, variables: dict, step: float, stop_time: float) -> bytes:
             endElement=end_element,
             endConnector=end_connector,
         )
-    _units(root, "ssd", units)
+    information = _element(
+        _element(
+            _element(_element(system, "ssd", "Annotations"), "ssc", "Annotation", type="org.openmodelica"),
+            "oms",
+            "Annotations",
+        ),
+        "oms",
+        "SimulationInformation",
+    )
+    _element(information, "oms", "FixedStepMaster", **OMS_MASTER, stepSize=repr(step))
+    _units(root, "ssd", used, units)
     experiment = _element(root, "ssd", "DefaultExperiment", startTime=0.0, stopTime=repr(float(stop_time)))
     annotation = _element(
         _element(experiment, "ssd", "Annotations"), "ssc", "Annotation", type="com.opensimulationplatform"
@@ -166,24 +189,24 @@ def cart_values(scheme: str, cart_mass: float) -> dict:
     return {**cart_parameters(m_cart=cart_mass), **SCHEMES[scheme][1]}
 
 
-def _ssv(scheme: str, values: dict, variables: dict) -> bytes:
+def _ssv(scheme: str, values: dict, variables: dict, units: dict) -> bytes:
     root = etree.Element(
         _q("ssv", "ParameterSet"),
         {"version": "1.0", "name": scheme},
         nsmap={prefix: NS[prefix] for prefix in ("ssv", "ssc")},
     )
     table = _element(root, "ssv", "Parameters")
-    units = set()
+    used = set()
     for name, value in values.items():
         variable = variables[name]
         parameter = _element(table, "ssv", "Parameter", name=name)
-        if variable.type == "Integer":
+        if variable.type in ("Integer", "Enumeration"):
             _element(parameter, "ssv", "Integer", value=int(value))
         else:
             unit = variable.unit
             _element(parameter, "ssv", "Real", value=repr(float(value)), **({"unit": unit} if unit else {}))
-            units |= {unit} - {None}
-    _units(root, "ssv", units)
+            used |= {unit} - {None}
+    _units(root, "ssv", used, units)
     return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
 
 
@@ -197,12 +220,18 @@ def write_package(
 ) -> Path:
     """The SSP package at `output` (a .ssp file) with both FMUs, every scheme's variant and
     parameter set, the cart of `cart_mass` [kg], and the default experiment (`step`, `stop_time`)."""
-    variables = {"p": _variables(pendulum_fmu), "cart": _variables(cart_fmu)}
+    (pendulum, pendulum_units), (cart, cart_units) = _declared(pendulum_fmu), _declared(cart_fmu)
+    variables, units = {"p": pendulum, "cart": cart}, pendulum_units | cart_units
+    clash = [
+        name for name in pendulum_units.keys() & cart_units.keys() if pendulum_units[name] != cart_units[name]
+    ]
+    if clash:
+        raise ValueError(f"the FMUs declare the units {clash} differently")
     with zipfile.ZipFile(output, "w", zipfile.ZIP_DEFLATED) as package:
         for scheme, ssd in VARIANTS.items():
-            package.writestr(ssd, _ssd(scheme, variables, step, stop_time))
+            package.writestr(ssd, _ssd(scheme, variables, units, step, stop_time))
             package.writestr(
-                parameter_file(scheme), _ssv(scheme, cart_values(scheme, cart_mass), variables["cart"])
+                parameter_file(scheme), _ssv(scheme, cart_values(scheme, cart_mass), cart, cart_units)
             )
         package.write(pendulum_fmu, FMUS["p"])
         package.write(cart_fmu, FMUS["cart"])

@@ -144,7 +144,8 @@ def plot(results: list[ToolResult], path: Path) -> None:
     steps = sorted({r.step for r in results}, reverse=True)
     colours = dict(zip(ssp_tools.TOOLS, plt.rcParams["axes.prop_cycle"].by_key()["color"]))
     styles = dict(zip(steps, ["-", "--", ":", "-."]))
-    widths = {"ecospy": 3.0, "ecos": 1.2, "libcosim": 1.6, "fmpy": 1.2}  # ecos' lines lie on ecospy's
+    # ecos' lines lie on ecospy's
+    widths = {"ecospy": 3.0, "ecos": 1.2, "libcosim": 1.6, "fmpy": 1.2, "omsimulator": 1.6}
     fig, axes = plt.subplots(
         len(masses), len(schemes), figsize=(6 * len(schemes), 3.6 * len(masses)), squeeze=False
     )

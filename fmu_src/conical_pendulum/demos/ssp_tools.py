@@ -8,11 +8,17 @@
     libcosim  libcosim through libcosimpy: CosimExecution.from_ssp_file, the step from the
               package's OSP annotation (demos/libcosim_run.py, its own process)
     fmpy      FMPy's fmpy.ssp.simulation.simulate_ssp, in this process
+    omsimulator
+              OpenModelica's OMSimulator command line (omsimulator()), the .ssp as written:
+              `OMSimulator PACKAGE.ssp --stopTime=...` for SystemStructure.ssd, and for
+              another variant a Lua script that activates it (oms_activateVariant)
 
 ecos and FMPy read SystemStructure.ssd only: a variant runs from the package unpacked
 with its SSD in that file's place (ssp.variant; FMPy needs it zipped again); libcosim is
-given the variant's .ssd. ecos and FMPy take the step and stop time from their caller,
-which reads them from the package (ssp.experiment). Each run gives the recorded variables
+given the variant's .ssd; OMSimulator loads every .ssd of the package as a variant. ecos
+and FMPy take the step and stop time from their caller, which reads them from the package
+(ssp.experiment); OMSimulator the step from its annotation, the stop time from its caller
+(its --stopTime, 1 s unless given, replaces the default experiment's). Each run gives the recorded variables
 by their FMU names (x, v, a, F_pivot_x, alpha0, ...) with "time", as coupled.cosimulate
 does, so coupled.coupling_errors compares them with the monolithic model.
 """
@@ -20,6 +26,7 @@ does, so coupled.coupling_errors compares them with the monolithic model.
 from __future__ import annotations
 
 import importlib.util
+import os
 import shutil
 import signal
 import subprocess
@@ -33,7 +40,13 @@ import numpy as np
 from . import ecospy_run, isolated, libcosim_run, ssp
 from .coupled import DIVERGED, EXCHANGED
 
-TOOLS = ("ecospy", "ecos", "libcosim", "fmpy")
+TOOLS = ("ecospy", "ecos", "libcosim", "fmpy", "omsimulator")
+OUTSIDE_PIP = ("omsimulator",)  # tools no pip extra installs
+# OMSimulator as ../shared/hosts/omsimulator holds it beside a source checkout (no registry
+# offers it), when it is not on PATH
+OMSIMULATOR_HOST = (
+    Path(__file__).parents[3].parent / "shared" / "hosts" / "omsimulator" / "bin" / "OMSimulator"
+)
 ECOS_MIN_STEPS = 10  # ecos 0.7.2's command line reports progress every (steps // 10) steps
 
 
@@ -58,6 +71,11 @@ def missing(tool: str) -> str | None:
         return ecospy_run.missing()
     if tool == "libcosim":
         return libcosim_run.missing()
+    if tool == "omsimulator" and omsimulator() is None:
+        return (
+            "OMSimulator (OpenModelica's, not on PATH nor in ../shared/hosts/omsimulator; "
+            "no package registry offers it)"
+        )
     return None
 
 
@@ -170,7 +188,9 @@ def run_fmpy(package: Path, scheme: str, work: Path) -> ToolRun:
     the component as its set_parameters matches them, and the step and stop time as
     arguments. Its rows carry the time a step started and the values after it: they are
     put at the time the values hold. Its loop adds the step to the time while time <
-    stop_time, so rounding can give it one step more than asked: that row is left out."""
+    stop_time, so rounding can give it one step more than asked: that row is left out. When
+    an FMU refuses a step (a diverging run), simulate_ssp raises and gives back none of it."""
+    from fmpy.fmi1 import FMICallException
     from fmpy.ssp.simulation import simulate_ssp
     from fmpy.ssp.ssd import read_ssv
 
@@ -185,7 +205,10 @@ def run_fmpy(package: Path, scheme: str, work: Path) -> ToolRun:
     for parameter in parameters.parameters:
         parameter.name = f"cart.{parameter.name}"
     start = time.perf_counter()
-    rows = simulate_ssp(str(source), stop_time=stop_time, step_size=step, parameter_set=parameters)
+    try:
+        rows = simulate_ssp(str(source), stop_time=stop_time, step_size=step, parameter_set=parameters)
+    except FMICallException as exc:  # an FMU refused a step (a diverging run): none of its rows come back
+        return ToolRun("fmpy", scheme, {}, time.perf_counter() - start, refused=f"simulate_ssp raised: {exc}")
     seconds = time.perf_counter() - start
     values = {"time": rows["time"] + step}
     values.update({name.split(".")[-1]: rows[name] for name in rows.dtype.names if name != "time"})
@@ -193,7 +216,96 @@ def run_fmpy(package: Path, scheme: str, work: Path) -> ToolRun:
     return ToolRun("fmpy", scheme, {name: column[kept] for name, column in values.items()}, seconds)
 
 
-RUNNERS = {"ecospy": run_ecospy, "ecos": run_ecos, "libcosim": run_libcosim, "fmpy": run_fmpy}
+def omsimulator() -> Path | None:
+    """OMSimulator's executable: on PATH, or beside this source checkout (OMSIMULATOR_HOST)."""
+    found = shutil.which("OMSimulator")
+    if found:
+        return Path(found)
+    return OMSIMULATOR_HOST if os.access(OMSIMULATOR_HOST, os.X_OK) else None
+
+
+def _oms_messages(text: str, level: str) -> list[str]:
+    """OMSimulator's messages of a level ("error", "warning"), each with its indented lines."""
+    messages: list[str] = []
+    for line in text.splitlines():
+        if line.startswith(f"{level}:"):
+            messages.append(line.split(":", 1)[1].strip())
+        elif messages and line.startswith(" ") and not line.lstrip().startswith(("info", "warning", "error")):
+            messages[-1] += " " + line.strip()
+    return messages
+
+
+def _oms_values(result: Path, model: str) -> dict:
+    """The recorded variables from OMSimulator's CSV by their FMU names, one row per
+    communication point: it writes two for each, the outputs after the step with the
+    inputs still held, then again once the inputs are set (the loop solved); the last is
+    kept, the values the next step starts from, as the other tools report them."""
+    table = np.genfromtxt(result, delimiter=",", names=True, deletechars="", autostrip=True, ndmin=1)
+    last = np.append(table["time"][1:] != table["time"][:-1], True)
+    values = {"time": table["time"][last]}
+    for name in EXCHANGED:
+        instance, variable = name.split("::")
+        values[variable] = table[f"{model}.{ssp.SYSTEM}.{instance}.{variable}"][last]
+    return values
+
+
+def run_omsimulator(package: Path, scheme: str, work: Path, options: tuple[str, ...] = ()) -> ToolRun:
+    """The package as written: its default variant from the command line, another one
+    activated by a Lua script (this OMSimulator's scripting; its command line runs
+    SystemStructure.ssd only); `options`, its command line's (--inputExtrapolation=true, ...),
+    apply to both. It exits 0 whether or not the run failed: what it printed says, `error:`
+    lines. A run that stopped before the stop time keeps its rows, with the first error as
+    why it ended; one that reached it despite errors lists them with its warnings."""
+    _, stop_time = ssp.experiment(package)
+    home = work / f"omsimulator-{scheme}"
+    if home.exists():
+        shutil.rmtree(home)
+    home.mkdir(parents=True)
+    model = ssp.model_name(scheme)
+    result = home / "result.csv"
+    if ssp.VARIANTS[scheme] == "SystemStructure.ssd":
+        command = [str(package), f"--stopTime={stop_time!r}", f"--resultFile={result.name}"]
+    else:
+        script = home / "run.lua"
+        default = ssp.model_name(next(s for s, name in ssp.VARIANTS.items() if name == "SystemStructure.ssd"))
+        script.write_text(
+            f'oms_importFile("{package}")\n'
+            f'oms_activateVariant("{default}", "{model}")\n'
+            f'oms_setResultFile("{model}", "{result.name}", 1)\n'
+            f'oms_setStopTime("{model}", {stop_time!r})\n'
+            + "".join(f'oms_{call}("{model}")\n' for call in ("instantiate", "initialize", "simulate"))
+            + f'oms_terminate("{model}")\noms_delete("{model}")\n'
+        )
+        command = [script.name]
+    start = time.perf_counter()
+    child = subprocess.run(
+        [str(omsimulator()), *command, *options, f"--tempDir={home}"],
+        cwd=home,
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=1800,
+    )
+    seconds = time.perf_counter() - start
+    printed = child.stdout + child.stderr
+    (home / "omsimulator.log").write_text(printed)
+    errors, warnings = _oms_messages(printed, "error"), _oms_messages(printed, "warning")
+    values = _oms_values(result, model) if result.exists() and result.stat().st_size else {}
+    if child.returncode or not values or len(values["time"]) < 2:
+        why = "; ".join(errors) or f"exit {child.returncode}, no result: {printed[-500:]}"
+        return ToolRun("omsimulator", scheme, {}, seconds, warnings, why)
+    step, _ = ssp.experiment(package)
+    ended = errors[0] if errors and values["time"][-1] < stop_time - step / 2 else None
+    return ToolRun("omsimulator", scheme, values, seconds, warnings + errors, None, ended)
+
+
+RUNNERS = {
+    "ecospy": run_ecospy,
+    "ecos": run_ecos,
+    "libcosim": run_libcosim,
+    "fmpy": run_fmpy,
+    "omsimulator": run_omsimulator,
+}
 
 
 def run(tool: str, package: Path, scheme: str, work: Path) -> ToolRun:

@@ -13,7 +13,14 @@ import numbers
 import sys
 from dataclasses import dataclass
 
-SOLVERS = ("rk4", "rk45", "dop853", "radau")  # the FMU's `solver`: its index; RK4..DOP853 are in C
+# The FMU's `solver`, an enumeration: its item's value is its index; RK4..DOP853 are in C.
+SOLVER_TEXTS = {
+    "rk4": "RK4 (fixed step)",
+    "rk45": "RK45 (Dormand-Prince 5(4))",
+    "dop853": "DOP853",
+    "radau": "Radau (scipy, stiff)",
+}
+SOLVERS = tuple(SOLVER_TEXTS)
 
 
 @dataclass(frozen=True)
@@ -26,6 +33,8 @@ class Rule:
     low_open: bool = False  # the value must exceed low, not only reach it
     high: float = math.inf  # the value must stay below high
     whole: bool = False  # the value must be a whole number (a count carried as a Real)
+    items: tuple[tuple[str, str], ...] = ()  # an enumeration's (name, description), valued 0, 1, ...
+    type_name: str = ""  # the enumeration's type in a model description
 
     def holds(self, value: float) -> bool:
         return (
@@ -59,13 +68,20 @@ RULES = {
         low=100 * sys.float_info.epsilon,
     ),
     "solver": Rule(
-        _choose(SOLVERS), f"a whole number from 0 to {len(SOLVERS) - 1}", low=0.0, high=len(SOLVERS)
+        _choose(SOLVERS),
+        f"a whole number from 0 to {len(SOLVERS) - 1}",
+        low=0.0,
+        high=len(SOLVERS),
+        items=tuple(SOLVER_TEXTS.items()),
+        type_name="Solver",
     ),
     "native-solver": Rule(
         _choose(NATIVE_SOLVERS) + "; Radau needs the pythonfmu FMU",
         f"a whole number from 0 to {len(NATIVE_SOLVERS) - 1}",
         low=0.0,
         high=len(NATIVE_SOLVERS),
+        items=tuple(SOLVER_TEXTS.items())[: len(NATIVE_SOLVERS)],
+        type_name="Solver",
     ),
     "hold-order": Rule(
         "choose 0 (held over the step) or 1 (extrapolated linearly)", "0 or 1", low=0.0, high=2.0
@@ -124,6 +140,7 @@ SETTINGS = {
         1e-8,
         False,
         "relative tolerance of the adaptive solvers (replaced by setupExperiment's tolerance when given)",
+        "1",
     ),
     "atol": Setting(1e-8, False, "absolute tolerance of the adaptive solvers"),
     "max_step": Setting(
@@ -133,9 +150,7 @@ SETTINGS = {
         "step into steps of at most this (0: no limit)",
         "s",
     ),
-    "solver": Setting(
-        1, True, "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), 2 = DOP853, 3 = Radau (scipy, stiff)"
-    ),
+    "solver": Setting(1, True, ", ".join(f"{k} = {text}" for k, text in enumerate(SOLVER_TEXTS.values()))),
     "max_steps": Setting(100_000, True, "most internal steps per do_step: a step needing more is discarded"),
 }
 

@@ -11,13 +11,14 @@
  * What this FMU does not have, as its model description says: no clocks and no events (no
  * event indicators, hasEventMode="false", providesEvaluateDiscreteStates="false"), no
  * Scheduled Execution, no configuration modes (no tunable structural parameters), variables of
- * the types Float64 and Int32 only (the others are refused) and, for a model with arrays, the
+ * the types Float64, Int32 and Enumeration (as Int64) only (the others are refused) and, for a model with arrays, the
  * UInt64 structural parameter of their dimension (fmi3_arrays.h, generated for every model: an
  * array's value reference stands for the model's scalars in order; a model without arrays has
  * no structural parameter and no UInt64 variable), no output derivatives, no intermediate
  * update. Early return (fmi3DoStep's earlyReturn, lastSuccessfulTime) and the adjoint
  * derivative are marked EARLY RETURN and ADJOINT below.
  */
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 
@@ -388,11 +389,23 @@ static fmi3Status check_scalars(FmiInstance *inst, const char *function, const v
     return fmi3OK;
 }
 
+/* The model contract's integers are FMI 3.0's Int32 variables and its enumerations, which FMI
+ * 3.0 gets and sets as Int64 (fmi3_arrays.h's cp_enumeration): each only by its own type. */
+static fmi3Status check_kind(FmiInstance *inst, const char *function, const char *type,
+                             const fmi3ValueReference vr[], size_t nvr, int enumeration)
+{
+    for (size_t k = 0; k < nvr; k++)
+        if ((vr[k] < CP_VR_TIME ? cp_enumeration[vr[k]] : 0) != enumeration)
+            return REFUSE(inst, "%s: value reference %u is not an %s variable", function, vr[k], type);
+    return fmi3OK;
+}
+
 fmi3Status fmi3GetInt32(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
                         fmi3Int32 values[], size_t nValues)
 {
     FmiInstance *inst = CHECKED(c, fmi3GetInt32);
     if (check_scalars(inst, "fmi3GetInt32", vr, nvr, values, nValues)) return fmi3Error;
+    if (check_kind(inst, "fmi3GetInt32", "Int32", vr, nvr, 0)) return fmi3Error;
     return (fmi3Status)fmi_get_integers(inst, "fmi3GetInt32", "Int32", vr, nvr, values);
 }
 fmi3Status fmi3SetInt32(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
@@ -400,7 +413,43 @@ fmi3Status fmi3SetInt32(fmi3Instance c, const fmi3ValueReference vr[], size_t nv
 {
     FmiInstance *inst = CHECKED(c, fmi3SetInt32);
     if (check_scalars(inst, "fmi3SetInt32", vr, nvr, values, nValues)) return fmi3Error;
+    if (check_kind(inst, "fmi3SetInt32", "Int32", vr, nvr, 0)) return fmi3Error;
     return (fmi3Status)fmi_set_integers(inst, "fmi3SetInt32", "Int32", vr, nvr, values);
+}
+fmi3Status fmi3GetInt64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                        fmi3Int64 values[], size_t nValues)
+{
+    FmiInstance *inst = CHECKED_AS(c, "fmi3GetInt64", fmi3GetInt32);
+    if (check_scalars(inst, "fmi3GetInt64", vr, nvr, values, nValues)) return fmi3Error;
+    if (check_kind(inst, "fmi3GetInt64", "Int64", vr, nvr, 1)) return fmi3Error;
+    for (size_t k = 0; k < nvr; k++) {
+        int value;
+        if (fmi_get_integers(inst, "fmi3GetInt64", "Int64", &vr[k], 1, &value)) return fmi3Error;
+        values[k] = value;
+    }
+    return fmi3OK;
+}
+fmi3Status fmi3SetInt64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                        const fmi3Int64 values[], size_t nValues)
+{
+    FmiInstance *inst = CHECKED_AS(c, "fmi3SetInt64", fmi3SetInt32);
+    if (check_scalars(inst, "fmi3SetInt64", vr, nvr, values, nValues)) return fmi3Error;
+    if (check_kind(inst, "fmi3SetInt64", "Int64", vr, nvr, 1)) return fmi3Error;
+    char message[MESSAGE_SIZE];
+    for (size_t k = 0; k < nvr; k++) {  /* all checked before any is taken, as fmi_set_integers */
+        const int value = values[k] < INT_MIN ? INT_MIN : values[k] > INT_MAX ? INT_MAX : (int)values[k];
+        if (value != values[k])  /* beyond the model's int: out of every enumeration's range */
+            return REFUSE(inst, "fmi3SetInt64: %s = %lld: out of range", cp_variable_name(vr[k]),
+                          (long long)values[k]);
+        if (model_check_integer(inst->model, vr[k], value, fmi_initialized(inst), message,
+                                sizeof message) != MODEL_OK)
+            return REFUSE(inst, "%s", message);
+    }
+    for (size_t k = 0; k < nvr; k++) {
+        const int value = (int)values[k];
+        if (fmi_set_integers(inst, "fmi3SetInt64", "Int64", &vr[k], 1, &value)) return fmi3Error;
+    }
+    return fmi3OK;
 }
 /* The other types: the model contract has none, so any value reference is refused. */
 #define NO_VARIABLES(function, row, type, value_type)                                          \
@@ -416,7 +465,6 @@ NO_VARIABLES(fmi3GetUInt8, fmi3GetOther, "UInt8", fmi3UInt8)
 NO_VARIABLES(fmi3GetInt16, fmi3GetOther, "Int16", fmi3Int16)
 NO_VARIABLES(fmi3GetUInt16, fmi3GetOther, "UInt16", fmi3UInt16)
 NO_VARIABLES(fmi3GetUInt32, fmi3GetOther, "UInt32", fmi3UInt32)
-NO_VARIABLES(fmi3GetInt64, fmi3GetOther, "Int64", fmi3Int64)
 NO_VARIABLES(fmi3GetBoolean, fmi3GetOther, "Boolean", fmi3Boolean)
 NO_VARIABLES(fmi3GetString, fmi3GetOther, "String", fmi3String)
 NO_VARIABLES(fmi3SetFloat32, fmi3SetOther, "Float32", const fmi3Float32)
@@ -425,7 +473,6 @@ NO_VARIABLES(fmi3SetUInt8, fmi3SetOther, "UInt8", const fmi3UInt8)
 NO_VARIABLES(fmi3SetInt16, fmi3SetOther, "Int16", const fmi3Int16)
 NO_VARIABLES(fmi3SetUInt16, fmi3SetOther, "UInt16", const fmi3UInt16)
 NO_VARIABLES(fmi3SetUInt32, fmi3SetOther, "UInt32", const fmi3UInt32)
-NO_VARIABLES(fmi3SetInt64, fmi3SetOther, "Int64", const fmi3Int64)
 NO_VARIABLES(fmi3SetBoolean, fmi3SetOther, "Boolean", const fmi3Boolean)
 NO_VARIABLES(fmi3SetString, fmi3SetOther, "String", const fmi3String)
 

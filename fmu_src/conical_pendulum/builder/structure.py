@@ -1,0 +1,134 @@
+"""What each computed variable of the pendulum depends on, read from the model (build time only).
+
+ModelStructure names, for every output and state derivative, the knowns it depends on; FMI
+2.0 reads a missing list as "depends on every known", OMSimulator as "on nothing", so every
+list is written out (builder.variables puts these sets into the records' depends_on).
+
+The expanded equations (builder.model.derive) give them exactly: an expression's free
+symbols, followed through the named intermediate definitions; u' = M^-1 F depends on every
+entry of M and F in its block of M (structurally, M^-1 is full within a block). The
+recursive formulation (runtime/csrc/core/chain.c) has no expressions: its loops go down the
+chain, so a link's kinematics depend on its own and its ancestors' joints and lengths, and the
+dynamics on everything; tests/test_structure.py holds the two to each other where both exist
+and both to the FMUs' directional derivatives.
+"""
+
+from __future__ import annotations
+
+import functools
+
+from ..scene import APPARENT_MASS, FREE_FORCE, PIVOT_OUTPUTS, Scene
+
+Dependencies = dict[str, frozenset[str]]  # computed variable -> the knowns it depends on
+
+
+@functools.cache
+def dependencies(scene: Scene) -> Dependencies:
+    """Each output's (Scene.output_names) and state derivative's (der(alpha0), ...) knowns:
+    states, parameters and inputs, by name."""
+    if scene.resolved_formulation() == "recursive":
+        return _chain(scene)
+    from .model import derive  # sympy: build time only
+
+    return _symbolic(scene, derive(scene))
+
+
+def _symbolic(scene: Scene, eqs) -> Dependencies:
+    knowns = dict(zip(eqs.states, scene.state_names())) | dict(zip(eqs.params, scene.core_parameter_names()))
+    rates = set(eqs.rates)
+    closure: dict = {}  # symbol -> the knowns (and rates u') it depends on
+
+    def of(expr) -> frozenset:
+        found = set()
+        for symbol in getattr(expr, "free_symbols", ()):
+            if symbol in closure:
+                found |= closure[symbol]
+            elif symbol in knowns:
+                found.add(knowns[symbol])
+            elif symbol in rates:
+                found.add(symbol)
+        return frozenset(found)
+
+    for symbol, expr in eqs.definitions:
+        closure[symbol] = of(expr)
+    mass, forcing = eqs.mass_matrix, eqs.forcing
+    dim = mass.shape[0]
+    blocks = _blocks(dim, lambda i, j: mass[i, j] != 0)
+    rate_of = {}
+    for block in blocks:
+        used = frozenset().union(
+            *(of(mass[i, j]) for i in block for j in block), *(of(forcing[i]) for i in block)
+        )
+        rate_of.update({eqs.rates[i]: used for i in block})
+
+    def resolved(expr) -> frozenset[str]:  # u' replaced by what it depends on
+        found = of(expr)
+        return frozenset(name for item in found for name in (rate_of[item] if item in rates else {item}))
+
+    names = scene.state_names()
+    result = {
+        name: resolved(expr)
+        for name, expr in zip(scene.output_names(), eqs.outputs)  # the pivot force comes last
+    }
+    result |= {f"der({names[k]})": frozenset({names[k + dim]}) for k in range(dim)}  # q' = u
+    result |= {f"der({names[dim + k]})": rate_of[eqs.rates[k]] for k in range(dim)}
+    if scene.coupling:
+        inputs = set(scene.input_names())
+        everything = frozenset().union(*rate_of.values())
+        momentum = frozenset().union(*(of(entry) for entry in eqs.momentum), of(eqs.total_mass))
+        whole_mass = frozenset().union(*(of(mass[i, j]) for i in range(dim) for j in range(dim)))
+        result |= dict.fromkeys(FREE_FORCE, frozenset(everything - inputs))  # F_pivot at a_pivot = 0
+        result |= dict.fromkeys(APPARENT_MASS, momentum | whole_mass)  # m I - P M^-1 P^T
+    return result
+
+
+def _blocks(dim: int, linked) -> list[list[int]]:
+    """The indices 0..dim-1 in the connected blocks of the symmetric relation linked(i, j)."""
+    root = list(range(dim))
+
+    def find(i):
+        while root[i] != i:
+            root[i] = root[root[i]]
+            i = root[i]
+        return i
+
+    for i in range(dim):
+        for j in range(i + 1, dim):
+            if linked(i, j):
+                root[find(i)] = find(j)
+    blocks: dict[int, list[int]] = {}
+    for i in range(dim):
+        blocks.setdefault(find(i), []).append(i)
+    return list(blocks.values())
+
+
+def _chain(scene: Scene) -> Dependencies:
+    """The recursive formulation's dependencies: down the chain from the pivot."""
+    n, parameters = scene.n, set(scene.parameter_names())
+    angles = [frozenset({f"alpha{i}", f"beta{i}"}) for i in range(n)]
+    above = [frozenset().union(*angles[: i + 1]) for i in range(n)]  # orientation of link i
+    lengths = [frozenset(f"l{k}" for k in range(i + 1)) for i in range(n)]
+    everything = frozenset(scene.state_names()) | parameters | set(scene.input_names())
+    result = {}
+    for scalar in scene.output_scalars():
+        i = scalar.link
+        if scalar.stem == "bob" or scalar.quantity in ("link_x", "link_y", "link_z"):
+            # the first joint turns last about the pivot's x axis (scene.py's 'Space' 'ZXY'),
+            # which moves no point along x
+            turns = above[i] - ({"beta0"} if scalar.suffix == "_x" else set())
+            result[scalar.name] = turns | lengths[i]
+        elif scalar.stem == "link":  # the orientation quaternion
+            result[scalar.name] = above[i]
+        elif scalar.name == "energy":
+            result[scalar.name] = everything - set(scene.input_names())
+        elif scalar.name in PIVOT_OUTPUTS:
+            result[scalar.name] = everything
+        elif scalar.name in FREE_FORCE:
+            result[scalar.name] = everything - set(scene.input_names())
+        elif scalar.name in APPARENT_MASS:
+            result[scalar.name] = above[n - 1] | (parameters - {"g"})
+    names = scene.state_names()
+    dim = 2 * n
+    result |= {f"der({names[k]})": frozenset({names[k + dim]}) for k in range(dim)}
+    result |= {f"der({names[dim + k]})": everything for k in range(dim)}
+    return result
