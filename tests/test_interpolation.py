@@ -251,3 +251,16 @@ def test_fmu_states_keep_the_derivatives_and_reset_forgets_them(built_fmu):
     assert inst.get("a_pivot_x") == [U[0]]  # held again
     assert inst.get(*states) != moved
     inst.close()
+
+
+@pytest.mark.parametrize("scene", [COUPLED, RECURSIVE], ids=["expanded", "recursive"])
+def test_energy_conserved_has_derivatives_zero_to_rounding(built_fmu, scene):
+    """With the support at rest the energy is conserved: its first and second time derivatives,
+    sums of terms of the energy's size times the rates squared, vanish to rounding (1e-14 of
+    the energy), which no difference in time resolves: exact, not approximate."""
+    inst = INSTANCES[2](built_fmu(scene, backend="native"))
+    inst.step(0.7)
+    (energy,) = inst.get("energy")
+    for order in (1, 2):
+        assert abs(output_derivatives(inst, ["energy"], order)[0]) < 1e-14 * abs(energy)
+    inst.close()
