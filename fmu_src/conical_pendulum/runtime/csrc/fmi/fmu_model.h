@@ -29,7 +29,8 @@
  * model_tolerance_refusal and model_set_tolerance, fmi3ExitInitializationMode calls
  * model_initialize, fmi3DoStep calls model_do_step_early (early return when the importer
  * allows it; no event handling), fmi3GetDirectionalDerivative calls
- * model_directional_derivative and fmi3GetAdjointDerivative model_adjoint_derivative.
+ * model_directional_derivative, fmi3GetAdjointDerivative model_adjoint_derivative and
+ * fmi3GetOutputDerivatives model_get_output_derivative (FMI 3.0 has no input derivatives).
  * What the two layers do alike on these functions (the FMU states, which copy the ModelData
  * whole, the experiment, the Model Exchange states, ...) is written once, in fmi_layer.c;
  * each layer keeps only its standard's API, types, state table and thin wrappers.
