@@ -69,7 +69,7 @@ class Instance:
 
     def set(self, values):
         for name, value in values.items():
-            if self.types[name] == "Integer":
+            if self.types[name] in ("Integer", "Enumeration"):  # fmi2SetInteger sets both
                 self.fmu.setInteger([self.vr[name]], [int(value)])
             else:
                 self.fmu.setReal([self.vr[name]], [float(value)])
@@ -171,6 +171,8 @@ class Instance3:
         for name, value in fmi3_start_values(self.path, values).items():
             if self.types[name] == "Int32":
                 self.fmu.setInt32([self.vr[name]], [int(value)])
+            elif self.types[name] == "Enumeration":  # FMI 3.0 sets an enumeration as Int64
+                self.fmu.setInt64([self.vr[name]], [int(value)])
             else:
                 value = [float(x) for x in value] if isinstance(value, list) else [float(value)]
                 self.fmu.setFloat64([self.vr[name]], value)

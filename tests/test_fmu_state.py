@@ -37,7 +37,7 @@ def real_names(instance):
 
 
 def integer_names(instance):
-    return [v.name for v in instance.md.modelVariables if v.type == "Integer"]
+    return [v.name for v in instance.md.modelVariables if v.type in ("Integer", "Enumeration")]
 
 
 def values(instance):

@@ -6,9 +6,11 @@ import zipfile
 
 import numpy as np
 import pytest
+from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssd, read_ssv
 from lxml import etree
 
+from conical_pendulum.builder.units import BASE_UNITS
 from conical_pendulum.demos import coupled, ecospy_run, libcosim_run, ssp, ssp_tools
 from conical_pendulum.demos.monolithic import cart_parameters
 from fmu_helpers import Instance
@@ -36,8 +38,12 @@ def ecospy_runs(package, tmp_path_factory):
     return {scheme: ssp_tools.run("ecospy", package, scheme, work) for scheme in ssp.VARIANTS}
 
 
-def test_the_package_is_valid_ssp_with_units_parameters_and_the_step(package):
+def test_the_package_is_valid_ssp_with_units_parameters_and_the_step(package, fmus):
     assert ssp.validate(package) == []
+    # the connectors' units are the FMUs' own: each variable's unit, each unit's BaseUnit
+    mds = dict(zip(ssp.FMUS, (read_model_description(str(path)) for path in fmus)))
+    declared = {u.name: u.baseUnit for md in mds.values() for u in md.unitDefinitions}
+    units = {(i, v.name): v.unit for i, md in mds.items() for v in md.modelVariables}
     with zipfile.ZipFile(package) as archive:
         assert sorted(archive.namelist()) == sorted(
             ["SystemStructure.ssd", "ApparentMass.ssd", *ssp.FMUS.values()]
@@ -59,6 +65,14 @@ def test_the_package_is_valid_ssp_with_units_parameters_and_the_step(package):
             assert x.get("kind") == "output" and x.find("ssc:Real", ssp.NS).get("unit") == "m"
             (newton,) = root.xpath("ssd:Units/ssc:Unit[@name='N']/ssc:BaseUnit", namespaces=ssp.NS)
             assert dict(newton.attrib) == {"kg": "1", "m": "1", "s": "-2"}
+            for connector in root.iterfind(".//ssd:Connector", ssp.NS):
+                instance = connector.getparent().getparent().get("name")
+                unit = connector.find("ssc:Real", ssp.NS).get("unit")
+                assert unit == units[instance, connector.get("name")] and unit is not None
+            for unit in root.iterfind("ssd:Units/ssc:Unit", ssp.NS):
+                base = declared[unit.get("name")]
+                wanted = {k: str(getattr(base, k)) for k in BASE_UNITS if getattr(base, k)}
+                assert dict(unit.find("ssc:BaseUnit", ssp.NS).attrib) == wanted
             (binding,) = root.xpath(".//ssd:ParameterBinding/@source", namespaces=ssp.NS)
             assert binding == ssp.parameter_file(scheme)
     assert ssp.experiment(package) == (STEP, STOP_TIME)

@@ -361,7 +361,7 @@ def test_command_writes_the_sweep(seed_fmu, tmp_path):
         (["--grid", "l0=5", "--grid", "l0=6"], "a variable is given twice"),
         (["--grid", "length=5"], "unknown variable(s) length: ConicalPendulum has no such variable"),
         (["--grid", "energy=1"], "energy cannot be set"),
-        (["--grid", "solver=1.5"], "solver = 1.5: solver is an Integer variable"),
+        (["--grid", "solver=1.5"], "solver = 1.5: solver is an Enumeration variable"),
         (["--grid", "l0=5", "--outputs", "energy,bob9_x"], "unknown output(s) bob9_x"),
         (["--grid", "l0=5", "--interval", "0"], "must be positive"),
         (["--grid", "l0=5", "--loop", "python"], "argument --loop: invalid choice: 'python'"),

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from .fmi3_arrays import array_start_values, fmu_data, scalar_columns
 
+# fmpy's types of a whole-number variable (the solver is an Enumeration): set as integers
+WHOLE_TYPES = ("Integer", "Int32", "Enumeration")
+
 
 def logging_callbacks(on_message):
     """fmi2CallbackFunctions that hand each log message to on_message(status, text).

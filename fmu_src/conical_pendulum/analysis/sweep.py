@@ -59,7 +59,7 @@ from fmpy.simulation import settable_in_initialization_mode, settable_in_instant
 
 from ..progress import bar
 from . import runner
-from .fmpy_runs import logging_callbacks, run_fmu
+from .fmpy_runs import WHOLE_TYPES, logging_callbacks, run_fmu
 
 logger = logging.getLogger(__name__)
 LOOPS = ("runner", "fmpy")  # sweep()'s loop: analysis.runner's compiled loop, or fmpy's own
@@ -331,9 +331,11 @@ def _check_runs(md, runs: Iterable[Mapping]) -> list[dict]:
         for name, value in run.items():
             if isinstance(value, bool) or not isinstance(value, numbers.Real):
                 raise ValueError(f"run {index}: {name} = {value!r} is not a number")
-            if variables[name].type == "Integer":
+            if variables[name].type in WHOLE_TYPES:
                 if not float(value).is_integer():
-                    raise ValueError(f"run {index}: {name} = {value!r}: {name} is an Integer variable")
+                    raise ValueError(
+                        f"run {index}: {name} = {value!r}: {name} is an {variables[name].type} variable"
+                    )
                 run[name] = int(value)
             else:
                 run[name] = float(value)
@@ -363,7 +365,7 @@ def _inputs(md, runs: list[dict]):
     columns = {}
     for name in names:
         variable = variables[name]
-        start = (int if variable.type == "Integer" else float)(variable.start)
+        start = (int if variable.type in WHOLE_TYPES else float)(variable.start)
         column = f"{name}_start" if variable.causality == "output" else name
         columns[column] = [run.get(name, start) for run in runs]
     return pd.DataFrame(columns, index=pd.RangeIndex(len(runs), name="run"))

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from ..runtime.rules import RULES
 from . import c_literals as c
 from .native_model import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
-from .units import attributes, enumerations, unit_definitions
+from .units import TIME, attributes, declared, enumerations, unit_definitions
 from .variables import Variable, describe, model_structure
 
 TYPES = {"Real": "Float64", "Integer": "Int32"}
@@ -156,7 +156,7 @@ def model_description(described: Description) -> bytes:
             "hasEventMode": "false",
         },
     )
-    unit_definitions(root, records)
+    unit_definitions(root, records, also=(TIME,))
     found = enumerations(records)
     if found:
         table = ET.SubElement(root, "TypeDefinitions")
@@ -191,6 +191,8 @@ def _model_variables(
         description="simulation time",
         causality="independent",
         variability="continuous",
+        quantity=declared(TIME).quantity,
+        unit=TIME,
     )
     if any(variable.array for variable in variables_):
         ET.SubElement(  # the arrays' dimension (fmi3_arrays.h's CP_VR_DIMENSION)

@@ -22,6 +22,7 @@ from ..runtime.rules import RULES
 
 BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")  # FMI's BaseUnit attributes
 DEGREES = 180.0 / math.pi  # value_deg = DEGREES * value_rad
+TIME = "s"  # the unit of FMI 3.0's independent variable, time
 
 
 @dataclass(frozen=True)
@@ -72,17 +73,19 @@ def declared(name: str) -> Unit:
         raise ValueError(f"unit {name!r} is not declared in builder.units: {', '.join(UNITS)}") from None
 
 
-def used(records) -> list[Unit]:
-    """The units the records carry, in UNITS's order: a model description's UnitDefinitions."""
-    names = {v.unit for v in records if v.unit}
+def used(records, also: tuple[str, ...] = ()) -> list[Unit]:
+    """The units the records carry (and `also`), in UNITS's order: a model description's
+    UnitDefinitions."""
+    names = {v.unit for v in records if v.unit} | set(also)
     for name in names:
         declared(name)
     return [unit for name, unit in UNITS.items() if name in names]
 
 
-def unit_definitions(parent: ET.Element, records) -> None:
-    """<UnitDefinitions> of the units the records carry (FMI 2.0 and 3.0 write them alike)."""
-    units = used(records)
+def unit_definitions(parent: ET.Element, records, also: tuple[str, ...] = ()) -> None:
+    """<UnitDefinitions> of the units the records carry and `also` (FMI 2.0 and 3.0 write them
+    alike)."""
+    units = used(records, also)
     if not units:
         return
     table = ET.SubElement(parent, "UnitDefinitions")

@@ -69,9 +69,9 @@ def start_values(fmu: Path, given: list[tuple[str, float]]) -> dict:
             raise UserError(f"--start {name}={value:g}: the FMU has no variable {name!r}")
         if not (settable_in_instantiated(variable) or settable_in_initialization_mode(variable)):
             raise UserError(f"--start {name}={value:g}: {name} is calculated; set parameters and states")
-        if variable.type == "Integer":
+        if variable.type in fmpy_runs.WHOLE_TYPES:
             if not value.is_integer():
-                raise UserError(f"--start {name}={value:g}: {name} is an Integer variable")
+                raise UserError(f"--start {name}={value:g}: {name} is an {variable.type} variable")
             value = int(value)
         values[name] = value
     return values

@@ -36,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=numbers,
         default=[ssp.STEP],
         metavar="DT,DT,...",
-        help=f"the packages' communication step [s] (the OSP annotation), comma-separated; each must "
+        help=f"the packages' communication step [s] (the OSP and OMSimulator annotations), comma-separated; each must "
         f"divide the stop time and be a multiple of the smallest ({ssp.STEP:g})",
     )
     parser.add_argument(
