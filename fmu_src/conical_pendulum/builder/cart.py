@@ -27,7 +27,8 @@ from .variables import Group, Member, Variable, per_second, variables_of
 NAME = "Cart"
 DESCRIPTION = (
     "cart on a spring and damper along X carrying an apparent mass M_x; inputs F_x (held or "
-    "extrapolated) and M_x (held) over each communication step, solved exactly"
+    "extrapolated) and M_x (held) over each communication step, or both interpolated from the "
+    "derivatives the master sets, solved exactly"
 )
 # Descriptions with the hole {unit}: UNITS's, the one source of each variable's unit.
 PARAMETERS = {
@@ -57,7 +58,7 @@ INPUTS = {
     "F_x": "force on the cart along X [{unit}]: the pendulum's F_pivot_x, or F_free_x with M_x",
     "M_x": "apparent mass along X of what the cart carries [{unit}] (the pendulum's M_pivot_xx), moved "
     "with the cart: (m_cart + M_x) a = F_x - k_cart x - c_cart v; 0 for an explicit exchange; "
-    "held over each step",
+    "held over each step, or moving as the derivatives the master sets say",
 }
 ACCELERATION = (
     "acceleration of the cart along X [{unit}] (the pendulum's a_pivot_x); depends at once on F_x and M_x"

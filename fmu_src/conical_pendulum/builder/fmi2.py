@@ -8,7 +8,7 @@ import time
 import xml.etree.ElementTree as ET
 
 from ..runtime.rules import RULES
-from .native_model import LOG_CATEGORIES, Description, Standard
+from .native_model import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
 from .units import attributes, enumerations, unit_definitions
 from .variables import Structure, Variable, model_structure
 
@@ -44,8 +44,8 @@ def model_description(described: Description) -> bytes:
             "CoSimulation",
             {
                 "canHandleVariableCommunicationStepSize": "true",
-                "canInterpolateInputs": "false",
-                "maxOutputDerivativeOrder": "0",
+                "canInterpolateInputs": "true",
+                "maxOutputDerivativeOrder": str(MAX_DERIVATIVE_ORDER),
             },
         ),
     ):

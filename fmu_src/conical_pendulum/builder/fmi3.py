@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from ..runtime.rules import RULES
 from . import c_literals as c
-from .native_model import LOG_CATEGORIES, Description, Standard
+from .native_model import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
 from .units import TIME, attributes, declared, enumerations, unit_definitions
 from .variables import Variable, describe, model_structure
 
@@ -149,7 +149,7 @@ def model_description(described: Description) -> bytes:
         {
             **common,
             "canHandleVariableCommunicationStepSize": "true",
-            "maxOutputDerivativeOrder": "0",
+            "maxOutputDerivativeOrder": str(MAX_DERIVATIVE_ORDER),
             "providesIntermediateUpdate": "false",
             "mightReturnEarlyFromDoStep": "true",
             "canReturnEarlyAfterIntermediateUpdate": "false",

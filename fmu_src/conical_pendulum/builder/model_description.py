@@ -107,8 +107,8 @@ def model_description_text(scene: Scene) -> str:
         else "; PUBLISHED pydy-example kinematics (does not conserve energy)"
     )
     coupling = (
-        "; hangs from a moving support: inputs a_pivot_x/y/z (held constant over each "
-        "communication step), outputs F_pivot_x/y/z = F_free_x/y/z - M_app a_pivot "
+        "; hangs from a moving support: inputs a_pivot_x/y/z (held over each "
+        "communication step, or interpolated from their derivatives), outputs F_pivot_x/y/z = F_free_x/y/z - M_app a_pivot "
         "with the apparent mass M_pivot_xx..zz"
         if scene.coupling
         else ""

@@ -39,6 +39,10 @@ class NativeModel:
 
 # The log categories, written once: the model description's LogCategories and fmu_config.h's
 # CP_LOG_* (the only categories the FMI layers log in, and those SetDebugLogging takes).
+# The highest order of the time derivatives a native FMU gives of its continuous outputs and
+# takes of its inputs (fmu_model.h's MODEL_MAX_DERIVATIVE_ORDER): FMI's maxOutputDerivativeOrder,
+# and FMI 2.0's canInterpolateInputs.
+MAX_DERIVATIVE_ORDER = 2
 LOG_CATEGORIES = {
     "logStatusError": "refused values and calls",
     "logStatusDiscard": "steps that could not complete, with a diagnosis",

@@ -40,7 +40,17 @@ def _config(data: dict, records: list[Variable]) -> list[str]:
 
 PENDULUM = NativeModel(
     MODEL_NAME,
-    ("model.c", "dynamics.c", "chain.c", "solvers.c", "diagnosis.c", "cosim.c", "directional.c", "rules.c")
+    (
+        "model.c",
+        "dynamics.c",
+        "chain.c",
+        "solvers.c",
+        "diagnosis.c",
+        "cosim.c",
+        "directional.c",
+        "second_directional.c",
+        "rules.c",
+    )
     + ("variable_table.c", "pendulum_model.c"),
     ("model.h", "real.h", "dynamics.h", "chain.h", "solvers.h", "tableaus.h", "status.h", "diagnosis.h")
     + ("cosim.h", "directional.h", "rules.h", "variable_table.h"),

@@ -191,8 +191,8 @@ DESCRIBED = {
         "J", "total mechanical energy relative to the pivot (kinetic + potential, zero at Y = 0) [{unit}]"
     ),
     **_axes(
-        "acceleration of the pivot (the support), inertial {axis} (Y up) [{unit}]; held constant over "
-        "each communication step",
+        "acceleration of the pivot (the support), inertial {axis} (Y up) [{unit}]; held over each "
+        "communication step, or (native FMUs) moving as the derivatives the master sets say",
         "m/s2",
         {f"a_pivot_{c}": c for c in "xyz"},
     ),

@@ -14,7 +14,7 @@ cdef extern from "status.h":
     const char *cp_status_message(int status)
 
 cdef extern from "solvers.h":
-    ctypedef int (*cp_rhs_fn)(void *ctx, const double *x, double *dx) noexcept nogil
+    ctypedef int (*cp_rhs_fn)(void *ctx, double t, const double *x, double *dx) noexcept nogil
     ctypedef struct cp_system:
         int dim
         cp_rhs_fn rhs
@@ -62,6 +62,7 @@ cdef extern from "cosim.h":
     int cp_cosim_step(const cp_settings *settings, const double *p, double *x, double *y,
                       double t, double dt, double *h, double *work, int *fsal, double *stats,
                       cp_failure *failure) noexcept nogil
+    int cp_held_rhs(void *ctx, double t, const double *x, double *dx) noexcept nogil
 
 cdef extern from "<math.h>" nogil:
     double INFINITY
@@ -128,7 +129,7 @@ cdef void _system(cp_system *system, cp_model *model, const double *p, cp_stats 
     model.pivot_ratio = 1.0
     model.bad_dof = -1
     system.dim = CP_NSTATE
-    system.rhs = cp_rhs
+    system.rhs = cp_held_rhs
     system.ctx = model
     stats.nfev = stats.naccept = stats.nreject = 0
 

@@ -30,9 +30,22 @@ int cp_cosim_step(const cp_settings *settings, const double *p, double *x, doubl
 /* cp_cosim_step with early return when reached is not NULL: on failure x and y are left at
  * the last point the solver reached where x' was computed (cp_integrate) and its outputs are
  * finite, or as they were at t; *reached is that time (t + dt on success), and
- * failure->kept says it too. */
+ * failure->kept says it too. With input_rates not NULL (CP_NINPUT rows of the first and
+ * second time derivatives of the inputs at t: cp_input_at's rates), every input follows its
+ * Taylor polynomial over the step, evaluated at each stage's time, and y is computed with the
+ * inputs where the state ends; NULL holds them, as p has them. */
 int cp_cosim_step_early(const cp_settings *settings, const double *p, double *x, double *y,
                         double t, double dt, double *h, double *work, int *fsal,
-                        double stats[CP_NSTAT], cp_failure *failure, double *reached);
+                        double stats[CP_NSTAT], cp_failure *failure, double *reached,
+                        const double (*input_rates)[2]);
+
+/* cp_rhs as a solver's system's right-hand side (ctx a cp_model): the inputs held as its p
+ * has them, whatever t. */
+int cp_held_rhs(void *ctx, double t, const double *x, double *dx);
+
+/* The inputs of p (its last CP_NINPUT values) tau after the point where they are p's, each
+ * on its Taylor polynomial u + u' tau + u'' tau^2 / 2 (rates[k] = {u', u''}), into p_at (all
+ * CP_NPARAM values: the parameters copied). */
+void cp_input_at(const double *p, const double (*rates)[2], double tau, double *p_at);
 
 #endif

@@ -12,4 +12,16 @@ int cp_directional(const double *x, const double *p, const double *dx_seed,
                    const double *dp_seed, double *d_derivatives, double *d_outputs,
                    double *pivot_ratio, int *bad_dof);
 
+/* The second derivative in s of the outputs along the curve (x, p) + s v + s^2 w / 2 at
+ * s = 0, y''[v, v] + y' w (CP_NOUTPUT values into d2_outputs): with v = (x', u') and
+ * w = (x'', u'') the outputs' second time derivative. Computed in second_directional.c from
+ * two evaluations of the model's C in long double complex arithmetic at s = +-h e^(i pi / 4),
+ * (Im y(s) + Im y(-s)) / h^2 = y'' + O(h^4): the first-order terms, equal and opposite,
+ * cancel, with h = eps_long_double^(1/5) over the curve's rate, so that truncation and
+ * rounding both stay below double's rounding (where long double is wider than double, as on
+ * x86-64; where it is double, some 1e-13 relative). Returns as cp_directional does. */
+int cp_second_directional(const double *x, const double *p, const double *vx, const double *vp,
+                          const double *wx, const double *wp, double *d2_outputs,
+                          double *pivot_ratio, int *bad_dof);
+
 #endif

@@ -20,10 +20,10 @@ static const tableau RK45_TABLEAU = {6, 4, RK45_C, &RK45_A[0][0], RK45_B, 5, RK4
 static const tableau DOP853_TABLEAU = {DOP853_STAGES, 7, DOP853_C, &DOP853_A[0][0], DOP853_B,
                                        DOP853_STAGES, DOP853_E5, DOP853_E3};
 
-static int eval(const cp_system *sys, const double *x, double *dx, cp_stats *stats)
+static int eval(const cp_system *sys, double t, const double *x, double *dx, cp_stats *stats)
 {
     stats->nfev++;
-    return sys->rhs(sys->ctx, x, dx);
+    return sys->rhs(sys->ctx, t, x, dx);
 }
 
 static double rms(int n, const double *v, const double *scale)
@@ -39,7 +39,7 @@ static double rms(int n, const double *v, const double *scale)
 /* cp_integrate has checked that ceil(dt / max_step) <= max_steps. On failure, good holds the
  * last point where x' was computed (x itself when none was) and *done the substeps that led
  * there. */
-static int rk4(const cp_system *sys, double *x, double dt, double max_step, double *work,
+static int rk4(const cp_system *sys, double t, double *x, double dt, double max_step, double *work,
                cp_stats *stats, long long *done)
 {
     int n = sys->dim, status;
@@ -51,15 +51,16 @@ static int rk4(const cp_system *sys, double *x, double dt, double max_step, doub
     memcpy(good, x, n * sizeof(double));
     *done = 0;
     for (long long s = 0; s < steps; s++) {
-        if ((status = eval(sys, y, k1, stats))) return status;
+        const double ts = t + s * h;
+        if ((status = eval(sys, ts, y, k1, stats))) return status;
         memcpy(good, y, n * sizeof(double));  /* x' is defined at y */
         *done = s;
         for (int i = 0; i < n; i++) tmp[i] = y[i] + 0.5 * h * k1[i];
-        if ((status = eval(sys, tmp, k2, stats))) return status;
+        if ((status = eval(sys, ts + 0.5 * h, tmp, k2, stats))) return status;
         for (int i = 0; i < n; i++) tmp[i] = y[i] + 0.5 * h * k2[i];
-        if ((status = eval(sys, tmp, k3, stats))) return status;
+        if ((status = eval(sys, ts + 0.5 * h, tmp, k3, stats))) return status;
         for (int i = 0; i < n; i++) tmp[i] = y[i] + h * k3[i];
-        if ((status = eval(sys, tmp, k4, stats))) return status;
+        if ((status = eval(sys, ts + h, tmp, k4, stats))) return status;
         for (int i = 0; i < n; i++) y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         stats->naccept++;
     }
@@ -69,7 +70,7 @@ static int rk4(const cp_system *sys, double *x, double dt, double max_step, doub
 }
 
 /* scipy.integrate._ivp.common.select_initial_step */
-static int initial_step(const cp_system *sys, const double *y, const double *f, double interval,
+static int initial_step(const cp_system *sys, double t, const double *y, const double *f, double interval,
                         double rtol, double atol, double max_step, int order, double *tmp,
                         double *f1, double *scale, cp_stats *stats, double *h)
 {
@@ -79,7 +80,7 @@ static int initial_step(const cp_system *sys, const double *y, const double *f, 
     double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
     if (h0 > interval) h0 = interval;
     for (int i = 0; i < n; i++) tmp[i] = y[i] + h0 * f[i];
-    if ((status = eval(sys, tmp, f1, stats))) return status;
+    if ((status = eval(sys, t + h0, tmp, f1, stats))) return status;
     for (int i = 0; i < n; i++) tmp[i] = f1[i] - f[i];
     double d2 = rms(n, tmp, scale) / h0;
     double h1 = (d1 <= 1e-15 && d2 <= 1e-15) ? fmax(1e-6, h0 * 1e-3)
@@ -162,14 +163,14 @@ static int one_step(const tableau *tb, const cp_system *sys, double t, double t_
                 for (int j = 0; j < s; j++) dy += K[j * n + i] * a[j];
                 m->tmp[i] = m->y[i] + dy * h;
             }
-            if ((status = eval(sys, m->tmp, K + s * n, stats))) return status;
+            if ((status = eval(sys, t + tb->c[s] * h, m->tmp, K + s * n, stats))) return status;
         }
         for (int i = 0; i < n; i++) {
             double dy = 0.0;
             for (int j = 0; j < tb->stages; j++) dy += K[j * n + i] * tb->b[j];
             m->y_new[i] = m->y[i] + h * dy;
         }
-        if ((status = eval(sys, m->y_new, K + tb->stages * n, stats))) return status;
+        if ((status = eval(sys, t_new, m->y_new, K + tb->stages * n, stats))) return status;
         for (int i = 0; i < n; i++)
             m->scale[i] = atol + fmax(fabs(m->y[i]), fabs(m->y_new[i])) * rtol;
         double norm = error_norm(tb, n, K, h, m->scale, m->err);
@@ -196,15 +197,15 @@ static void advance(const tableau *tb, int n, rk_memory *m)
     memcpy(m->K, m->K + tb->stages * n, n * sizeof(double));
 }
 
-static int start(const tableau *tb, const cp_system *sys, const double *x, double interval,
+static int start(const tableau *tb, const cp_system *sys, double t, const double *x, double interval,
                  double rtol, double atol, double max_step, int fsal, rk_memory *m,
                  double *h_abs, cp_stats *stats)
 {
     int status;
     memcpy(m->y, x, sys->dim * sizeof(double));
-    if (!fsal && (status = eval(sys, m->y, m->K, stats))) return status;
+    if (!fsal && (status = eval(sys, t, m->y, m->K, stats))) return status;
     if (!(*h_abs > 0) || !isfinite(*h_abs))
-        return initial_step(sys, m->y, m->K, interval, rtol, atol, max_step, tb->order, m->tmp,
+        return initial_step(sys, t, m->y, m->K, interval, rtol, atol, max_step, tb->order, m->tmp,
                             m->err, m->scale, stats, h_abs);
     return CP_OK;
 }
@@ -220,7 +221,7 @@ static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x
     double t_start = t, t_end = t + dt, h_abs = *h_io, t_new, h;
     long long attempts = 0;
     if (!(max_step > 0)) max_step = INFINITY;
-    if ((status = start(tb, sys, x, dt, rtol, atol, max_step, fsal, &m, &h_abs, stats))) return status;
+    if ((status = start(tb, sys, t, x, dt, rtol, atol, max_step, fsal, &m, &h_abs, stats))) return status;
     while (t < t_end) {
         status = one_step(tb, sys, t, t_end, &m, rtol, atol, max_step, max_steps, &attempts,
                           &h_abs, &t_new, &h, stats);
@@ -242,7 +243,7 @@ static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x
 }
 
 /* scipy's DOP853._dense_output_impl: three more stages, then the interpolant F. */
-static int dop853_interpolant(const cp_system *sys, double h, rk_memory *m, cp_stats *stats)
+static int dop853_interpolant(const cp_system *sys, double t, double h, rk_memory *m, cp_stats *stats)
 {
     int n = sys->dim, status, stages = DOP853_STAGES;
     double *K = m->K;
@@ -253,7 +254,7 @@ static int dop853_interpolant(const cp_system *sys, double h, rk_memory *m, cp_s
             for (int j = 0; j < s; j++) dy += K[j * n + i] * DOP853_A_EXTRA[e][j];
             m->tmp[i] = m->y[i] + dy * h;
         }
-        if ((status = eval(sys, m->tmp, K + s * n, stats))) return status;
+        if ((status = eval(sys, t + DOP853_C_EXTRA[e] * h, m->tmp, K + s * n, stats))) return status;
     }
     const double *f_old = K, *f_new = K + stages * n;
     for (int i = 0; i < n; i++) {
@@ -294,14 +295,14 @@ int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double
     long long attempts = 0;
     if (!(max_step > 0)) max_step = INFINITY;
     if (ntimes < 2) return CP_OK;
-    status = start(tb, sys, out, t_end - t, rtol, atol, max_step, 0, &m, &h_abs, stats);
+    status = start(tb, sys, t, out, t_end - t, rtol, atol, max_step, 0, &m, &h_abs, stats);
     if (status) return status;
     while (t < t_end) {
         status = one_step(tb, sys, t, t_end, &m, rtol, atol, max_step, max_steps, &attempts,
                           &h_abs, &t_new, &h, stats);
         if (status) return status;
         if (next < ntimes && times[next] <= t_new) {
-            if ((status = dop853_interpolant(sys, h, &m, stats))) return status;
+            if ((status = dop853_interpolant(sys, t, h, &m, stats))) return status;
             for (; next < ntimes && times[next] <= t_new; next++) {
                 if (times[next] == t_new) memcpy(out + next * n, m.y_new, n * sizeof(double));
                 else dop853_evaluate(n, &m, (times[next] - t) / h, out + next * n);
@@ -324,7 +325,7 @@ int cp_integrate(int method, const cp_system *sys, double t, double *x, double d
     if (method == CP_RK4) {
         long long done;
         *fsal = 0;
-        status = rk4(sys, x, dt, max_step, work, stats, &done);
+        status = rk4(sys, t, x, dt, max_step, work, stats, &done);
         if (status == CP_OK) {
             if (reached) *reached = t + dt;
         } else if (reached && done > 0) {  /* the last substep where x' was computed */

@@ -6,7 +6,9 @@
 
 #include "status.h"
 
-typedef int (*cp_rhs_fn)(void *ctx, const double *x, double *dx);
+/* x' = f(t, x): the solvers pass every stage's time, so an input that moves within a step
+ * (cosim.c's interpolated inputs) is evaluated where the stage is. */
+typedef int (*cp_rhs_fn)(void *ctx, double t, const double *x, double *dx);
 
 typedef struct {
     int dim;

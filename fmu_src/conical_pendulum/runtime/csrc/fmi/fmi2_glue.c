@@ -414,21 +414,31 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[])
 {
-    (void)vr, (void)order, (void)value;
     FmiInstance *inst = CHECKED(c, fmi2SetRealInputDerivatives);
     if (!inst) return fmi2Error;
-    return nvr ? REFUSE(inst, "fmi2SetRealInputDerivatives: inputs are held constant over a "
-                        "step (canInterpolateInputs is false)") : fmi2OK;
+    if (nvr && (!vr || !order || !value))
+        return REFUSE(inst, "fmi2SetRealInputDerivatives: vr, order or value is NULL");
+    for (size_t k = 0; k < nvr; k++)  /* all checked before any is taken */
+        if (fmi_check_input_derivative(inst, "fmi2SetRealInputDerivatives", vr[k], vr[k], order[k],
+                                       value[k]))
+            return fmi2Error;
+    for (size_t k = 0; k < nvr; k++) model_set_input_derivative(inst->model, vr[k], order[k], value[k]);
+    return fmi2OK;
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[])
 {
-    (void)vr, (void)order, (void)value;
     FmiInstance *inst = CHECKED(c, fmi2GetRealOutputDerivatives);
     if (!inst) return fmi2Error;
-    return nvr ? REFUSE(inst, "fmi2GetRealOutputDerivatives: not provided "
-                        "(MaxOutputDerivativeOrder is 0)") : fmi2OK;
+    if (nvr && (!vr || !order || !value))
+        return REFUSE(inst, "fmi2GetRealOutputDerivatives: vr, order or value is NULL");
+    for (size_t k = 0; k < nvr; k++) {
+        const FmiStatus status = fmi_get_output_derivative(inst, "fmi2GetRealOutputDerivatives",
+                                                           vr[k], vr[k], order[k], &value[k]);
+        if (status != FMI_OK) return (fmi2Status)status;
+    }
+    return fmi2OK;
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,

@@ -825,11 +825,21 @@ fmi3Status fmi3EnterStepMode(fmi3Instance c)
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
                                     const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
 {
-    (void)vr, (void)orders, (void)values, (void)nValues;
     FmiInstance *inst = CHECKED(c, fmi3GetOutputDerivatives);
     if (!inst) return fmi3Error;
-    return nvr ? REFUSE(inst, "fmi3GetOutputDerivatives: not provided "
-                        "(maxOutputDerivativeOrder is 0)") : fmi3OK;
+    if (nvr && !orders) return REFUSE(inst, "fmi3GetOutputDerivatives: orders is NULL");
+    if (check_values(inst, "fmi3GetOutputDerivatives", vr, nvr, values, nValues)) return fmi3Error;
+    for (size_t k = 0, j = 0; k < nvr; k++) {
+        const unsigned *members;
+        const size_t n = elements(vr[k], &members);
+        for (size_t e = 0; e < n; e++, j++) {
+            const FmiStatus status = fmi_get_output_derivative(
+                inst, "fmi3GetOutputDerivatives", ELEMENT(vr[k], members, e), vr[k], orders[k],
+                &values[j]);
+            if (status != FMI_OK) return (fmi3Status)status;
+        }
+    }
+    return fmi3OK;
 }
 
 /* One communication step. EARLY RETURN: with earlyReturnAllowed (fmi3InstantiateCoSimulation),

@@ -267,6 +267,56 @@ FmiStatus fmi_derivative(FmiInstance *inst, const char *function, const char *se
     return FMI_OK;
 }
 
+/* ---- input and output derivatives ------------------------------------------------------------ */
+
+/* NULL if order is one the model gives or takes, or the message (without the function). */
+static const char *order_refusal(int order, const char *what, const char *name, char *message,
+                                 size_t size)
+{
+    if (order >= 1 && order <= MODEL_MAX_DERIVATIVE_ORDER) return NULL;
+    snprintf(message, size, "order %d of %s %s: must be 1 to %d (maxOutputDerivativeOrder)",
+             order, what, name, MODEL_MAX_DERIVATIVE_ORDER);
+    return message;
+}
+
+FmiStatus fmi_check_input_derivative(FmiInstance *inst, const char *function, unsigned vr,
+                                     unsigned named, int order, double value)
+{
+    const char *name = inst->standard->variable_name(vr);
+    char message[MESSAGE_SIZE];
+    if (model_check_input_derivative(inst->model, vr) != MODEL_OK)
+        return fmi_error(inst, "%s: value reference %u (%s) is not a continuous input: only "
+                         "inputs take derivatives", function, named, name);
+    if (order_refusal(order, "the derivative of", name, message, sizeof message))
+        return fmi_error(inst, "%s: %s", function, message);
+    if (!isfinite(value))
+        return fmi_error(inst, "%s: derivative %d of %s = %g: must be finite", function, order,
+                         name, value);
+    return FMI_OK;
+}
+
+FmiStatus fmi_get_output_derivative(FmiInstance *inst, const char *function, unsigned vr,
+                                    unsigned named, int order, double *value)
+{
+    const char *name = inst->standard->variable_name(vr);
+    char message[MESSAGE_SIZE];
+    if (order_refusal(order, "the derivative of", name, message, sizeof message))
+        return fmi_error(inst, "%s: %s", function, message);
+    switch (model_get_output_derivative(inst->model, vr, order, value, inst->machine.time,
+                                        message, sizeof message)) {
+    case MODEL_OK: break;
+    case MODEL_DISCARD: return fmi_discard(inst, message);
+    default:
+        return fmi_error(inst, "%s: value reference %u (%s) is not a continuous output: only "
+                         "they have derivatives", function, named, name);
+    }
+    if (isfinite(*value)) return FMI_OK;
+    fmi_log(inst, FMI_DISCARD, inst->standard->log_discard, "%s: derivative %d of %s is not "
+            "finite at t = %.9g s; check parameters and state", function, order, name,
+            inst->machine.time);
+    return FMI_DISCARD;
+}
+
 /* ---- Model Exchange ------------------------------------------------------------------------ */
 
 FmiStatus fmi_set_time(FmiInstance *inst, const char *function, double time)

@@ -172,6 +172,21 @@ FmiStatus fmi_derivative(FmiInstance *inst, const char *function, const char *se
                          const unsigned unknown[], size_t n_unknown, const unsigned known[],
                          size_t n_known, const double seed[], double sensitivity[]);
 
+/* ---- input and output derivatives (Co-Simulation) ------------------------------------------ */
+
+/* Whether value may be the order-th time derivative of the Real input vr (a continuous input,
+ * order 1 to MODEL_MAX_DERIVATIVE_ORDER, value finite), without taking it: FMI_OK, or refused
+ * naming named's variable. A layer checks every value of a call before it sets any
+ * (model_set_input_derivative). */
+FmiStatus fmi_check_input_derivative(FmiInstance *inst, const char *function, unsigned vr,
+                                     unsigned named, int order, double value);
+
+/* The order-th time derivative of the continuous output vr into *value: refused (a value
+ * reference that is no continuous output, an order out of range), discarded where it cannot be
+ * had or is not finite. */
+FmiStatus fmi_get_output_derivative(FmiInstance *inst, const char *function, unsigned vr,
+                                    unsigned named, int order, double *value);
+
 /* ---- Model Exchange ------------------------------------------------------------------------ */
 
 FmiStatus fmi_set_time(FmiInstance *inst, const char *function, double time);

@@ -29,7 +29,8 @@
  * model_tolerance_refusal and model_set_tolerance, fmi3ExitInitializationMode calls
  * model_initialize, fmi3DoStep calls model_do_step_early (early return when the importer
  * allows it; no event handling), fmi3GetDirectionalDerivative calls
- * model_directional_derivative and fmi3GetAdjointDerivative model_adjoint_derivative.
+ * model_directional_derivative, fmi3GetAdjointDerivative model_adjoint_derivative and
+ * fmi3GetOutputDerivatives model_get_output_derivative (FMI 3.0 has no input derivatives).
  * What the two layers do alike on these functions (the FMU states, which copy the ModelData
  * whole, the experiment, the Model Exchange states, ...) is written once, in fmi_layer.c;
  * each layer keeps only its standard's API, types, state table and thin wrappers.
@@ -44,7 +45,7 @@
  * (builder/fmi3.py): the pendulum's per-link arrays and n_links; the cart has neither.
  *
  * Not in the contract: Boolean and String variables, event indicators and events (neither
- * model has any; the FMI layer refuses them), input and output derivatives. */
+ * model has any; the FMI layer refuses them). */
 #ifndef CP_FMU_MODEL_H
 #define CP_FMU_MODEL_H
 
@@ -160,6 +161,31 @@ ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], si
                                      const unsigned knowns[], size_t n_known, const double seed[],
                                      double sensitivity[], double time, char *message,
                                      size_t size);
+
+/* ---- input and output derivatives (Co-Simulation) ----
+ * FMI 2.0's canInterpolateInputs with fmi2SetRealInputDerivatives, and maxOutputDerivativeOrder
+ * with fmi2GetRealOutputDerivatives (FMI 3.0: fmi3GetOutputDerivatives). The FMI layer checks
+ * the order (1 to MODEL_MAX_DERIVATIVE_ORDER) and that a value set is finite, and refuses a
+ * derived value that is not; the model says which variables have derivatives. */
+
+#define MODEL_MAX_DERIVATIVE_ORDER 2
+
+/* MODEL_OK if vr is a continuous input whose derivatives may be set, else MODEL_NO_VARIABLE. */
+ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr);
+
+/* Takes the order-th time derivative of the input vr at the current time (order 1 or 2, the
+ * value finite, vr accepted by model_check_input_derivative). Over the next step the input
+ * follows its Taylor polynomial u + u' tau + u'' tau^2 / 2 (tau from the step's start),
+ * evaluated wherever the model needs it; after the step the input's value and derivatives are
+ * the polynomial's there, until the master sets others. Reset sets every derivative to 0
+ * (held inputs); they are part of the ModelData, so of the FMU states. */
+void model_set_input_derivative(ModelData *m, unsigned vr, int order, double value);
+
+/* The order-th time derivative (1 or 2) of the continuous output vr at the current time, with
+ * the inputs moving as their derivatives say: MODEL_OK; MODEL_NO_VARIABLE (vr is no continuous
+ * output); MODEL_DISCARD (message) where it cannot be had. Exact to rounding. */
+ModelStatus model_get_output_derivative(ModelData *m, unsigned vr, int order, double *value,
+                                        double time, char *message, size_t size);
 
 /* ---- co-simulation ---- */
 

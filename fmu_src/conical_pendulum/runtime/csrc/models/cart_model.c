@@ -25,6 +25,9 @@ struct ModelData {
     int has_last;           /* last_time and last_input are a step's */
     double force;           /* the force in effect now: F_x as set, or extrapolated to now */
     double last_time, last_input;  /* the last step's start and F_x there */
+    /* the inputs' first and second time derivatives as the master set them, F_x's then M_x's
+     * (0: held); over a step the inputs follow their Taylor polynomials, and step along them */
+    double input_rates[2][2];
 };
 
 const ModelSizes model_sizes = {sizeof(ModelData), CP_NREAL, CP_VR_DERIVATIVE - CP_NREAL, N_STATE,
@@ -246,6 +249,119 @@ ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], si
     return MODEL_OK;
 }
 
+/* ---- input and output derivatives ---- */
+
+static int input_index(unsigned vr)  /* F_x 0, M_x 1, else -1 */
+{
+    return vr == CP_VR_F_X ? 0 : vr == CP_VR_M_X ? 1 : -1;
+}
+
+static int interpolated(const ModelData *m)
+{
+    for (int k = 0; k < 2; k++)
+        if (m->input_rates[k][0] != 0.0 || m->input_rates[k][1] != 0.0) return 1;
+    return 0;
+}
+
+ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr)
+{
+    (void)m;
+    return input_index(vr) >= 0 ? MODEL_OK : MODEL_NO_VARIABLE;
+}
+
+void model_set_input_derivative(ModelData *m, unsigned vr, int order, double value)
+{
+    m->input_rates[input_index(vr)][order - 1] = value;
+}
+
+/* Exact: (m_cart + M_x) a = F - k x - c v differentiated once and twice in time, with F and
+ * M_x moving as the master's derivatives say: P a' = F' - k v - c a - P' a,
+ * P a'' = F'' - k a - c a' - P'' a - 2 P' a'. */
+ModelStatus model_get_output_derivative(ModelData *m, unsigned vr, int order, double *value,
+                                        double time, char *message, size_t size)
+{
+    if (vr != CP_VR_X && vr != CP_VR_V && vr != CP_VR_A) return MODEL_NO_VARIABLE;
+    double a;
+    ModelStatus status = checked_acceleration(m, &a, time, message, size);
+    if (status != MODEL_OK) return status;
+    const double(*rate)[2] = (const double(*)[2])m->input_rates, P = mass(m);
+    const double k = m->r[CP_VR_K_CART], c = m->r[CP_VR_C_CART];
+    const double a1 = (rate[0][0] - k * m->r[CP_VR_V] - c * a - rate[1][0] * a) / P;
+    const double a2 = (rate[0][1] - k * a - c * a1 - rate[1][1] * a - 2 * rate[1][0] * a1) / P;
+    const double rates[3][2] = {{m->r[CP_VR_V], a}, {a, a1}, {a1, a2}};
+    *value = rates[vr == CP_VR_X ? 0 : vr == CP_VR_V ? 1 : 2][order - 1];
+    return MODEL_OK;
+}
+
+/* The step with moving inputs, exact to rounding: P(tau) x'' + c x' + k x = F(tau), P and F
+ * quadratic in tau, solved by its Taylor series in substeps short enough that the series
+ * converges geometrically (every coefficient's ratio below one half), summed until its terms
+ * fall below rounding. Each substep re-expands P and F where it starts. end: x, v, F at dt. */
+static const char *series_step(const ModelData *m, double t, double dt, double end[3],
+                               char *message, size_t size)
+{
+    const double(*rate)[2] = (const double(*)[2])m->input_rates;
+    const double k = m->r[CP_VR_K_CART], c = m->r[CP_VR_C_CART];
+    const double F[3] = {m->force, rate[0][0], rate[0][1]};
+    const double P[3] = {mass(m), rate[1][0], rate[1][1]};
+    /* the mass must stay positive: at both ends and at the vertex of its parabola */
+    double lowest = fmin(P[0], P[0] + dt * (P[1] + 0.5 * dt * P[2]));
+    if (P[2] > 0 && -P[1] / P[2] > 0 && -P[1] / P[2] < dt) lowest = P[0] - 0.5 * P[1] * P[1] / P[2];
+    if (!(lowest > 0)) {
+        snprintf(message, size, "do_step at t = %.9g s: m_cart + M_x would reach %g kg within the "
+                 "step (M_x and its derivatives as set): the moving mass must stay positive; the "
+                 "state is kept", t, lowest);
+        return message;
+    }
+    double bound = 0.0;  /* 1 / the shortest time scale of the equation over the step */
+    bound = fmax(bound, sqrt(k / lowest) * 2.0);
+    bound = fmax(bound, c / lowest * 2.0);
+    bound = fmax(bound, fabs(P[1]) / lowest * 2.0);
+    bound = fmax(bound, sqrt(fabs(P[2]) / lowest * 2.0));
+    const double n_sub = fmax(1.0, ceil(dt * bound));
+    if (!(n_sub <= 1e6)) {
+        snprintf(message, size, "do_step at t = %.9g s: the step of %g s with these inputs' "
+                 "derivatives needs %g substeps; the state is kept", t, dt, n_sub);
+        return message;
+    }
+    const double h = dt / n_sub;
+    double x = m->r[CP_VR_X], v = m->r[CP_VR_V];
+    for (long sub = 0; sub < (long)n_sub; sub++) {
+        const double tau = sub * h;
+        const double P0 = P[0] + tau * (P[1] + 0.5 * tau * P[2]), P1 = P[1] + tau * P[2];
+        const double Fh[3] = {F[0] + tau * (F[1] + 0.5 * tau * F[2]), (F[1] + tau * F[2]) * h,
+                              0.5 * F[2] * h * h};  /* F_n h^n */
+        double b0 = x, b1 = v * h, x_end = b0 + b1, v_end = b1;  /* b_n = a_n h^n */
+        for (int n = 0; n < 200; n++) {
+            const double b2 = h * h / (P0 * (n + 2) * (n + 1))
+                              * ((n < 3 ? Fh[n] : 0.0) - (k + 0.5 * P[2] * n * (n - 1)) * b0
+                                 - (c + P1 * n) * (n + 1) * b1 / h);
+            x_end += b2;
+            v_end += (n + 2) * b2;
+            if (n > 2 && fabs(b2) + fabs(b1) <= 1e-18 * (fabs(x_end) + fabs(v_end))) break;
+            b0 = b1;
+            b1 = b2;
+        }
+        x = x_end;
+        v = v_end / h;
+    }
+    end[0] = x;
+    end[1] = v;
+    end[2] = F[0] + dt * (F[1] + 0.5 * dt * F[2]);
+    return NULL;
+}
+
+/* The inputs dt along their polynomials: their values and rates there. */
+static void advance_inputs(ModelData *m, double dt)
+{
+    const unsigned vr[2] = {CP_VR_F_X, CP_VR_M_X};
+    for (int k = 0; k < 2; k++) {
+        double *rate = m->input_rates[k];
+        m->r[vr[k]] += dt * (rate[0] + 0.5 * dt * rate[1]);
+        rate[0] += dt * rate[1];
+    }
+}
+
 /* ---- co-simulation ---- */
 
 /* c = a b, 4 x 4. */
@@ -308,6 +424,24 @@ ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_ret
         return MODEL_DISCARD;
     }
     const double input = m->r[CP_VR_F_X], k = m->r[CP_VR_K_CART], c = m->r[CP_VR_C_CART];
+    if (interpolated(m) && dt > 0) {  /* the master's polynomials, not the history */
+        double end[3] = {0.0, 0.0, 0.0};
+        if (series_step(m, t, dt, end, message, size)) return MODEL_DISCARD;
+        if (!(isfinite(end[0]) && isfinite(end[1]) && isfinite(end[2]))) {
+            snprintf(message, size, "do_step at t = %.9g s: the cart's state is not finite after "
+                     "the step (values too large for a double); the state is kept", t);
+            return MODEL_DISCARD;
+        }
+        m->has_last = 1;
+        m->last_time = t;
+        m->last_input = input;
+        m->r[CP_VR_X] = end[0];
+        m->r[CP_VR_V] = end[1];
+        advance_inputs(m, dt);
+        m->force = m->r[CP_VR_F_X];
+        if (last_successful_time) *last_successful_time = t + dt;
+        return MODEL_OK;
+    }
     double slope = 0.0;
     if (m->f_x_order == 1 && m->has_last && t > m->last_time)
         slope = (input - m->last_input) / (t - m->last_time);
@@ -354,7 +488,9 @@ const char *model_invalid(const ModelData *m, char *message, size_t size)
         if (real_rule_refusal(vr, m->r[vr], message, size)) return message;
     if (order_refusal(m->f_x_order, message, size)) return message;
     const struct { const char *name; double value; } carried[] = {
-        {"force", m->force}, {"last_time", m->last_time}, {"last_input", m->last_input}};
+        {"force", m->force}, {"last_time", m->last_time}, {"last_input", m->last_input},
+        {"derivative 1 of F_x", m->input_rates[0][0]}, {"derivative 2 of F_x", m->input_rates[0][1]},
+        {"derivative 1 of M_x", m->input_rates[1][0]}, {"derivative 2 of M_x", m->input_rates[1][1]}};
     for (size_t k = 0; k < sizeof carried / sizeof carried[0]; k++)
         if (cp_real_refusal(carried[k].name, carried[k].value, &cp_rules[CP_FINITE_RULE], "",
                             message, size))

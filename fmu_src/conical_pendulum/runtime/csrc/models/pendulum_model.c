@@ -27,6 +27,15 @@ struct ModelData {
     double work[CP_STEP_WORK_SIZE];
     double dx[CP_NSTATE];         /* Model Exchange: x' at x when dx_valid */
     int dx_valid, outputs_valid;
+    /* the inputs' first and second time derivatives as the master set them (0: held); the
+     * inputs follow their Taylor polynomial over a step, and step along it (+1: C has no
+     * empty array) */
+    double input_rates[CP_NINPUT + 1][2];
+    /* the first and second time derivatives of the states and outputs (from CP_VR_STATE)
+     * at the current values: the outputs' to order rates_valid (0, 1 or 2), the states' to 2
+     * once it is 1 */
+    double rates[CP_NSTATE + CP_NOUTPUT][2];
+    int rates_valid;
 };
 
 const ModelSizes model_sizes = {sizeof(ModelData), CP_NREAL, CP_VR_DERIVATIVE - CP_NREAL,
@@ -72,6 +81,7 @@ static void invalidate(ModelData *m)
     m->fsal = 0;
     m->dx_valid = 0;
     m->outputs_valid = 0;
+    m->rates_valid = 0;
 }
 
 static void update_outputs(ModelData *m)
@@ -317,6 +327,88 @@ ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], si
     return MODEL_OK;
 }
 
+/* ---- input and output derivatives ---- */
+
+static int is_input(unsigned vr)
+{
+    return vr >= CP_VR_INPUT && vr < CP_VR_INPUT + CP_NINPUT;
+}
+
+/* Whether some input moves over a step. */
+static int interpolated(const ModelData *m)
+{
+    for (int k = 0; k < CP_NINPUT; k++)
+        if (m->input_rates[k][0] != 0.0 || m->input_rates[k][1] != 0.0) return 1;
+    return 0;
+}
+
+/* The inputs tau along their polynomials: their values and rates there, the new point the
+ * polynomials start from (what the master sets next replaces it). */
+static void advance_inputs(ModelData *m, double tau)
+{
+    for (int k = 0; k < CP_NINPUT; k++) {
+        double *u = &m->r[CP_VR_INPUT + k], *rate = m->input_rates[k];
+        *u += tau * (rate[0] + 0.5 * tau * rate[1]);
+        rate[0] += tau * rate[1];
+    }
+}
+
+ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr)
+{
+    (void)m;
+    return is_input(vr) ? MODEL_OK : MODEL_NO_VARIABLE;
+}
+
+void model_set_input_derivative(ModelData *m, unsigned vr, int order, double value)
+{
+    double *rate = &m->input_rates[vr - CP_VR_INPUT][order - 1];
+    if (*rate != value) m->rates_valid = 0;  /* x' at x depends on the inputs' values only */
+    *rate = value;
+}
+
+/* The time derivatives of the states and outputs to order (m->rates_valid: the order they are
+ * valid to): x' = f, x'' = f' (x', u') and y' = y' (x', u') by one complex step (cp_directional
+ * along (x', u')); y'' = y''[(x', u'), (x', u')] + y' (x'', u'') by cp_second_directional, only
+ * when asked (two evaluations in long double complex, some 50 times one in double complex). */
+static ModelStatus time_rates(ModelData *m, int order, double time, char *message, size_t size)
+{
+    if (m->rates_valid >= order) return MODEL_OK;
+    ModelStatus status = derivatives(m, time, message, size);
+    if (status != MODEL_OK) return status;
+    double vp[CP_NPARAM] = {0}, wp[CP_NPARAM] = {0}, x2[CP_NSTATE], y[CP_NOUTPUT + 1],
+           pivot_ratio;
+    for (int k = 0; k < CP_NINPUT; k++) {
+        vp[CP_VR_INPUT + k] = m->input_rates[k][0];  /* the inputs end p (fmu_config.h) */
+        wp[CP_VR_INPUT + k] = m->input_rates[k][1];
+    }
+    int bad_dof, found = CP_OK;
+    if (m->rates_valid < 1) {
+        found = cp_directional(X(m), m->r, m->dx, vp, x2, y, &pivot_ratio, &bad_dof);
+        for (int k = 0; found == CP_OK && k < CP_NSTATE; k++) {
+            m->rates[k][0] = m->dx[k];
+            m->rates[k][1] = x2[k];
+        }
+        for (int k = 0; found == CP_OK && k < CP_NOUTPUT; k++) m->rates[CP_NSTATE + k][0] = y[k];
+    }
+    if (found == CP_OK && order >= 2) {
+        for (int k = 0; k < CP_NSTATE; k++) x2[k] = m->rates[k][1];
+        found = cp_second_directional(X(m), m->r, m->dx, vp, x2, wp, y, &pivot_ratio, &bad_dof);
+        for (int k = 0; found == CP_OK && k < CP_NOUTPUT; k++) m->rates[CP_NSTATE + k][1] = y[k];
+    }
+    if (found != CP_OK) return no_derivatives(time, found, bad_dof, pivot_ratio, message, size);
+    m->rates_valid = order > m->rates_valid ? order : m->rates_valid;
+    return MODEL_OK;
+}
+
+ModelStatus model_get_output_derivative(ModelData *m, unsigned vr, int order, double *value,
+                                        double time, char *message, size_t size)
+{
+    if (vr < CP_VR_STATE || vr >= CP_VR_STATISTICS) return MODEL_NO_VARIABLE;
+    ModelStatus status = time_rates(m, vr < CP_VR_OUTPUT ? 1 : order, time, message, size);
+    if (status == MODEL_OK) *value = m->rates[vr - CP_VR_STATE][order - 1];
+    return status;
+}
+
 /* ---- co-simulation ---- */
 
 ModelStatus model_do_step(ModelData *m, double t, double dt, char *message, size_t size)
@@ -333,11 +425,15 @@ ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_ret
     double reached = t;
     int status = cp_cosim_step_early(&settings, m->r, X(m), Y(m), t, dt, &m->h, m->work,
                                      &m->fsal, STATS(m), &failure,
-                                     early_return_allowed ? &reached : NULL);
+                                     early_return_allowed ? &reached : NULL,
+                                     interpolated(m) ? (const double(*)[2])m->input_rates : NULL);
     if (last_successful_time) *last_successful_time = status == CP_OK ? t + dt : reached;
     /* valid where the state moved (cosim.c computed them there); at t, computed again */
     m->outputs_valid = status == CP_OK || reached > t;
-    if (status == CP_OK || reached > t) m->dx_valid = 0;
+    if (status == CP_OK || reached > t) {
+        m->dx_valid = m->rates_valid = 0;
+        advance_inputs(m, (status == CP_OK ? t + dt : reached) - t);
+    }
     if (status != CP_OK) {
         cp_diagnose(message, size, status, &failure);
         return MODEL_DISCARD;
@@ -351,7 +447,8 @@ ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_ret
  * they are valid), and the statistics are counts; solver and max_steps keep theirs as
  * model_check_integer applies them, the tolerance is 0 (none) or keeps
  * model_tolerance_refusal's; the carried step is finite and not negative, the flags are 0
- * or 1, the carried derivatives are finite where they are valid. */
+ * or 1, the carried derivatives are finite where they are valid, and so are the inputs'
+ * derivatives. */
 const char *model_invalid(const ModelData *m, char *message, size_t size)
 {
     const struct { const char *name; int value; } flags[] = {
@@ -361,6 +458,10 @@ const char *model_invalid(const ModelData *m, char *message, size_t size)
             snprintf(message, size, "%s = %d: must be 0 or 1", flags[k].name, flags[k].value);
             return message;
         }
+    if (m->rates_valid < 0 || m->rates_valid > 2) {
+        snprintf(message, size, "rates_valid = %d: must be 0, 1 or 2", m->rates_valid);
+        return message;
+    }
     for (unsigned vr = 0; vr < CP_NREAL; vr++) {
         if (is_output(vr) && !m->outputs_valid) continue;
         if (real_rule_refusal(vr, m->r[vr], message, size)) return message;
@@ -381,5 +482,21 @@ const char *model_invalid(const ModelData *m, char *message, size_t size)
                                                &cp_rules[CP_FINITE_RULE], "", message, size)))
             return message;
     }
+    for (int k = 0; k < CP_NINPUT; k++)
+        for (int order = 1; order <= 2; order++) {
+            snprintf(name, sizeof name, "derivative %d of %s", order,
+                     cp_variable_name(CP_VR_INPUT + k));
+            if (cp_real_refusal(name, m->input_rates[k][order - 1], &cp_rules[CP_FINITE_RULE], "",
+                                message, size))
+                return message;
+        }
+    for (int k = 0; k < CP_NSTATE + CP_NOUTPUT; k++)  /* the states' to 2 once rates_valid */
+        for (int order = 1; order <= (k < CP_NSTATE && m->rates_valid ? 2 : m->rates_valid); order++) {
+            snprintf(name, sizeof name, "carried derivative %d of %s", order,
+                     cp_variable_name(CP_VR_STATE + k));
+            if (cp_real_refusal(name, m->rates[k][order - 1], &cp_rules[CP_FINITE_RULE], "",
+                                message, size))
+                return message;
+        }
     return NULL;
 }
