@@ -22,6 +22,7 @@
 #define cp_outputs cp_outputs_cs2
 #define cp_joint cp_joint_cs2
 #define cp_momentum cp_momentum_cs2
+#define cp_work_rates cp_work_rates_cs2
 #define cp_chain_rates_and_apparent_mass cp_chain_rates_and_apparent_mass_cs2
 
 #include "model.c"
