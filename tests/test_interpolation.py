@@ -16,12 +16,16 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from scipy.integrate import solve_ivp
 
-from conical_pendulum import Scene
+from conical_pendulum import Link, Scene
 from conical_pendulum.builder.compiler import load_core
 from fmu_helpers import INSTANCES
 
 COUPLED = Scene.uniform(3, coupling=True)  # expanded, a_pivot inputs
 RECURSIVE = Scene.uniform(7, coupling=True)  # chain.c
+# joint damping and a force on a bob: more inputs (F_bob1_x/y/z), the energy's books as states
+FORCED = Scene(
+    links=(Link(damping=0.3), Link(damping=0.2, bob_force=True)), joint_damping=True, coupling=True
+)
 INPUTS = ("a_pivot_x", "a_pivot_y", "a_pivot_z")
 TIGHT = {"rtol": 1e-13, "atol": 1e-13}
 U = (0.3, -0.2, 0.1)  # the inputs at the step's start, then their first and second derivatives
@@ -78,7 +82,9 @@ def assert_derivatives_match_differences(inst, names, h, bound):
 
 
 @pytest.mark.parametrize(
-    ("scene", "fmi_version"), [(COUPLED, 2), (RECURSIVE, 2), (COUPLED, 3)], ids=["fmi2", "recursive", "fmi3"]
+    ("scene", "fmi_version"),
+    [(COUPLED, 2), (RECURSIVE, 2), (COUPLED, 3), (FORCED, 2)],
+    ids=["fmi2", "recursive", "fmi3", "forced"],
 )
 def test_pendulum_output_derivatives_equal_richardson_differences_in_time(built_fmu, scene, fmi_version):
     inst = INSTANCES[fmi_version](
@@ -86,9 +92,10 @@ def test_pendulum_output_derivatives_equal_richardson_differences_in_time(built_
     )
     inst.step(0.3)  # a moving point, not the start
     names = continuous_outputs(inst) if fmi_version == 2 else list(FMI3_OUTPUTS)
-    if fmi_version == 2:  # the inputs move: their derivatives enter the outputs'
-        inst.fmu.setReal([inst.vr[n] for n in INPUTS], list(U))
-        set_input_derivatives(inst, INPUTS, U1, U2)
+    if fmi_version == 2:  # the inputs move (every one of them): their derivatives enter the outputs'
+        inputs, times = scene.input_names(), len(scene.input_names()) // len(INPUTS)
+        inst.fmu.setReal([inst.vr[n] for n in inputs], list(U) * times)
+        set_input_derivatives(inst, inputs, U1 * times, U2 * times)
     assert_derivatives_match_differences(inst, names, h=5e-3, bound=1e-7)
     inst.close()
 
