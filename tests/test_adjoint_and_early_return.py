@@ -91,21 +91,27 @@ def test_the_adjoint_is_the_transpose_of_the_directional_derivative(built, scene
 def test_both_agree_with_central_differences(built, scene):
     """seed^T J by the adjoint, and J v by the directional derivative, against Richardson-
     extrapolated central differences of the values (fmi2's test bound: 1e-8 of the largest
-    entry), at a random state, inputs, seed and direction."""
+    entry), at a random state, inputs, seed and direction, along the states, the inputs and
+    the parameters."""
     m = model(built, scene)
     x, a = random_point(m, 7)
-    n = len(x)
+    n, n_input = len(x), len(a)
+    parameters = [m.vr[name] for name in SCENES[scene].parameter_names()]
+    knowns = m.knowns + parameters  # a parameter is a known too
+    p = np.array(m.get(*parameters))
 
-    def values(p):
-        m.set_point(p[:n], p[n:])
+    def values(point):
+        m.set_point(point[:n], point[n : n + n_input])
+        for vr, value in zip(parameters, point[n + n_input :]):
+            m.set(vr, value, initialized=0)
         return m.values()
 
     m.set_point(x, a)
     assert_adjoint_and_directional_match_differences(
         values,
-        lambda w: m.adjoint(m.unknowns, m.knowns, w)[1],
-        lambda v: m.directional(m.unknowns, m.knowns, v)[1],
-        np.concatenate([x, a]),
+        lambda w: m.adjoint(m.unknowns, knowns, w)[1],
+        lambda v: m.directional(m.unknowns, knowns, v)[1],
+        np.concatenate([x, a, p]),
         len(m.unknowns),
     )
 
@@ -117,12 +123,15 @@ def test_bad_references_and_seeds_are_refused_and_the_model_goes_on(built):
     vr, der = m.vr, m.unknowns[0]
     before = bytes(m.data)
     _, expected = m.adjoint(m.unknowns, m.knowns, np.ones(len(m.unknowns)))
-    unknown, known = ": only outputs and state derivatives are", ": only states and inputs are"
+    unknown, known = (
+        ": only outputs and state derivatives are",
+        ": only states, inputs and Real parameters are",
+    )
     cases = [
         ([vr["l0"]], [vr["alpha0"]], [1.0], f"value reference {vr['l0']} (l0) as an unknown{unknown}"),
         ([vr["rtol"]], [vr["alpha0"]], [1.0], f"value reference {vr['rtol']} (rtol) as an unknown{unknown}"),
         ([der], [vr["energy"]], [1.0], f"value reference {vr['energy']} (energy) as a known{known}"),
-        ([der], [vr["g"]], [1.0], f"value reference {vr['g']} (g) as a known{known}"),
+        ([der], [vr["bob2_x"]], [1.0], f"value reference {vr['bob2_x']} (bob2_x) as a known{known}"),
         ([10_000], [vr["alpha0"]], [1.0], f"value reference 10000 (?) as an unknown{unknown}"),
         ([der], [10_000], [1.0], f"value reference 10000 (?) as a known{known}"),
         ([der], [vr["alpha0"]], [math.nan], "seed of der(alpha0) = nan: must be finite"),
@@ -141,6 +150,16 @@ def test_bad_references_and_seeds_are_refused_and_the_model_goes_on(built):
         [vr["alpha1"], vr["alpha0"], n_rhs], [vr["alpha0"], vr["a_pivot_x"], vr["alpha1"]], [2.0, 5.0, 7.0]
     )
     assert status == MODEL_OK and list(sensitivity) == [5.0, 0.0, 2.0]
+    # a parameter is a known: at rest and with the support still, x' is g times what it would
+    # be at g = 1 (the forcing is gravity alone), so seed^T dx'/dg is seed^T x' / g exactly
+    n = len(x) // 2
+    m.set_point(np.concatenate([x[:n], np.zeros(n)]), np.zeros(len(a)))
+    derivatives = [u for u in m.unknowns if m.name[u].startswith("der(")]
+    w = np.random.default_rng(9).standard_normal(len(derivatives))
+    status, (along_g,) = m.adjoint(derivatives, [vr["g"]], w)
+    at_rest = m.values(derivatives) / m.get("g")[0]
+    assert status == MODEL_OK
+    assert abs(along_g - w @ at_rest) <= 1e-14 * (np.abs(w) @ np.abs(at_rest))
 
 
 def test_a_singular_mass_matrix_is_discarded_never_nan(built):

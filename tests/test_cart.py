@@ -19,6 +19,7 @@ from conical_pendulum.builder.compiler import CSRC_FILES
 from conical_pendulum.builder.pendulum import PENDULUM
 from conical_pendulum.cli import main
 from conical_pendulum.demos.monolithic import cart_parameters
+from differences import richardson
 from fmu_helpers import INSTANCES, Instance, Instance3
 
 ERROR, DISCARD = 3, 2  # fmi2Error, fmi2Discard (fmi3Error, fmi3Discard the same)
@@ -299,25 +300,56 @@ def test_fmu_state_get_set_and_serialize_replay_bit_for_bit(built_cart, cart_fmu
 
 
 def test_directional_derivatives_are_exact(cart_fmu):
+    """a = (F - k_cart x - c_cart v) / (m_cart + M_x), written out: along the state, the
+    inputs and the parameters (FMI 2.0's knowns of the InitialUnknowns, which OMSimulator
+    asks for while starting the explicit scheme's loop), after steps."""
     m, k, c = cart_parameters().values()
     fmu = Instance(cart_fmu, start_values={"M_x": 30.0, "F_x": 40.0})
     fmu.step(0.5)
     fmu.set({"F_x": 25.0})
     vr = fmu.vr
-    mass, (a,) = m + 30.0, fmu.get("a")
-    knowns = ["x", "v", "F_x", "M_x"]
-    expected = {"a": [-k / mass, -c / mass, 1 / mass, -a / mass], "der(x)": [0, 1, 0, 0], "x": [1, 0, 0, 0]}
+    mass, (a, x, v) = m + 30.0, fmu.get("a", "x", "v")
+    knowns = ["x", "v", "F_x", "M_x", "m_cart", "k_cart", "c_cart"]
+    expected = {
+        "a": [-k / mass, -c / mass, 1 / mass, -a / mass, -a / mass, -x / mass, -v / mass],
+        "der(x)": [0, 1, 0, 0, 0, 0, 0],
+        "x": [1, 0, 0, 0, 0, 0, 0],
+    }
     expected["der(v)"] = expected["a"]
     for unknown, row in expected.items():
         for known, entry in zip(knowns, row):
             (value,) = fmu.fmu.getDirectionalDerivative([vr[unknown]], [vr[known]], [1.0])
             assert value == pytest.approx(entry, rel=1e-15, abs=0), (unknown, known)
-    with pytest.raises(FMICallException):
-        fmu.fmu.getDirectionalDerivative([vr["a"]], [vr["m_cart"]], [1.0])
-    assert any(
-        "value reference 0 (m_cart) as a known: only states and inputs are" in text
-        for _, text in fmu.messages
-    )
+    for known in ("a", "F_x_order"):  # a calculated output, an Integer parameter
+        with pytest.raises(FMICallException):
+            fmu.fmu.getDirectionalDerivative([vr["a"]], [vr[known]], [1.0])
+        assert (
+            f"value reference {vr[known]} ({known}) as a known: only states, inputs and Real parameters are"
+            in fmu.texts()
+        )
+    fmu.close()
+
+
+def test_partials_along_the_parameters_are_the_differences_of_a(cart_fmu):
+    """In initialization mode, where the parameters may be set: each column of a and der(v)
+    along m_cart, k_cart, c_cart and M_x equals Richardson differences of fmi2GetReal's a, to
+    1e-10 relative (a is rational in them: the differences' error is rounding)."""
+    fmu = Instance(cart_fmu, initialize=False, start_values={"M_x": 30.0, "F_x": 40.0, "v": 0.7})
+    fmu.fmu.setupExperiment(startTime=0.0)
+    fmu.fmu.enterInitializationMode()
+    vr = fmu.vr
+    for known in ("m_cart", "k_cart", "c_cart", "M_x"):
+        (start,) = fmu.get(known)
+        along = fmu.fmu.getDirectionalDerivative([vr["a"], vr["der(v)"]], [vr[known]], [1.0])
+
+        def values(p, known=known):
+            fmu.set({known: p[0]})
+            return np.array(fmu.get("a"))
+
+        (difference,) = richardson(values, np.array([start]), np.array([start])) / start
+        values([start])
+        assert along[0] == along[1] == pytest.approx(difference, rel=1e-10, abs=0), known
+    fmu.fmu.exitInitializationMode()
     fmu.close()
 
 

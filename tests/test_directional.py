@@ -210,6 +210,52 @@ def test_it_agrees_with_differences_of_the_compiled_core(models, scene):
     assert (np.abs(J[rows] - FD) / scale).max() < 1e-8
 
 
+@pytest.mark.parametrize("scene", list(SCENES))
+def test_parameters_are_knowns_of_the_initial_unknowns(native, scene):
+    """FMI 2.0's knowns in initialization mode (OMSimulator asks for them there, to start an
+    algebraic loop between FMUs): every Real parameter, the settings too. Where a parameter
+    may still be set, its column equals Richardson differences of the FMU's own values with
+    it moved by 2e-3 of itself, to 1e-8 of the column's largest entry; the pairs the
+    InitialUnknowns leave out are exactly zero (a setting's whole column), each listed pair
+    nonzero at this point. Parameters 20 % off their equal starts: no partial vanishes by
+    symmetry."""
+    chosen = SCENES[scene]
+    fmu = Instance(native(scene), name="init", initialize=False)
+    fmu.fmu.setupExperiment(startTime=0.0)
+    fmu.fmu.enterInitializationMode()
+    x, a = random_point(chosen, 2)
+    rng = np.random.default_rng(3)
+    fmu.set(dict(zip(chosen.parameter_names(), np.array(chosen.parameters()) * rng.uniform(0.8, 1.2))))
+    fmu.set(dict(zip(chosen.state_names() + chosen.input_names(), np.concatenate([x, a]))))
+    md = fmu.md
+    parameters = [v.name for v in md.modelVariables if v.causality == "parameter" and v.type == "Real"]
+    assert {"g", "l0", "rtol"} <= set(parameters)
+    unknowns = [u.variable.valueReference for u in md.initialUnknowns]
+    listed = np.array(
+        [
+            [fmu.vr[p] in {d.valueReference for d in u.dependencies} for p in parameters]
+            for u in md.initialUnknowns
+        ]
+    )
+    J = np.array([fmu.fmu.getDirectionalDerivative(unknowns, [fmu.vr[p]], [1.0]) for p in parameters]).T
+    np.testing.assert_array_equal(J[~listed], 0.0)
+    assert (np.abs(J[listed]) > 0).all()
+    for k, name in enumerate(parameters):
+        if not listed[:, k].any():
+            continue  # a setting: its column is all zero (above)
+        (start,) = fmu.get(name)
+
+        def values(p, name=name):
+            fmu.set({name: p[0]})
+            return np.array(fmu.fmu.getReal(unknowns))
+
+        derivative = richardson(values, np.array([start]), np.array([start])) / start
+        values([start])
+        assert np.abs(derivative - J[:, k]).max() < 1e-8 * np.abs(J[:, k]).max(), name
+    fmu.fmu.exitInitializationMode()
+    fmu.close()
+
+
 def test_co_simulation_gives_them_too(native, models):
     """In a Co-Simulation instance: outputs with respect to states (set in initialization
     mode, where a Co-Simulation state may be set) and inputs by central differences; after
@@ -252,12 +298,15 @@ def test_bad_references_are_errors_naming_them_and_the_instance_goes_on(native, 
     model = models("coupled")
     vr = model.vr
     der = model.unknowns[0]
-    unknown, known = ": only outputs and state derivatives are", ": only states and inputs are"
+    unknown, known = (
+        ": only outputs and state derivatives are",
+        ": only states, inputs and Real parameters are",
+    )
     cases = [
         ([vr["l0"]], [vr["alpha0"]], [1.0], f"value reference {vr['l0']} (l0) as an unknown{unknown}"),
         ([vr["rtol"]], [vr["alpha0"]], [1.0], f"value reference {vr['rtol']} (rtol) as an unknown{unknown}"),
         ([der], [vr["energy"]], [1.0], f"value reference {vr['energy']} (energy) as a known{known}"),
-        ([der], [vr["g"]], [1.0], f"value reference {vr['g']} (g) as a known{known}"),
+        ([der], [vr["bob2_x"]], [1.0], f"value reference {vr['bob2_x']} (bob2_x) as a known{known}"),
         ([10_000], [vr["alpha0"]], [1.0], f"value reference 10000 (?) as an unknown{unknown}"),
         ([der], [10_000], [1.0], f"value reference 10000 (?) as a known{known}"),
         ([der], [vr["alpha0"]], [float("nan")], "dvKnown of alpha0 = nan: must be finite"),
@@ -268,7 +317,16 @@ def test_bad_references_are_errors_naming_them_and_the_instance_goes_on(native, 
             model.fmu.getDirectionalDerivative(unknowns, knowns, seed)
         assert failure.value.status == 3  # fmi2Error
         assert model.messages == [(3, "fmi2GetDirectionalDerivative: " + message)]
+    # a parameter is a known: at rest and with the support still, x' is g times what it would
+    # be at g = 1 (the forcing is gravity alone), so its partial along g is x' / g exactly
     x, a = random_point(SCENES["coupled"], 0)
+    n = len(x) // 2
+    model.set(np.concatenate([x[:n], np.zeros(n)]), np.zeros(len(a)))
+    derivatives = model.unknowns[: len(x)]
+    along_g = np.array(model.fmu.getDirectionalDerivative(derivatives, [vr["g"]], [1.0]))
+    at_rest = model.values()[: len(x)] / model.fmu.getReal([vr["g"]])[0]
+    assert np.abs(at_rest[n:]).min() > 1e-3
+    np.testing.assert_allclose(along_g, at_rest, rtol=1e-14, atol=0)
     model.set(x, a)
     assert np.isfinite(model.jacobian()).all()
     # a state as unknown is its own value: the identity; a statistic depends on nothing

@@ -206,12 +206,15 @@ def test_bad_references_and_seeds_are_refused_and_the_instance_goes_on(fmus):
     w = np.ones(fmu.count(fmu.unknowns))
     expected = fmu.adjoint(fmu.unknowns, fmu.knowns, w)
     prefix = "fmi3GetAdjointDerivative: "
-    unknown, known = ": only outputs and state derivatives are", ": only states and inputs are"
+    unknown, known = (
+        ": only outputs and state derivatives are",
+        ": only states, inputs and Real parameters are",
+    )
     cases = [
         ([vr["l"]], [vr["alpha"]], [1.0] * 3, f"value reference {vr['l']} (l0) as an unknown{unknown}"),
         ([vr["rtol"]], [vr["alpha"]], [1.0], f"value reference {vr['rtol']} (rtol) as an unknown{unknown}"),
         ([der], [vr["energy"]], [1.0] * 3, f"value reference {vr['energy']} (energy) as a known{known}"),
-        ([der], [vr["g"]], [1.0] * 3, f"value reference {vr['g']} (g) as a known{known}"),
+        ([der], [vr["bob_x"]], [1.0] * 3, f"value reference {vr['bob_x']} (bob0_x) as a known{known}"),
         ([10_000], [vr["alpha"]], [1.0], f"value reference 10000 (?) as an unknown{unknown}"),
         ([der], [10_000], [1.0] * 3, f"value reference 10000 (?) as a known{known}"),
         ([der], [vr["alpha"] + 1], [1.0] * 3, f"value reference {vr['alpha'] + 1} is not a variable"),
@@ -225,6 +228,18 @@ def test_bad_references_and_seeds_are_refused_and_the_instance_goes_on(fmus):
         assert failure.value.status == ERROR
         assert fmu.texts(ERROR).startswith(prefix + message), fmu.messages
     np.testing.assert_array_equal(fmu.adjoint(fmu.unknowns, fmu.knowns, w), expected)
+    # a parameter is a known: at rest and with the support still, x' is g times what it would
+    # be at g = 1 (the forcing is gravity alone), so its partial along g is x' / g exactly,
+    # directional and adjoint alike
+    x, a = random_point(fmu, 0)
+    n = len(x) // 2
+    fmu.set_point(np.concatenate([x[:n], np.zeros(n)]), np.zeros(len(a)))
+    derivatives = [vr[f"der({name})"] for name in STATE_ARRAYS]
+    at_rest = fmu.values(derivatives) / fmu.values([vr["g"]])[0]
+    np.testing.assert_allclose(fmu.directional(derivatives, [vr["g"]], [1.0]), at_rest, rtol=1e-14, atol=0)
+    seed = np.random.default_rng(9).standard_normal(len(at_rest))
+    (along_g,) = fmu.adjoint(derivatives, [vr["g"]], seed)
+    assert abs(along_g - seed @ at_rest) <= 1e-14 * (np.abs(seed) @ np.abs(at_rest))
     fmu.close()
 
 

@@ -200,14 +200,18 @@ def test_fmpy_runs_it_with_its_own_master(package, ecospy_runs, tmp_path):
         assert run.values["x"][0] != pytest.approx(ecospy_runs[scheme].values["x"][1], abs=1e-6)
 
 
-@pytest.fixture(scope="module")
-def omsimulator_runs(package, tmp_path_factory):
-    """OMSimulator from ../shared/hosts/omsimulator (or PATH), each variant of the package as written."""
+def require_omsimulator():
     require_tool(
         "OMSimulator",
         ssp_tools.omsimulator,
         "OpenModelica's OMSimulator on PATH or in ../shared/hosts/omsimulator (and Debian's libicu72)",
     )
+
+
+@pytest.fixture(scope="module")
+def omsimulator_runs(package, tmp_path_factory):
+    """OMSimulator from ../shared/hosts/omsimulator (or PATH), each variant of the package as written."""
+    require_omsimulator()
     work = tmp_path_factory.mktemp("omsimulator")
     return {scheme: ssp_tools.run("omsimulator", package, scheme, work) for scheme in ssp.VARIANTS}
 
@@ -230,16 +234,26 @@ def test_omsimulator_reads_its_master_and_step_from_the_package(package, omsimul
         np.testing.assert_allclose(run.values["time"], STEP * np.arange(11), rtol=0, atol=1e-12)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the FMUs' InitialUnknowns depend on parameters (l0, m_cart, ...), and OMSimulator hands "
-    "those to fmi2GetDirectionalDerivative as knowns (seed 0) while initializing; the FMUs refuse "
-    "any known but states and inputs (fmi_layer's cp_known_refusal)",
-)
 def test_omsimulator_prints_no_error(omsimulator_runs):
-    """It exits 0 even when a run fails, so the runner reads its `error:` lines: none wanted."""
+    """It exits 0 even when a run fails, so the runner reads its `error:` lines: none wanted.
+    While initializing it asks for the InitialUnknowns' derivatives with their parameters (l0,
+    m_cart, ...) among the knowns, seed 0, and the FMUs answer them."""
     for run in omsimulator_runs.values():
         assert run.warnings == [], run.warnings
+
+
+@pytest.mark.parametrize("cart_mass", [2.0, 0.5])
+def test_omsimulator_starts_the_light_carts_in_the_explicit_scheme(fmus, cart_mass, tmp_path):
+    """With the 2 and 0.5 kg carts KINSOL converges at the start only on the exact derivatives
+    with respect to parameters (it stopped with flag -7 while the FMUs refused them): the run
+    reaches the stop time, with no error printed."""
+    require_omsimulator()
+    path = tmp_path / "PendulumOnCart.ssp"
+    package = ssp.write_package(path, *fmus, cart_mass=cart_mass, step=STEP, stop_time=STOP_TIME)
+    run = ssp_tools.run("omsimulator", package, "explicit", tmp_path)
+    assert run.refused is None and run.ended is None, run.refused
+    assert run.warnings == [], run.warnings
+    np.testing.assert_allclose(run.values["time"], STEP * np.arange(11), rtol=0, atol=1e-12)
 
 
 def test_omsimulator_solves_the_explicit_loop_at_every_step(fmus, omsimulator_runs, ecospy_runs):

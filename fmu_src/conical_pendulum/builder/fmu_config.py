@@ -40,9 +40,12 @@ def settable(variable: Variable) -> str:
 
 def role(variable: Variable) -> str:
     """A variable's part in directional derivatives, as cp_role says it: a state is a known
-    and an unknown (an output of its own value), an input a known, an output or a state
+    and an unknown (an output of its own value), an input or a Real parameter a known (FMI
+    2.0's knowns of the InitialUnknowns, FMI 3.0's of every list), an output or a state
     derivative an unknown."""
-    known = variable.group in ("states", "inputs")
+    known = variable.group in ("states", "inputs") or (
+        variable.causality == "parameter" and variable.type == "Real"
+    )
     unknown = variable.causality == "output" or bool(variable.derivative_of)
     return " | ".join(["CP_KNOWN"] * known + ["CP_UNKNOWN"] * unknown) or "0"
 

@@ -142,7 +142,8 @@ ModelStatus model_get_derivatives(ModelData *m, double dx[], double time, char *
 
 /* sensitivity = J seed, J the Jacobian of the unknowns (value references: state derivatives
  * and outputs; a state as unknown is an output of its own value) with respect to the knowns
- * (states and inputs), at the current values; nothing of m changes. MODEL_OK; MODEL_REFUSED
+ * (states, inputs and Real parameters: cp_role), at the current values, in any mode; nothing
+ * of m changes. MODEL_OK; MODEL_REFUSED
  * (message) for a value reference that is no unknown or no known, and nothing written;
  * MODEL_DISCARD (message) where the Jacobian cannot be had. The seed is finite (the FMI
  * layer checks it); a sensitivity may come out non-finite, and the FMI layer refuses to hand

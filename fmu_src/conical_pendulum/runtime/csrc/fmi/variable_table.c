@@ -23,8 +23,8 @@ const char *cp_not_settable(unsigned vr, int initialized, char *message, size_t 
 const char *cp_known_refusal(unsigned vr, char *message, size_t size)
 {
     if (vr < CP_NVARIABLE && (cp_role[vr] & CP_KNOWN)) return NULL;
-    snprintf(message, size, "value reference %u (%s) as a known: only states and inputs are", vr,
-             cp_variable_name(vr));
+    snprintf(message, size, "value reference %u (%s) as a known: only states, inputs and Real "
+             "parameters are", vr, cp_variable_name(vr));
     return message;
 }
 

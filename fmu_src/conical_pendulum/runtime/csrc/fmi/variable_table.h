@@ -10,8 +10,8 @@
 /* cp_settable's values: when a variable may be set (its causality, variability, initial). */
 enum { CP_SET_NEVER, CP_SET_BEFORE_INIT, CP_SET_ALWAYS };
 
-/* cp_role's bits: the directional derivatives' knowns (states and inputs) and unknowns
- * (outputs, states among them, and state derivatives). */
+/* cp_role's bits: the directional derivatives' knowns (states, inputs and Real parameters)
+ * and unknowns (outputs, states among them, and state derivatives). */
 enum { CP_KNOWN = 1, CP_UNKNOWN = 2 };
 
 /* A variable's name by value reference (Reals, then Integers, then derivatives); "?" for
@@ -23,8 +23,8 @@ const char *cp_variable_name(unsigned vr);
  * always. */
 const char *cp_not_settable(unsigned vr, int initialized, char *message, size_t size);
 
-/* NULL if the variable is a known of a directional derivative (a state or an input), or why
- * not (in message). */
+/* NULL if the variable is a known of a directional derivative (a state, an input or a Real
+ * parameter), or why not (in message). */
 const char *cp_known_refusal(unsigned vr, char *message, size_t size);
 
 /* NULL if the variable is an unknown of a directional derivative (an output or a state

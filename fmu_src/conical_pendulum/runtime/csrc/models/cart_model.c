@@ -188,8 +188,9 @@ ModelStatus model_get_derivatives(ModelData *m, double dx[], double time, char *
 
 /* ---- directional derivatives ---- */
 
-/* d unknown / d known, exact: the cart is linear in its state and F_x, and a depends on M_x
- * through 1 / (m_cart + M_x). A state as unknown is an output of its own value. */
+/* d unknown / d known, exact: a = (F - k_cart x - c_cart v) / (m_cart + M_x) is linear in
+ * the state, F_x, k_cart and c_cart, and depends on M_x and m_cart through 1 / (m_cart + M_x).
+ * A state as unknown is an output of its own value. */
 static double jacobian(const ModelData *m, unsigned unknown, unsigned known)
 {
     if (unknown == CP_VR_X || unknown == CP_VR_V) return unknown == known;
@@ -198,7 +199,11 @@ static double jacobian(const ModelData *m, unsigned unknown, unsigned known)
     case CP_VR_X: return -m->r[CP_VR_K_CART] / mass(m);
     case CP_VR_V: return -m->r[CP_VR_C_CART] / mass(m);
     case CP_VR_F_X: return 1.0 / mass(m);
-    default: return -acceleration(m) / mass(m);  /* M_x */
+    case CP_VR_K_CART: return -m->r[CP_VR_X] / mass(m);
+    case CP_VR_C_CART: return -m->r[CP_VR_V] / mass(m);
+    case CP_VR_M_CART:
+    case CP_VR_M_X: return -acceleration(m) / mass(m);
+    default: return 0.0;  /* no other known (cp_known_refusal) */
     }
 }
 

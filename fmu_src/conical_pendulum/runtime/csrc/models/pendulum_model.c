@@ -234,9 +234,9 @@ ModelStatus model_get_derivatives(ModelData *m, double dx[], double time, char *
 
 /* ---- directional derivatives ---- */
 
-/* From directional.c: the model's own C evaluated in complex arithmetic, exact to rounding.
- * A state as unknown is an output of its own value; the statistics depend on nothing
- * (ModelStructure). */
+/* From directional.c: the model's own C evaluated in complex arithmetic, exact to rounding,
+ * along states, inputs and parameters alike. A state as unknown is an output of its own
+ * value; the statistics depend on nothing (ModelStructure). */
 /* The column of the unknowns along (dx_seed, dp_seed): the derivatives and the outputs where
  * wanted (cp_directional), or MODEL_DISCARD with the diagnosis. */
 static ModelStatus column(ModelData *m, const double *dx_seed, const double *dp_seed,
@@ -250,6 +250,15 @@ static ModelStatus column(ModelData *m, const double *dx_seed, const double *dp_
                                 &pivot_ratio, &bad_dof);
     return status == CP_OK ? MODEL_OK
                            : no_derivatives(time, status, bad_dof, pivot_ratio, message, size);
+}
+
+/* A known's seed into the direction (dx_seed, dp_seed): a parameter or an input is an entry
+ * of p (the inputs end it, fmu_config.h), a state one of x; a solver setting (rtol, atol,
+ * max_step) moves nothing, the derivatives and outputs at an instant not depending on it. */
+static void add_seed(unsigned vr, double seed, double *dx_seed, double *dp_seed)
+{
+    if (vr < CP_VR_STATE) dp_seed[vr] += seed;
+    else if (vr < CP_VR_STATE + CP_NSTATE) dx_seed[vr - CP_VR_STATE] += seed;
 }
 
 /* The unknown vr's entry of a column (a state's is its own seed; a statistic's 0). */
@@ -271,8 +280,7 @@ ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[]
     for (size_t k = 0; k < n_known; k++) {
         const unsigned vr = knowns[k];
         if (cp_known_refusal(vr, message, size)) return MODEL_REFUSED;
-        if (vr < CP_VR_STATE) dp_seed[vr] += seed[k];  /* the inputs end p (fmu_config.h) */
-        else dx_seed[vr - CP_VR_STATE] += seed[k];
+        add_seed(vr, seed[k], dx_seed, dp_seed);
     }
     int want_derivatives = 0, want_outputs = 0;
     for (size_t k = 0; k < n_unknown; k++) {
@@ -313,9 +321,7 @@ ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], si
     double d_derivatives[CP_NSTATE], d_outputs[CP_NOUTPUT + 1];
     for (size_t j = 0; j < n_known; j++) {
         double dx_seed[CP_NSTATE] = {0}, dp_seed[CP_NPARAM] = {0};
-        const unsigned known = knowns[j];
-        if (known < CP_VR_STATE) dp_seed[known] = 1.0;
-        else dx_seed[known - CP_VR_STATE] = 1.0;
+        add_seed(knowns[j], 1.0, dx_seed, dp_seed);
         ModelStatus status = column(m, dx_seed, dp_seed, want_derivatives ? d_derivatives : NULL,
                                     want_outputs ? d_outputs : NULL, time, message, size);
         if (status != MODEL_OK) return status;
