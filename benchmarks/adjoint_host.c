@@ -24,34 +24,9 @@
 #include <time.h>
 
 #include "fmu_model.h"
+#include "timing_host.h"
 
-#define MAX_VR 4096
 #define MESSAGE 2048
-
-static size_t parse(const char *text, unsigned *out)
-{
-    size_t n = 0;
-    if (strcmp(text, "-") == 0) return 0;
-    for (const char *s = text; *s && n < MAX_VR; n++) {
-        char *end;
-        out[n] = (unsigned)strtoul(s, &end, 10);
-        s = *end == ',' ? end + 1 : end;
-    }
-    return n;
-}
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-static int compare(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 enum { RHS, SET, OUTPUTS, ADJOINT, DIRECTIONAL, PER_ROW, N_OPERATION };
 static const char *const names[N_OPERATION] = {"rhs", "set", "outputs", "adjoint", "directional",

@@ -20,43 +20,7 @@
 #include <time.h>
 
 #include "fmi2Functions.h"
-
-#define MAX_VR 4096
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
-                   fmi2String category, fmi2String message, ...)
-{
-    (void)env, (void)name, (void)category;
-    if (status != fmi2OK) fprintf(stderr, "[%d] %s\n", status, message);
-}
-
-static size_t parse(const char *text, fmi2ValueReference *out)
-{
-    size_t n = 0;
-    if (strcmp(text, "-") == 0) return 0;
-    for (const char *s = text; *s && n < MAX_VR; n++) {
-        char *end;
-        out[n] = (fmi2ValueReference)strtoul(s, &end, 10);
-        s = *end == ',' ? end + 1 : end;
-    }
-    return n;
-}
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-static int compare(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-#define LOAD(name) name##TYPE *name = (name##TYPE *)dlsym(lib, #name)
-#define CHECK(call) do { if ((call) != fmi2OK) { fprintf(stderr, "failed: %s\n", #call); return 1; } } while (0)
+#include "timing_host.h"
 
 enum { SET, RHS, OUTPUTS, DD_DERIVATIVES, DD_OUTPUTS, DD_BOTH, JACOBIAN, NOPS };
 static const char *const names[NOPS] = {"set", "rhs", "outputs", "dd_derivatives", "dd_outputs",
