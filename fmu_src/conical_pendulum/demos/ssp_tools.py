@@ -42,10 +42,14 @@ from .coupled import DIVERGED, EXCHANGED
 
 TOOLS = ("ecospy", "ecos", "libcosim", "fmpy", "omsimulator")
 OUTSIDE_PIP = ("omsimulator",)  # tools no pip extra installs
-# OMSimulator as ../shared/hosts/omsimulator holds it beside a source checkout (no registry
-# offers it), when it is not on PATH
-OMSIMULATOR_HOST = (
-    Path(__file__).parents[3].parent / "shared" / "hosts" / "omsimulator" / "bin" / "OMSimulator"
+# OMSimulator as the workplace's shared/hosts/omsimulator holds it (no registry offers it),
+# when it is not on PATH: beside this source checkout (../shared), beside a folder above it,
+# or in /work/shared, where the developers' checkout has it (a clone made elsewhere for CI)
+OMSIMULATOR_HOSTS = tuple(
+    dict.fromkeys(
+        folder / "shared" / "hosts" / "omsimulator" / "bin" / "OMSimulator"
+        for folder in (*Path(__file__).resolve().parents[4:], Path("/work"))
+    )
 )
 ECOS_MIN_STEPS = 10  # ecos 0.7.2's command line reports progress every (steps // 10) steps
 
@@ -217,11 +221,11 @@ def run_fmpy(package: Path, scheme: str, work: Path) -> ToolRun:
 
 
 def omsimulator() -> Path | None:
-    """OMSimulator's executable: on PATH, or beside this source checkout (OMSIMULATOR_HOST)."""
+    """OMSimulator's executable: on PATH, or in the shared hosts (OMSIMULATOR_HOSTS)."""
     found = shutil.which("OMSimulator")
     if found:
         return Path(found)
-    return OMSIMULATOR_HOST if os.access(OMSIMULATOR_HOST, os.X_OK) else None
+    return next((host for host in OMSIMULATOR_HOSTS if os.access(host, os.X_OK)), None)
 
 
 def _oms_messages(text: str, level: str) -> list[str]:
