@@ -429,51 +429,42 @@ ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_ret
         return MODEL_DISCARD;
     }
     const double input = m->r[CP_VR_F_X], k = m->r[CP_VR_K_CART], c = m->r[CP_VR_C_CART];
-    if (interpolated(m) && dt > 0) {  /* the master's polynomials, not the history */
-        double end[3] = {0.0, 0.0, 0.0};
+    const int moving = interpolated(m) && dt > 0;  /* the master's polynomials, not the history */
+    double end[3] = {0.0, 0.0, 0.0};
+    if (moving) {
         if (series_step(m, t, dt, end, message, size)) return MODEL_DISCARD;
-        if (!(isfinite(end[0]) && isfinite(end[1]) && isfinite(end[2]))) {
-            snprintf(message, size, "do_step at t = %.9g s: the cart's state is not finite after "
-                     "the step (values too large for a double); the state is kept", t);
-            return MODEL_DISCARD;
-        }
-        m->has_last = 1;
-        m->last_time = t;
-        m->last_input = input;
-        m->r[CP_VR_X] = end[0];
-        m->r[CP_VR_V] = end[1];
-        advance_inputs(m, dt);
-        m->force = m->r[CP_VR_F_X];
-        if (last_successful_time) *last_successful_time = t + dt;
-        return MODEL_OK;
+    } else {
+        double slope = 0.0;
+        if (m->f_x_order == 1 && m->has_last && t > m->last_time)
+            slope = (input - m->last_input) / (t - m->last_time);
+        /* (x, v, F, F') with x' = v, mass v' = F - k x - c v, F' = slope: exact over the step */
+        double system[N_EXP][N_EXP] = {{0.0, 1.0, 0.0, 0.0},
+                                       {-k / mass(m), -c / mass(m), 1.0 / mass(m), 0.0},
+                                       {0.0, 0.0, 0.0, 1.0},
+                                       {0.0, 0.0, 0.0, 0.0}};
+        for (int i = 0; i < N_EXP; i++)
+            for (int j = 0; j < N_EXP; j++) system[i][j] *= dt;
+        double e[N_EXP][N_EXP], start[N_EXP] = {m->r[CP_VR_X], m->r[CP_VR_V], input, slope};
+        expm(e, system);
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < N_EXP; j++) end[i] += e[i][j] * start[j];
     }
-    double slope = 0.0;
-    if (m->f_x_order == 1 && m->has_last && t > m->last_time)
-        slope = (input - m->last_input) / (t - m->last_time);
-    /* (x, v, F, F') with x' = v, mass v' = F - k x - c v, F' = slope: exact over the step */
-    double system[N_EXP][N_EXP] = {{0.0, 1.0, 0.0, 0.0},
-                                   {-k / mass(m), -c / mass(m), 1.0 / mass(m), 0.0},
-                                   {0.0, 0.0, 0.0, 1.0},
-                                   {0.0, 0.0, 0.0, 0.0}};
-    for (int i = 0; i < N_EXP; i++)
-        for (int j = 0; j < N_EXP; j++) system[i][j] *= dt;
-    double e[N_EXP][N_EXP], start[N_EXP] = {m->r[CP_VR_X], m->r[CP_VR_V], input, slope}, end[3];
-    expm(e, system);
-    for (int i = 0; i < 3; i++) {
-        end[i] = 0.0;
-        for (int j = 0; j < N_EXP; j++) end[i] += e[i][j] * start[j];
-        if (!isfinite(end[i])) {
-            snprintf(message, size, "do_step at t = %.9g s: the cart's state is not finite after "
-                     "the step (values too large for a double); the state is kept", t);
-            return MODEL_DISCARD;
-        }
+    if (!(isfinite(end[0]) && isfinite(end[1]) && isfinite(end[2]))) {
+        snprintf(message, size, "do_step at t = %.9g s: the cart's state is not finite after "
+                 "the step (values too large for a double); the state is kept", t);
+        return MODEL_DISCARD;
     }
     m->has_last = 1;
     m->last_time = t;
     m->last_input = input;
     m->r[CP_VR_X] = end[0];
     m->r[CP_VR_V] = end[1];
-    m->force = end[2];
+    if (moving) {
+        advance_inputs(m, dt);
+        m->force = m->r[CP_VR_F_X];
+    } else {
+        m->force = end[2];
+    }
     if (last_successful_time) *last_successful_time = t + dt;
     return MODEL_OK;
 }
