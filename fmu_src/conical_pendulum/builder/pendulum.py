@@ -53,7 +53,7 @@ PENDULUM = NativeModel(
     )
     + ("variable_table.c", "pendulum_model.c"),
     ("model.h", "real.h", "dynamics.h", "chain.h", "solvers.h", "tableaus.h", "status.h", "diagnosis.h")
-    + ("cosim.h", "directional.h", "rules.h", "variable_table.h"),
+    + ("cosim.h", "directional.h", "model_copy.h", "rules.h", "variable_table.h"),
     lambda: groups("native"),
     _config,
     1.0 / 60.0,

@@ -10,25 +10,8 @@
  * (pivot choice and checks) acts on real parts, which are f(x)'s to 1e-40 relative.
  */
 #define CP_COMPLEX_STEP 1
-/* Complex products and quotients by the textbook formulas (GCC's -fcx-limited-range), not
- * C99 Annex G's library calls that sort out infinities and NaNs: a complex step has neither
- * (its parts are finite or the evaluation fails), and the calls cost most of its time. */
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC optimize("cx-limited-range")
-#endif
-#define cp_rhs cp_rhs_cs
-#define cp_chain_rhs cp_chain_rhs_cs
-#define cp_eval_outputs cp_eval_outputs_cs
-#define cp_mass_forcing cp_mass_forcing_cs
-#define cp_outputs cp_outputs_cs
-#define cp_joint cp_joint_cs
-#define cp_momentum cp_momentum_cs
-#define cp_work_rates cp_work_rates_cs
-#define cp_chain_rates_and_apparent_mass cp_chain_rates_and_apparent_mass_cs
-
-#include "model.c"
-#include "dynamics.c"
-#include "chain.c"
+#define CP_COPY_SUFFIX _cs
+#include "model_copy.h"
 
 #include "directional.h"
 

@@ -1,6 +1,6 @@
 /* Second directional derivatives of the model's outputs (directional.h), the model's own C
  * compiled a third time with cp_real = long double complex (real.h), its external names
- * renamed as directional.c renames them for its copy.
+ * renamed (model_copy.h) as directional.c's are for its copy.
  *
  * A complex step gives first derivatives free of cancellation, not second ones: no single
  * complex point has an imaginary part of order h^2 without one of order h. Two points do:
@@ -9,25 +9,8 @@
  * truncation and eps |g'| / h of rounding (the first-order terms cancel). In long double
  * (eps 1.1e-19 on x86-64) with h = eps^(1/5) both are below a double's rounding. */
 #define CP_COMPLEX_STEP 2
-/* Complex products and quotients by the textbook formulas (GCC's -fcx-limited-range), not
- * C99 Annex G's library calls that sort out infinities and NaNs: a complex step has neither
- * (its parts are finite or the evaluation fails), and the calls cost most of its time. */
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC optimize("cx-limited-range")
-#endif
-#define cp_rhs cp_rhs_cs2
-#define cp_chain_rhs cp_chain_rhs_cs2
-#define cp_eval_outputs cp_eval_outputs_cs2
-#define cp_mass_forcing cp_mass_forcing_cs2
-#define cp_outputs cp_outputs_cs2
-#define cp_joint cp_joint_cs2
-#define cp_momentum cp_momentum_cs2
-#define cp_work_rates cp_work_rates_cs2
-#define cp_chain_rates_and_apparent_mass cp_chain_rates_and_apparent_mass_cs2
-
-#include "model.c"
-#include "dynamics.c"
-#include "chain.c"
+#define CP_COPY_SUFFIX _cs2
+#include "model_copy.h"
 
 #include <float.h>
 
