@@ -2,7 +2,7 @@
 
 The scene is the single input of the build pipeline. Its structure (which bodies
 exist, which outputs are wanted, which kinematics, which forces) decides the generated
-code; its numbers (lengths, masses, radii, damping) are only start values of FMU parameters.
+code; its numbers (lengths, masses, radii, damping, drag) are only start values of FMU parameters.
 This module imports no sympy: the FMU and the native simulation use it too. Its value
 rules are runtime.rules', the same the FMU applies.
 """
@@ -16,25 +16,32 @@ import tomllib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from .runtime.rules import LINK_RULES, RULES, satisfies
+from .runtime.rules import LINK_RULES, QUANTITIES, RULES, satisfies
 
 KINEMATICS = ("consistent", "pydy-example")
 OUTPUT_GROUPS = ("bobs", "poses", "energy")
 PIVOT_INPUTS = ("a_pivot_x", "a_pivot_y", "a_pivot_z")
+# With coupling and air drag: the support's inertial velocity, which the bobs' drag needs
+# (the chain's own velocities are relative to the pivot)
+PIVOT_VELOCITY = ("v_pivot_x", "v_pivot_y", "v_pivot_z")
+WIND = ("wind_x", "wind_y", "wind_z")  # the air's inertial velocity, with air drag
 PIVOT_OUTPUTS = ("F_pivot_x", "F_pivot_y", "F_pivot_z")
 # The pivot force split by its dependence on the support's acceleration, F_pivot = F_free -
 # M_app a_pivot: the force at a_pivot = 0, and the chain's apparent mass (its upper triangle).
 FREE_FORCE = ("F_free_x", "F_free_y", "F_free_z")
 APPARENT_MASS = ("M_pivot_xx", "M_pivot_xy", "M_pivot_xz", "M_pivot_yy", "M_pivot_yz", "M_pivot_zz")
 # The energy's books: states with the work of each non-conservative force since the start
-# (the joints' damping, the bobs' applied forces, the moving pivot's inertial force)
-WORKS = ("W_damping", "W_external", "W_pivot")
+# (the joints' damping, the air's drag on the bobs, the bobs' applied forces, the moving
+# pivot's inertial force)
+WORKS = ("W_damping", "W_drag", "W_external", "W_pivot")
 FORMULATIONS = ("auto", "expanded", "recursive")
 MAX_LINKS = 100
 MAX_EXPANDED_LINKS = 20  # the expanded equations' C grows like n^3: minutes to compile at 20
 MAX_PUBLISHED_LINKS = 4  # the published derivation grows exponentially with n
 RECURSIVE_FROM = 6  # "auto": links from which the recursive formulation is the faster
 SEED_ANGLE = math.radians(10.0)
+AIR_DENSITY = 1.225  # kg/m3: the ISA's at sea level
+SPHERE_DRAG = 0.47  # a sphere's drag coefficient at Reynolds numbers 1e3 to 2e5
 
 
 class SceneError(ValueError):
@@ -55,6 +62,10 @@ class Link:
     moments: tuple[float, float, float] | None = None  # (Ixx, Iyy, Izz); None: a cylinder's
     damping: float = 0.0  # joint damping coefficient c (torque -c w_rel), with Scene.joint_damping
     bob_force: bool = False  # an applied force on the bob: inputs F_bob<i>_x/y/z, inertial
+    # with Scene.air_drag: the bob's drag coefficient and frontal area (None: a sphere's,
+    # SPHERE_DRAG and pi bob_radius^2)
+    bob_drag_coefficient: float | None = None
+    bob_area: float | None = None
 
     def inertia(self) -> tuple[float, float, float]:
         """Central inertia (Ixx, Iyy, Izz): as given, or a solid cylinder along the link's y axis."""
@@ -62,6 +73,12 @@ class Link:
             return tuple(float(m) for m in self.moments)
         transverse = self.mass * (3.0 * self.radius**2 + self.length**2) / 12.0
         return transverse, self.mass * self.radius**2, transverse
+
+    def drag(self) -> tuple[float, float]:
+        """The bob's drag coefficient and frontal area: as given, or a sphere's."""
+        coefficient = SPHERE_DRAG if self.bob_drag_coefficient is None else self.bob_drag_coefficient
+        area = math.pi * self.bob_radius**2 if self.bob_area is None else self.bob_area
+        return coefficient, area
 
 
 @dataclass(frozen=True)
@@ -97,6 +114,9 @@ class Scene:
     coupling: bool = False  # pivot acceleration inputs and pivot force outputs
     formulation: str = "auto"  # "expanded" equations, "recursive" loops, or by the number of links
     joint_damping: bool = False  # a viscous torque -c w_rel at each joint, c per joint a parameter
+    # quadratic drag on every bob, -1/2 rho C_d A |v - w| (v - w) with the wind w an input
+    air_drag: bool = False
+    air_density: float = AIR_DENSITY  # rho's start value, with air_drag
 
     def __post_init__(self):
         unknown = [g for g in self.outputs if g not in OUTPUT_GROUPS]
@@ -157,7 +177,7 @@ class Scene:
         for i, link in enumerate(self.links):
             for name, rule in LINK_RULES.items():
                 value = getattr(link, name)
-                if not satisfies(rule, value):
+                if value is not None and not satisfies(rule, value):
                     raise SceneError(
                         f"link[{i}].{FILE_NAMES.get(name, name)}: must be "
                         f"{RULES[rule].wanted}{MASSLESS_HINT if name == 'mass' else ''}, "
@@ -191,6 +211,7 @@ class Scene:
                         f"link[{i}].damping: {link.damping!r} given, but the scene has no joint "
                         "damping: set joint_damping = true"
                     )
+        self._validate_drag()
         for i, link in enumerate(self.links):
             if not isinstance(link.bob_force, bool):
                 raise SceneError(f"link[{i}].bob.force: expected true or false, got {link.bob_force!r}")
@@ -213,6 +234,34 @@ class Scene:
                     "would be undetermined; give one of them mass or a bob, or drop them"
                 )
 
+    def _validate_drag(self) -> None:
+        if not isinstance(self.air_drag, bool):
+            raise SceneError(f"air_drag: expected true or false, got {self.air_drag!r}")
+        if self.air_drag and self.kinematics != "consistent":
+            raise SceneError(
+                "air_drag: the bobs' drag needs kinematics 'consistent'; the published "
+                f"{self.kinematics!r} equations take no forces"
+            )
+        if not satisfies(QUANTITIES["rho"][0], self.air_density):
+            raise SceneError(
+                f"air_density: must be {RULES[QUANTITIES['rho'][0]].wanted}, got {self.air_density!r}"
+            )
+        if self.air_drag and not self.dragged_bobs():
+            raise SceneError("air_drag: the scene has no bob for the air to drag")
+        if self.air_drag:
+            return
+        if self.air_density != AIR_DENSITY:
+            raise SceneError(
+                f"air_density: {self.air_density!r} given, but the scene has no air drag: set air_drag = true"
+            )
+        for i, link in enumerate(self.links):
+            for name in ("bob_drag_coefficient", "bob_area"):
+                if getattr(link, name) is not None:
+                    raise SceneError(
+                        f"link[{i}].{FILE_NAMES[name]}: {getattr(link, name)!r} given, but the scene "
+                        "has no air drag: set air_drag = true"
+                    )
+
     def resolved_formulation(self) -> str:
         """The formulation the core is generated in: as chosen, or for "auto" the faster one
         at this number of links (benchmarks/chain_scaling.py measures the crossover)."""
@@ -225,7 +274,7 @@ class Scene:
     def structure(self) -> dict:
         """What the generated code depends on, and nothing else (an option left out is not
         named, so a scene without options keeps today's key)."""
-        options = {name: True for name in ("joint_damping",) if getattr(self, name)}
+        options = {name: True for name in ("joint_damping", "air_drag") if getattr(self, name)}
         if self.forced_bobs():
             options["bob_forces"] = self.forced_bobs()
         return {
@@ -245,16 +294,20 @@ class Scene:
 
     def parameter_scalars(self) -> list[Scalar]:
         """Parameters in the seed's order: l, m (bobs), M (links), Ixx, Iyy, Izz, then the
-        joints' damping c (with joint_damping), then g."""
+        joints' damping c (with joint_damping), the bobs' drag coefficients C_d and areas A
+        and the air's density rho (with air_drag), then g."""
         n = range(self.n)
         massive = [i for i in n if self.links[i].has_mass]
         bobs = [i for i in n if self.links[i].has_bob]
+        dragged = self.dragged_bobs()
         return (
             [Scalar("l", i) for i in n]
             + [Scalar("m", i) for i in bobs]
             + [Scalar("M", i) for i in massive]
             + [Scalar(axis, i) for axis in ("Ixx", "Iyy", "Izz") for i in massive]
             + ([Scalar("c", i) for i in n] if self.joint_damping else [])
+            + [Scalar(quantity, i) for quantity in ("C_d", "A") for i in dragged]
+            + ([Scalar("rho")] if dragged else [])
             + [Scalar("g")]
         )
 
@@ -269,6 +322,8 @@ class Scene:
             values[f"M{i}"] = link.mass
             values[f"Ixx{i}"], values[f"Iyy{i}"], values[f"Izz{i}"] = link.inertia()
             values[f"c{i}"] = link.damping
+            values[f"C_d{i}"], values[f"A{i}"] = link.drag()
+        values["rho"] = self.air_density
         values["g"] = self.gravity
         return [float(values[name]) for name in self.parameter_names()]
 
@@ -276,11 +331,17 @@ class Scene:
         """The links whose bob takes an applied force (inputs F_bob<i>_x/y/z)."""
         return [i for i, link in enumerate(self.links) if link.bob_force]
 
+    def dragged_bobs(self) -> list[int]:
+        """The links whose bob the air drags (every bob, with air_drag)."""
+        return [i for i, link in enumerate(self.links) if link.has_bob] if self.air_drag else []
+
     def input_scalars(self) -> list[Scalar]:
-        """Inputs, held constant over a communication step: the pivot's inertial acceleration,
-        then the forces applied to the bobs the scene names (inertial components)."""
-        pivot = [Scalar(name) for name in PIVOT_INPUTS] if self.coupling else []
-        return pivot + [Scalar("F_bob", i, f"_{c}") for i in self.forced_bobs() for c in "xyz"]
+        """Inputs, held constant over a communication step: the pivot's inertial acceleration
+        (first: the core reads it there) and with air drag its velocity, the forces applied to
+        the bobs the scene names, then the wind (all in inertial components)."""
+        pivot = list(PIVOT_INPUTS) + (list(PIVOT_VELOCITY) if self.air_drag else []) if self.coupling else []
+        forces = [Scalar("F_bob", i, f"_{c}") for i in self.forced_bobs() for c in "xyz"]
+        return [Scalar(name) for name in pivot] + forces + [Scalar(name) for name in WIND if self.air_drag]
 
     def input_names(self) -> list[str]:
         return _names(self.input_scalars())
@@ -302,7 +363,7 @@ class Scene:
     def work_names(self) -> list[str]:
         """The energy's books: states integrating the power of each non-conservative force
         the scene has, so that energy minus their sum stays constant."""
-        forces = (self.joint_damping, bool(self.forced_bobs()))
+        forces = (self.joint_damping, self.air_drag, bool(self.forced_bobs()))
         # the moving pivot's work is kept with the other forces' (a coupled scene without
         # them stays as it was)
         kept = (*forces, self.coupling and any(forces))
@@ -384,11 +445,26 @@ def load_scene(path) -> Scene:
 
 
 DEFAULT_LINK = Link()
-FILE_NAMES = {"bob_mass": "bob.mass", "bob_radius": "bob.radius"}  # Link fields as a file names them
+FILE_NAMES = {  # Link fields as a file names them
+    "bob_mass": "bob.mass",
+    "bob_radius": "bob.radius",
+    "bob_drag_coefficient": "bob.drag_coefficient",
+    "bob_area": "bob.area",
+}
 MASSLESS_HINT = " (or 0 for a massless link: has_mass=False)"
-SCENE_FIELDS = {"link", "kinematics", "gravity", "outputs", "coupling", "formulation", "joint_damping"}
+SCENE_FIELDS = {
+    "link",
+    "kinematics",
+    "gravity",
+    "outputs",
+    "coupling",
+    "formulation",
+    "joint_damping",
+    "air_drag",
+    "air_density",
+}
 LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob", "damping"}
-BOB_FIELDS = {"mass", "radius", "force"}
+BOB_FIELDS = {"mass", "radius", "force", "drag_coefficient", "area"}
 
 
 def scene_from_dict(data: dict) -> Scene:
@@ -426,13 +502,18 @@ def scene_from_dict(data: dict) -> Scene:
         except TypeError as exc:
             raise SceneError(f"{where}: {exc}") from None
     scene_fields = {"links": tuple(made)}
-    for name in ("kinematics", "gravity", "outputs", "coupling", "formulation", "joint_damping"):
+    for name in SCENE_FIELDS - {"link"}:
         if name in data:
             scene_fields[name] = tuple(data[name]) if name == "outputs" else data[name]
     if "joint_damping" not in data and any("damping" in entry for entry in links):
         scene_fields["joint_damping"] = True  # a link's damping asks for it
-    if "gravity" in data and not isinstance(data["gravity"], (int, float)):
-        raise SceneError(f"gravity: expected a number, got {data['gravity']!r}")
+    drag_fields = ("drag_coefficient", "area")
+    bob_drag = any(name in (entry.get("bob") or {}) for entry in links for name in drag_fields)
+    if "air_drag" not in data and ("air_density" in data or bob_drag):
+        scene_fields["air_drag"] = True  # the air's density or a bob's drag asks for it
+    for name in ("gravity", "air_density"):
+        if name in data and (isinstance(data[name], bool) or not isinstance(data[name], (int, float))):
+            raise SceneError(f"{name}: expected a number, got {data[name]!r}")
     return Scene(**scene_fields)
 
 

@@ -197,6 +197,23 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
                 else []
             ),
             *(
+                [
+                    "#define CP_DRAG 1",
+                    c.define("CP_RHO_INDEX", index("rho")),
+                    c.define("CP_WIND_INDEX", index("wind_x")),
+                    c.define("CP_PIVOT_VELOCITY_INDEX", index("v_pivot_x")),
+                    "/* Where each bob's drag coefficient C_d<i> and area A<i> are in p (-1: no drag). */",
+                    "static const int cp_bob_drag[CP_NLINK] = "
+                    + c.initializer(index("C_d", i) for i in range(scene.n))
+                    + ";",
+                    "static const int cp_bob_area[CP_NLINK] = "
+                    + c.initializer(index("A", i) for i in range(scene.n))
+                    + ";",
+                ]
+                if scene.air_drag
+                else []
+            ),
+            *(
                 c.define(f"CP_OUTPUT_{group.upper()}", int(group in scene.outputs))
                 for group in ("bobs", "poses", "energy")
             ),

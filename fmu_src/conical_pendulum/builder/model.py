@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import sympy as sm
 import sympy.physics.mechanics as me
 
-from ..scene import PIVOT_INPUTS, Scene
+from ..scene import PIVOT_INPUTS, PIVOT_VELOCITY, WIND, Scene
 from .kane import kanes_method
 
 Vec = sm.Matrix
@@ -107,10 +107,12 @@ def joint_damping(scene: Scene) -> tuple[list[sm.Expr], sm.Expr]:
 
 def _work_rates(scene: Scene, sym: _Symbols, sums: _Sums) -> list[sm.Expr]:
     """The power of each force of the energy's books (Scene.work_names, in its order): the
-    joints' damping, the bobs' applied forces, and the moving pivot's inertial force
-    -m a_pivot on every mass (velocities are relative to the pivot, as the energy is)."""
+    joints' damping, the air's drag, the bobs' applied forces, and the moving pivot's
+    inertial force -m a_pivot on every mass (velocities are relative to the pivot, as the
+    energy is)."""
     power = {
         "W_damping": lambda: joint_damping(scene)[1],
+        "W_drag": lambda: sums.drag_power,
         "W_external": lambda: sums.external_power,
         "W_pivot": lambda: -sym.pivot_acc.dot(sums.linear_momentum),
     }
@@ -234,6 +236,7 @@ class _Sums:
     # sum m v: the power of the pivot's inertial force -m a_pivot is -a_pivot . sum m v
     linear_momentum: sm.Matrix = field(default_factory=lambda: ZERO)
     external_power: sm.Expr = sm.S.Zero  # of the forces applied to the bobs
+    drag_power: sm.Expr = sm.S.Zero  # of the air's drag on the bobs
 
     @classmethod
     def empty(cls, dim: int) -> _Sums:
@@ -330,17 +333,33 @@ def _add_particle(sums: _Sums, sym: _Symbols, mass, point: _Point) -> None:
     sums.potential += mass * g * point.position[1]
 
 
-def _add_bob_force(sums: _Sums, sym: _Symbols, i: int, bob: _Point) -> None:
-    """An applied force F (inputs F_bob<i>_x/y/z, inertial) on bob i: F . v_s to F, its power
-    F . v, and with coupling its share of the force on the support (Newton's law for the
-    chain: sum m (g - a) + F)."""
-    force = Vec([sym.params[f"F_bob{i}_{c}"] for c in "xyz"])
+def _add_force(sums: _Sums, sym: _Symbols, point: _Point, force: sm.Matrix) -> sm.Expr:
+    """A force F (inertial components) on a point of the chain: F . v_s to F, and with
+    coupling its share of the force on the support (Newton's law for the chain: sum m (g - a)
+    + F). Returns its power F . v (v relative to the pivot, as the energy's)."""
     for s in range(sym.dim):
-        if bob.partials[s] != ZERO:
-            sums.force_terms[s] += bob.partials[s].dot(force)
-    sums.external_power += force.dot(bob.velocity)
+        if point.partials[s] != ZERO:
+            sums.force_terms[s] += point.partials[s].dot(force)
     if sym.pivot_acc is not None:
         sums.support_force += force
+    return force.dot(point.velocity)
+
+
+def _applied_force(sym: _Symbols, i: int) -> sm.Matrix:
+    """The force applied to bob i: its inputs F_bob<i>_x/y/z."""
+    return Vec([sym.params[f"F_bob{i}_{c}"] for c in "xyz"])
+
+
+def _drag(b: _Builder, sym: _Symbols, i: int, bob: _Point) -> sm.Matrix:
+    """The air's quadratic drag on bob i, -1/2 rho C_d A |v_air| v_air, v_air its velocity
+    through the air: relative to the pivot, plus the pivot's (inputs v_pivot, with
+    coupling), less the wind (inputs wind_x/y/z). |v_air| is a square root, which the
+    complex step differentiates exactly, also at v_air = 0 (the force's derivative is 0)."""
+    p = sym.params
+    moving = Vec([p[name] for name in PIVOT_VELOCITY]) if sym.pivot_acc is not None else ZERO
+    v_air = b.name(f"va{i}", bob.velocity + moving - Vec([p[name] for name in WIND]))
+    speed = b.name(f"speed{i}", sm.sqrt(v_air.dot(v_air)))
+    return b.name(f"fd{i}", -p["rho"] * p[f"C_d{i}"] * p[f"A{i}"] / 2 * speed * v_air)
 
 
 def _add_link_rotation(b: _Builder, sums: _Sums, sym: _Symbols, i: int, frame: _Frame) -> None:
@@ -404,7 +423,7 @@ def derive(scene: Scene) -> Equations:
     ja, jb, joint_dcm, joint_jac = joint_kinematics()
     joint = (ja, jb, joint_dcm, joint_jac, [joint_jac.diff(ja), joint_jac.diff(jb)])
     b, sums, parent = _Builder(), _Sums.empty(sym.dim), _Parent.pivot(sym.dim)
-    bobs, poses = [], []
+    bobs, poses, dragged = [], [], scene.dragged_bobs()
     for i, link in enumerate(scene.links):
         frame = _link_frame(b, scene, sym, joint, i, parent.frame)
         centre, lower, quaternion = _link_points(b, sym, i, parent, frame)
@@ -415,7 +434,9 @@ def derive(scene: Scene) -> Equations:
             _add_particle(sums, sym, sym.params[f"m{i}"], lower)
             bobs.append(lower.position)
         if link.bob_force:
-            _add_bob_force(sums, sym, i, lower)
+            sums.external_power += _add_force(sums, sym, lower, _applied_force(sym, i))
+        if i in dragged:
+            sums.drag_power += _add_force(sums, sym, lower, _drag(b, sym, i, lower))
         if link.has_mass:
             _add_link_rotation(b, sums, sym, i, frame)
         parent = _Parent(frame, lower, quaternion)

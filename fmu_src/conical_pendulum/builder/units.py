@@ -50,9 +50,11 @@ UNITS = {
         Unit("1"),  # dimensionless: a quaternion's components, a count, a relative tolerance
         Unit("s", {"s": 1}, "Time"),
         Unit("m", {"m": 1}, "Length"),
+        Unit("m2", {"m": 2}, "Area"),
         Unit("m/s", {"m": 1, "s": -1}, "Velocity"),
         Unit("m/s2", {"m": 1, "s": -2}, "Acceleration"),
         Unit("kg", {"kg": 1}, "Mass"),
+        Unit("kg/m3", {"kg": 1, "m": -3}, "Density"),
         Unit("kg.m2", {"kg": 1, "m": 2}, "MomentOfInertia"),
         Unit("N", {"kg": 1, "m": 1, "s": -2}, "Force"),
         Unit("J", {"kg": 1, "m": 2, "s": -2}, "Energy"),

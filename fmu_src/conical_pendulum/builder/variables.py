@@ -165,6 +165,32 @@ DESCRIBED = {
         "viscous damping coefficient of joint {link}: a torque -c w_rel on link {link}, w_rel its "
         "angular velocity relative to its parent (and +c w_rel on the parent) [{unit}]",
     ),
+    "C_d": Described(
+        "1",
+        "drag coefficient of bob {link}: the air drags it by -1/2 rho C_d A |v_air| v_air, v_air its "
+        "velocity through the air (0: no drag) [{unit}]",
+    ),
+    "A": Described("m2", "frontal area of bob {link}, in its air drag [{unit}]"),
+    "rho": Described("kg/m3", "density of the air, in the bobs' drag [{unit}]"),
+    **_axes(
+        "velocity of the air (the wind), inertial {axis} (Y up) [{unit}]; held constant over each "
+        "communication step",
+        "m/s",
+        {f"wind_{c}": c for c in "xyz"},
+    ),
+    **_axes(
+        "velocity of the pivot (the support), inertial {axis} (Y up) [{unit}], which the bobs' air "
+        "drag needs (the chain's own velocities are relative to the pivot); held constant over each "
+        "communication step: connect it with a_pivot",
+        "m/s",
+        {f"v_pivot_{c}": c for c in "xyz"},
+    ),
+    "W_drag": Described(
+        "J",
+        "work done on the chain by the air's drag on the bobs since the start, with velocities "
+        "relative to the pivot (<= 0 in still air and at a fixed pivot); energy minus the W_ outputs' "
+        "sum stays constant [{unit}]",
+    ),
     "W_damping": Described(
         "J",
         "work done on the chain by the joints' damping since the start (<= 0); energy minus the "

@@ -105,6 +105,9 @@ QUANTITIES = {
     "Iyy": ("non-negative", "a moment of inertia"),
     "Izz": ("non-negative", "a moment of inertia"),
     "c": ("non-negative", "a joint damping coefficient"),  # a negative one would feed energy in
+    "rho": ("non-negative", "an air density"),  # the drag's: negative ones would feed energy in
+    "C_d": ("non-negative", "a drag coefficient"),
+    "A": ("non-negative", "a frontal area"),
     "rtol": ("relative-tolerance", "a relative tolerance"),
     "atol": ("positive", "a tolerance"),
     "max_step": ("non-negative", "the largest internal step"),
@@ -124,6 +127,8 @@ LINK_RULES = {
     "mass": QUANTITIES["M"][0],
     "bob_mass": QUANTITIES["m"][0],
     "damping": QUANTITIES["c"][0],
+    "bob_drag_coefficient": QUANTITIES["C_d"][0],  # None: a sphere's (scene.Link.drag)
+    "bob_area": QUANTITIES["A"][0],
     "radius": "positive",
     "bob_radius": "positive",
 }

@@ -32,6 +32,9 @@ typedef struct {
     cp_real I[36];     /* spatial inertia of link and bob about the joint */
     cp_real b[6];      /* velocity-dependent force of link and bob about the joint */
     cp_real IA[36], pA[6], U[12], Dinv[4], uu[2];
+#ifdef CP_DRAG
+    cp_real drag[3];   /* the air's drag on the bob (bob_drag) */
+#endif
 } Link;
 
 static void cross(const cp_real *a, const cp_real *b, cp_real *out)
@@ -92,6 +95,35 @@ static void central_inertia(const Link *k, const cp_real *p, const cp_link_param
                             + k->R[i * 3 + 2] * diag[2] * k->R[j * 3 + 2];
 }
 
+/* A force F (inertial components) at the link's bob: -[r x F; F] to its bias force. */
+static void apply_at_bob(Link *k, const cp_real F[3])
+{
+    cp_real t[3];
+    cross(k->r, F, t);
+    for (int j = 0; j < 3; j++) k->b[j] -= t[j], k->b[3 + j] -= F[j];
+}
+
+#ifdef CP_DRAG
+/* The air's drag on link i's bob, -1/2 rho C_d A |v_air| v_air, v_air the bob's velocity
+ * relative to the pivot, plus the pivot's (with coupling), less the wind (builder.model's
+ * _drag): into k->drag, and applied at the bob. */
+static void bob_drag(Link *k, const cp_real *p, int i)
+{
+    cp_real wr[3], v[3];
+    cross(k->w, k->r, wr);
+    for (int j = 0; j < 3; j++) {
+        v[j] = k->vel[j] + wr[j] - p[CP_WIND_INDEX + j];
+#if CP_PIVOT_VELOCITY_INDEX >= 0
+        v[j] += p[CP_PIVOT_VELOCITY_INDEX + j];
+#endif
+    }
+    const cp_real speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    const cp_real scale = -0.5 * p[CP_RHO_INDEX] * p[cp_bob_drag[i]] * p[cp_bob_area[i]] * speed;
+    for (int j = 0; j < 3; j++) k->drag[j] = scale * v[j];
+    apply_at_bob(k, k->drag);
+}
+#endif
+
 /* Positions, velocities, joint axes, bias accelerations, and each link's inertia. */
 static void kinematics(const cp_real *x, const cp_real *p, Link *links)
 {
@@ -143,11 +175,10 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
         }
         if (lp->m >= 0) add_body(k, p[lp->m], k->r, NULL);
 #ifdef CP_BOB_FORCES
-        if (cp_bob_force[i] >= 0) {  /* an applied force F at the bob: [r x F; F] less */
-            const cp_real *F = p + cp_bob_force[i];
-            cross(k->r, F, t);
-            for (int j = 0; j < 3; j++) k->b[j] -= t[j], k->b[3 + j] -= F[j];
-        }
+        if (cp_bob_force[i] >= 0) apply_at_bob(k, p + cp_bob_force[i]);
+#endif
+#ifdef CP_DRAG
+        if (cp_bob_drag[i] >= 0) bob_drag(k, p, i);
 #endif
     }
 }
@@ -303,6 +334,17 @@ static void work_rates(const cp_real *x, const cp_real *p, const Link *links, cp
     for (int i = 0; i < n; i++)
         damping -= p[CP_DAMPING_INDEX + i] * (x[2 * n + i] * x[2 * n + i] + x[3 * n + i] * x[3 * n + i]);
     dW[CP_WORK_DAMPING] = damping;
+#endif
+#if CP_WORK_DRAG >= 0
+    cp_real drag = 0;  /* the drag times the bob's velocity relative to the pivot */
+    for (int i = 0; i < n; i++) {
+        const Link *k = &links[i];
+        cp_real wr[3];
+        if (cp_bob_drag[i] < 0) continue;
+        cross(k->w, k->r, wr);
+        for (int j = 0; j < 3; j++) drag += k->drag[j] * (k->vel[j] + wr[j]);
+    }
+    dW[CP_WORK_DRAG] = drag;
 #endif
 #if CP_WORK_EXTERNAL >= 0 || CP_WORK_PIVOT >= 0
     cp_real momentum[3] = {0, 0, 0};
@@ -502,6 +544,10 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
 #ifdef CP_BOB_FORCES
         if (cp_bob_force[i] >= 0)  /* what the bob's applied force passes on to the support */
             for (int j = 0; j < 3; j++) force[j] += p[cp_bob_force[i] + j];
+#endif
+#ifdef CP_DRAG
+        if (cp_bob_drag[i] >= 0)  /* and the air's drag on it */
+            for (int j = 0; j < 3; j++) force[j] += k->drag[j];
 #endif
     }
     for (int j = 0; j < 3; j++) *out++ = force[j];
