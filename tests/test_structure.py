@@ -19,15 +19,17 @@ SCENES = {
     "coupled": Scene.uniform(3, coupling=True),
     "mixed": Scene(links=(Link(), Link(has_mass=False), Link(has_bob=False)), coupling=True),
     "recursive": Scene.uniform(7, coupling=True),
-    # joint damping and a force on the middle bob: the energy's books as states
+    # joint damping, the air's drag and a force on the middle bob: the energy's books as states
     "forced": Scene(
         links=(Link(damping=0.3), Link(damping=0.2, bob_force=True), Link(damping=0.1)),
         joint_damping=True,
+        air_drag=True,
         coupling=True,
     ),
     "forced_recursive": Scene(
         links=(Link(damping=0.3),) * 3 + (Link(damping=0.1, bob_force=True),) + (Link(damping=0.2),) * 3,
         joint_damping=True,
+        air_drag=True,
         coupling=True,
     ),
 }

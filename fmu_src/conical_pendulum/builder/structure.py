@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import functools
 
-from ..scene import APPARENT_MASS, FREE_FORCE, PIVOT_INPUTS, PIVOT_OUTPUTS, Scene
+from ..scene import APPARENT_MASS, FREE_FORCE, PIVOT_INPUTS, PIVOT_OUTPUTS, PIVOT_VELOCITY, WIND, Scene
 
 Dependencies = dict[str, frozenset[str]]  # computed variable -> the knowns it depends on
 
@@ -109,7 +109,8 @@ def _chain(scene: Scene) -> Dependencies:
     above = [frozenset().union(*angles[: i + 1]) for i in range(n)]  # orientation of link i
     lengths = [frozenset(f"l{k}" for k in range(i + 1)) for i in range(n)]
     inputs, works = set(scene.input_names()), set(scene.work_names())
-    damping = {s.name for s in scene.parameter_scalars() if s.quantity == "c"}  # joint damping
+    # the forces' coefficients, which move nothing but the chain's dynamics (and the books)
+    damping = {s.name for s in scene.parameter_scalars() if s.quantity in ("c", "C_d", "A", "rho")}
     everything = frozenset(scene.state_names()) | parameters | inputs
     motion = everything - works  # the chain's motion; the energy's books follow it
     result = {}
@@ -150,6 +151,10 @@ def _work_rates(scene: Scene, above, lengths) -> Dependencies:
 
     powers = {
         "W_damping": of_kind("c") | frozenset().union(*rates),  # c w_rel^2: the rates alone
+        "W_drag": frozenset().union(  # the drag times the bob's velocity
+            *(moving[i] | of_kind("rho") | {f"C_d{i}", f"A{i}"} for i in scene.dragged_bobs())
+        )
+        | (set(scene.input_names()) & {*WIND, *PIVOT_VELOCITY}),  # the air's velocity
         "W_external": frozenset().union(
             *(moving[i] | {f"F_bob{i}_{c}" for c in "xyz"} for i in scene.forced_bobs())
         ),

@@ -95,6 +95,7 @@ static void central_inertia(const Link *k, const cp_real *p, const cp_link_param
                             + k->R[i * 3 + 2] * diag[2] * k->R[j * 3 + 2];
 }
 
+#if defined(CP_BOB_FORCES) || defined(CP_DRAG)
 /* A force F (inertial components) at the link's bob: -[r x F; F] to its bias force. */
 static void apply_at_bob(Link *k, const cp_real F[3])
 {
@@ -102,6 +103,7 @@ static void apply_at_bob(Link *k, const cp_real F[3])
     cross(k->r, F, t);
     for (int j = 0; j < 3; j++) k->b[j] -= t[j], k->b[3 + j] -= F[j];
 }
+#endif
 
 #ifdef CP_DRAG
 /* The air's drag on link i's bob, -1/2 rho C_d A |v_air| v_air, v_air the bob's velocity
