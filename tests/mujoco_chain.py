@@ -4,7 +4,10 @@ As benchmarks/chain_scaling.py builds it (each link a body with hinges about its
 then its own z at its top: the joint's Rx(beta) Rz(alpha)), but with each body's inertia
 given exactly (the link's cylinder and a point bob: MuJoCo's sphere geom would give the bob
 a radius), no contacts, and MuJoCo's RK4 at a small step. MuJoCo's hinge damping is -c q'
-per hinge: with the joint's orthonormal axes, the same torque -c w_rel as the scene's.
+per hinge: with the joint's orthonormal axes, the same torque -c w_rel as the scene's. The
+air's drag on the bobs is computed here, in mjcb_passive, which MuJoCo calls at every stage of
+its RK4: a force at each bob's site from the site's velocity and the wind, added to the passive
+forces with mj_applyFT.
 """
 
 import numpy as np
@@ -45,10 +48,11 @@ def mjcf(scene: Scene, timestep: float) -> str:
         link = scene.links[i]
         top = "0 0 0" if i == 0 else f"0 {-scene.links[i - 1].length!r} 0"
         damping = f' damping="{link.damping!r}"' if scene.joint_damping else ""
+        site = f'<site name="bob{i}" pos="0 {-link.length!r} 0"/>' if link.has_bob else ""
         xml = (
             f'<body name="link{i}" pos="{top}">{body_inertial(link)}'
             f'<joint type="hinge" axis="1 0 0"{damping}/><joint type="hinge" axis="0 0 1"{damping}/>'
-            f"{bob_body(i, link) if link.bob_force else ''}{xml}</body>"
+            f"{site}{bob_body(i, link) if link.bob_force else ''}{xml}</body>"
         )
     return (
         f'<mujoco><option gravity="0 {-scene.gravity!r} 0" integrator="RK4" timestep="{timestep!r}">'
@@ -57,14 +61,48 @@ def mjcf(scene: Scene, timestep: float) -> str:
     )
 
 
-def simulate_mujoco(scene: Scene, state: dict, times, timestep=1e-3, applied=None):
+def drag_callback(scene: Scene, wind, parameters: dict | None = None):
+    """An mjcb_passive adding the air's drag on every bob, -1/2 rho C_d A |v - w| (v - w), at
+    the scene's (or `parameters`') rho, C_d<i> and A<i> and the wind w (3 numbers), at the
+    bob's site: its velocity from mj_objectVelocity, the force by mj_applyFT."""
+    import mujoco
+
+    values = dict(zip(scene.parameter_names(), scene.parameter_defaults())) | (parameters or {})
+    bobs = scene.dragged_bobs()
+    scale = [-0.5 * values["rho"] * values[f"C_d{i}"] * values[f"A{i}"] for i in bobs]
+    velocity, torque = np.zeros(6), np.zeros(3)
+
+    def passive(model, data):
+        for i, k in zip(bobs, scale):
+            site = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, f"bob{i}")
+            mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_SITE, site, velocity, 0)
+            v_air = velocity[3:] - wind
+            force = k * np.linalg.norm(v_air) * v_air
+            body = model.site_bodyid[site]
+            mujoco.mj_applyFT(model, data, force, torque, data.site_xpos[site], body, data.qfrc_passive)
+
+    return passive
+
+
+def simulate_mujoco(scene: Scene, state: dict, times, timestep=1e-3, applied=None, passive=None):
     """The angles (alpha, beta per link, scene order) at `times` (multiples of timestep from
     0). applied(t, data, bodies): sets data.xfrc_applied before each step (bodies: the body
-    id of each bob with a force, by link), if given."""
+    id of each bob with a force, by link), if given; passive: MuJoCo's mjcb_passive while it
+    runs (drag_callback), if given."""
     import mujoco
 
     model = mujoco.MjModel.from_xml_string(mjcf(scene, timestep))
     data = mujoco.MjData(model)
+    mujoco.set_mjcb_passive(passive)
+    try:
+        return _run(scene, model, data, state, times, timestep, applied)
+    finally:
+        mujoco.set_mjcb_passive(None)
+
+
+def _run(scene, model, data, state, times, timestep, applied):
+    import mujoco
+
     x = dict(zip(scene.state_names(), scene.initial_state(state)))
     n = scene.n
     data.qpos[:] = [x[f"{name}{i}"] for i in range(n) for name in ("beta", "alpha")]

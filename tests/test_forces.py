@@ -1,11 +1,14 @@
 """The forces a scene may add: joint damping (Scene.joint_damping, the torque -c w_rel at each
-joint, c per joint a parameter) and forces applied to the bobs it names (Link.bob_force, inputs
+joint, c per joint a parameter), the air's drag on the bobs (Scene.air_drag, -1/2 rho C_d A |v_air|
+v_air with the wind an input) and forces applied to the bobs it names (Link.bob_force, inputs
 F_bob<i>_x/y/z), in both formulations and every FMU, with the energy's books (W_damping,
-W_external, W_pivot); checked against MuJoCo (hinge damping, xfrc_applied), the damped
-small-swing pendulum's analytic decay, and Newton's law for the force on the support."""
+W_drag, W_external, W_pivot); checked against MuJoCo (hinge damping, drag in mjcb_passive,
+xfrc_applied), the damped small-swing pendulum's analytic decay, a pendulum's lean in a
+steady wind, and Newton's law for the force on the support."""
 
 import hashlib
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -21,7 +24,7 @@ from conical_pendulum.builder.model import derive, joint_damping
 from conical_pendulum.runtime.rules import BadValue, check_value
 from conical_pendulum.scene import load_scene
 from fmu_helpers import INSTANCES
-from mujoco_chain import simulate_mujoco
+from mujoco_chain import drag_callback, simulate_mujoco
 
 ERROR = 3  # fmi2Error, fmi3Error
 
@@ -31,22 +34,27 @@ DAMPED = Scene(
     coupling=True,
 )
 DAMPED_RECURSIVE = Scene(links=tuple(Link(damping=1.0 + i) for i in range(7)), joint_damping=True)
-# every option at once, the FMUs' scene: damping, forces on two bobs, a moving support
+# every option at once, the FMUs' scene: damping, the air's drag, forces on two bobs, a moving
+# support
 FORCED = Scene(
     links=(
         Link(damping=4.0, bob_force=True),
         Link(damping=2.0, has_bob=False),
-        Link(damping=1.0, bob_force=True),
+        Link(damping=1.0, bob_force=True, bob_area=6.0),
     ),
     joint_damping=True,
+    air_drag=True,
     coupling=True,
 )
 FORCED_RECURSIVE = Scene(
     links=tuple(Link(damping=1.0 + i, bob_force=i in (2, 6)) for i in range(7)),
     joint_damping=True,
+    air_drag=True,
     coupling=True,
 )
-FORCES = {"F_bob0_x": 20.0, "F_bob2_y": 10.0, "F_bob2_z": -30.0}
+# the wind, the support's velocity (which only the drag sees) and the applied forces
+WIND = {"wind_x": 4.0, "wind_z": -2.5}
+FORCES = {"F_bob0_x": 20.0, "F_bob2_y": 10.0, "F_bob2_z": -30.0, **WIND, "v_pivot_x": 1.0, "v_pivot_y": -0.5}
 STATE, PARAMETERS = {"alpha0": 0.5, "beta1": 0.3, "omega2": 0.4}, {"c1": 3.0}
 START = {**STATE, **PARAMETERS}
 
@@ -127,23 +135,26 @@ def sympy_symbol(name):
 
 
 @pytest.mark.parametrize(
-    "links, coupling",
+    "links, coupling, drag",
     [
-        ((Link(damping=2.0),), False),
-        ((Link(damping=1.0), Link(damping=3.0, has_mass=False)), True),
-        ((Link(damping=4.0), Link(damping=2.0, has_bob=False), Link(damping=1.0)), True),
-        (FORCED.links, True),
-        ((Link(damping=1.0, bob_force=True), Link(damping=3.0, has_mass=False, bob_force=True)), False),
+        ((Link(damping=2.0),), False, False),
+        ((Link(damping=1.0), Link(damping=3.0, has_mass=False)), True, False),
+        ((Link(damping=4.0), Link(damping=2.0, has_bob=False), Link(damping=1.0)), True, False),
+        (FORCED.links, True, True),
+        (
+            (Link(damping=1.0, bob_force=True), Link(damping=3.0, has_mass=False, bob_force=True)),
+            False,
+            False,
+        ),
+        ((Link(damping=1.0, bob_drag_coefficient=1.1), Link(damping=3.0, has_mass=False)), False, True),
     ],
 )
-def test_the_formulations_agree(links, coupling):
+def test_the_formulations_agree(links, coupling, drag):
     """M, F, x' (the books' rates too) and the outputs (the pivot force, F_free, M_app among
     them) at random states and inputs."""
-    cores = [
-        load_core(Scene(links=links, joint_damping=True, coupling=coupling, formulation=f))
-        for f in ("expanded", "recursive")
-    ]
-    scene = Scene(links=links, joint_damping=True, coupling=coupling)
+    options = {"joint_damping": True, "coupling": coupling, "air_drag": drag}
+    cores = [load_core(Scene(links=links, formulation=f, **options)) for f in ("expanded", "recursive")]
+    scene = Scene(links=links, **options)
     rng = np.random.default_rng(3)
     for _ in range(5):
         x = rng.uniform(-1, 1, len(scene.state_names()))
@@ -200,14 +211,16 @@ def test_energy_minus_the_forces_work_stays_constant(scene):
 
 @pytest.mark.parametrize("formulation", ["expanded", "recursive"])
 def test_the_support_force_is_newtons_law_with_the_applied_forces(formulation):
-    """F_pivot = sum m (g - a) + sum F_bob, the masses' accelerations a (the pivot's plus
-    their own relative to it) from second differences of their positions (bob and link
-    centre outputs) at 1 ms: an independent path to what the model computes."""
-    scene = Scene(links=FORCED.links, joint_damping=True, coupling=True, formulation=formulation)
+    """F_pivot = sum m (g - a) + sum F_bob + sum drag, the masses' accelerations a (the
+    pivot's plus their own relative to it) from second differences of their positions (bob
+    and link centre outputs) at 1 ms, the bobs' drag from first differences: an independent
+    path to what the model computes."""
+    scene = replace(FORCED, formulation=formulation)
     a_pivot = np.array([1.5, 0.0, -0.7])
     inputs = {**FORCES, "a_pivot_x": a_pivot[0], "a_pivot_z": a_pivot[2]}
     h, times = 1e-3, np.linspace(0, 2.0, 2001)
     run = simulate(scene, times, state=STATE, parameters=inputs, rtol=1e-13, atol=1e-13)
+    air = np.array([inputs.get(f"v_pivot_{c}", 0.0) - inputs.get(f"wind_{c}", 0.0) for c in "xyz"])
     total = np.zeros((len(times) - 2, 3))
     for i, link in enumerate(scene.links):
         masses = {"link": link.mass if link.has_mass else 0.0, "bob": link.bob_mass if link.has_bob else 0.0}
@@ -216,6 +229,11 @@ def test_the_support_force_is_newtons_law_with_the_applied_forces(formulation):
                 r = np.column_stack([run[f"{body}{i}_{c}"] for c in "xyz"])
                 acc = (r[2:] - 2 * r[1:-1] + r[:-2]) / h**2 + a_pivot
                 total += mass * (np.array([0.0, -scene.gravity, 0.0]) - acc)
+        if link.has_bob:
+            r = np.column_stack([run[f"bob{i}_{c}"] for c in "xyz"])
+            v_air = (r[2:] - r[:-2]) / (2 * h) + air
+            c_d, area = link.drag()
+            total -= 0.5 * 1.225 * c_d * area * np.linalg.norm(v_air, axis=1)[:, None] * v_air
     total += [FORCES.get(f"F_bob0_{c}", 0.0) + FORCES.get(f"F_bob2_{c}", 0.0) for c in "xyz"]
     pivot = np.column_stack([run[f"F_pivot_{c}"] for c in "xyz"])[1:-1]
     assert np.abs(pivot - total).max() < 1e-5 * np.abs(pivot).max()
@@ -258,17 +276,22 @@ def test_it_agrees_with_mujocos_hinge_damping(scene):
 
 @pytest.mark.parametrize("scene", [FORCED, FORCED_RECURSIVE], ids=["expanded", "recursive"])
 def test_it_agrees_with_mujocos_applied_forces(scene):
-    """MuJoCo's xfrc_applied on each forced bob (a body of its own there), held over each
-    0.5 s and changed between, as a co-simulation master holds an input over its step; ours
-    run segment by segment with the same held values. Hinge damping too; a fixed support."""
-    scene = Scene(links=scene.links, joint_damping=True, formulation=scene.formulation)
+    """MuJoCo's xfrc_applied on each forced bob (a body of its own there) and the wind of its
+    drag (drag_callback), held over each 0.5 s and changed between, as a co-simulation master
+    holds an input over its step; ours run segment by segment with the same held values.
+    Hinge damping too; a fixed support."""
+    scene = replace(scene, coupling=False)
     rng = np.random.default_rng(11)
     held = rng.uniform(-30, 30, (20, len(scene.input_names())))  # one row per 0.5 s
+    windy = [k for k, name in enumerate(scene.input_names()) if name.startswith("wind_")]
+    held[:, windy] /= 3  # winds up to 10 m/s
+    wind = np.zeros(3)  # what drag_callback reads, set with the forces
 
     def applied(t, data, bodies):
-        row = held[min(int(t / 0.5 + 1e-9), len(held) - 1)]
-        for k, i in enumerate(scene.forced_bobs()):
-            data.xfrc_applied[bodies[i], :3] = row[3 * k : 3 * k + 3]
+        row = dict(zip(scene.input_names(), held[min(int(t / 0.5 + 1e-9), len(held) - 1)]))
+        for i in scene.forced_bobs():
+            data.xfrc_applied[bodies[i], :3] = [row[f"F_bob{i}_{c}"] for c in "xyz"]
+        wind[:] = [row[f"wind_{c}"] for c in "xyz"]
 
     times, state, angles = np.linspace(0, 10, 201), dict(STATE), []
     names = [f"{a}{i}" for a in ("alpha", "beta") for i in range(scene.n)]
@@ -285,10 +308,88 @@ def test_it_agrees_with_mujocos_applied_forces(scene):
         angles.append(np.column_stack([run[n] for n in names])[:-1])
         state = {n: run[n][-1] for n in scene.state_names()}
     ours = np.concatenate(angles + [[[state[n] for n in names]]])
-    theirs = simulate_mujoco(scene, STATE, times, applied=applied)
+    theirs = simulate_mujoco(scene, STATE, times, applied=applied, passive=drag_callback(scene, wind))
     assert np.abs(ours - theirs).max() < 1e-6
-    still = simulate_mujoco(scene, STATE, times)  # the same chain without the forces
+    still = simulate_mujoco(scene, STATE, times)  # the same chain without the forces and the air
     assert np.abs(still - theirs).max() > 1e-2
+
+
+# in still air, and in a wind that changes its direction (the test's wind_x/wind_z)
+DRAGGED = Scene(
+    links=(Link(damping=4.0), Link(damping=2.0, has_bob=False), Link(damping=1.0, bob_area=6.0)),
+    joint_damping=True,
+    air_drag=True,
+)
+DRAGGED_RECURSIVE = Scene(
+    links=tuple(Link(damping=1.0 + i, bob_drag_coefficient=0.3 + 0.1 * i) for i in range(7)),
+    joint_damping=True,
+    air_drag=True,
+)
+
+
+@pytest.mark.parametrize("scene", [DRAGGED, DRAGGED_RECURSIVE], ids=["expanded", "recursive"])
+def test_it_agrees_with_mujocos_chain_in_a_wind_by_mjcb_passive(scene):
+    """MuJoCo's chain with the drag computed at each stage of its RK4 (mujoco_chain's
+    drag_callback, from the bobs' sites' velocities) against our DOP853 at 1e-12, every angle
+    over 10 s, in a wind."""
+    times = np.linspace(0, 10, 101)
+    wind = np.array([WIND.get(f"wind_{c}", 0.0) for c in "xyz"])
+    run = simulate(scene, times, state=STATE, parameters=WIND, rtol=1e-12, atol=1e-12)
+    ours = np.column_stack([run[f"{a}{i}"] for a in ("alpha", "beta") for i in range(scene.n)])
+    theirs = simulate_mujoco(scene, STATE, times, passive=drag_callback(scene, wind))
+    assert np.abs(ours - theirs).max() < 1e-6
+    assert run["W_drag"][-1] < -1.0  # the wind did work to see, and took more than it gave
+    in_still_air = simulate_mujoco(scene, STATE, times, passive=drag_callback(scene, np.zeros(3)))
+    assert np.abs(in_still_air - theirs).max() > 1e-2  # what the check tells apart
+
+
+def test_a_pendulum_leans_into_a_steady_wind_by_drag_over_weight():
+    """A bob on a massless link in a steady wind along z settles (the joint's damping takes
+    the swing) where the wind's drag, 1/2 rho C_d A w^2, and the weight m g balance: at
+    atan(drag / weight) from the vertical, in the wind's plane."""
+    link = Link(has_mass=False, damping=1200.0)  # near critical for its lean
+    scene = Scene(links=(link,), joint_damping=True, air_drag=True)
+    wind = 10.0
+    run = simulate(
+        scene,
+        np.linspace(0, 60, 61),
+        state={"alpha0": 0.0, "beta0": 0.0},
+        parameters={"wind_z": wind},
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    c_d, area = link.drag()
+    drag, weight = 0.5 * 1.225 * c_d * area * wind**2, link.bob_mass * scene.gravity
+    lean = math.atan2(run["bob0_z"][-1], -run["bob0_y"][-1])
+    assert drag / weight > 1.5  # leaning by some 60 degrees
+    assert abs(lean - math.atan(drag / weight)) < 1e-9
+    assert abs(run["bob0_x"][-1]) < 1e-12 and abs(run["omega0"][-1]) + abs(run["delta0"][-1]) < 1e-9
+
+
+def test_a_bad_drag_is_refused_naming_it(tmp_path):
+    with pytest.raises(SceneError, match=r"link\[1\]\.bob\.area: must be a finite number >= 0, got -1.0"):
+        Scene(links=(Link(), Link(bob_area=-1.0)), air_drag=True)
+    with pytest.raises(SceneError, match=r"air_density: must be a finite number >= 0, got -1.2"):
+        Scene(air_drag=True, air_density=-1.2)
+    with pytest.raises(
+        SceneError, match=r"link\[0\]\.bob\.drag_coefficient: 1.0 given, but the scene has no air"
+    ):
+        Scene(links=(Link(bob_drag_coefficient=1.0),))
+    with pytest.raises(SceneError, match=r"air_drag: the scene has no bob for the air to drag"):
+        Scene.uniform(2, bobs=False, air_drag=True)
+    with pytest.raises(SceneError, match=r"air_drag: .* needs kinematics 'consistent'"):
+        Scene(air_drag=True, kinematics="pydy-example")
+    with pytest.raises(BadValue, match=r"C_d1 = -0\.5: a drag coefficient cannot be negative"):
+        check_value("C_d1", -0.5, "C_d")
+    path = tmp_path / "windy.toml"
+    path.write_text("air_density = 1.0\n[[link]]\nbob = { mass = 2.0, area = 0.5 }\n")
+    scene = load_scene(path)
+    assert scene.air_drag and scene.links[0].drag() == (0.47, 0.5)
+    assert dict(zip(scene.parameter_names(), scene.parameter_defaults()))["rho"] == 1.0
+    assert scene.input_names() == ["wind_x", "wind_y", "wind_z"] and scene.state_names()[-1] == "W_drag"
+    path.write_text("air_density = true\n[[link]]\n")
+    with pytest.raises(SceneError, match=r"air_density: expected a number, got True"):
+        load_scene(path)
 
 
 @pytest.fixture(scope="module")
@@ -324,13 +425,17 @@ def test_model_exchange_follows_the_reference(damped_fmu):
 
 
 @pytest.mark.parametrize("fmi_version", [2, 3])
-def test_an_fmu_refuses_a_negative_damping_naming_it(damped_fmu, fmi_version):
+@pytest.mark.parametrize(
+    "name, value, kept, rule",
+    [("c2", -1.0, 1.0, "a joint damping coefficient"), ("rho", -1.2, 1.225, "an air density")],
+)
+def test_an_fmu_refuses_a_negative_damping_naming_it(damped_fmu, fmi_version, name, value, kept, rule):
     fmu = INSTANCES[fmi_version](damped_fmu("native", fmi_version), initialize=False)
     with pytest.raises(FMICallException):
-        fmu.set({"c2": -1.0})
-    message = "c2 = -1.0: a joint damping coefficient cannot be negative"
+        fmu.set({name: value})
+    message = f"{name} = {value}: {rule} cannot be negative"
     assert any(status == ERROR and text.startswith(message) for status, text in fmu.messages), fmu.messages
     fmu.initialize()
     fmu.step(0.5)
-    assert fmu.get("c2") == [1.0] and fmu.get("W_damping")[0] < 0  # the damping it had
+    assert fmu.get(name) == [kept] and fmu.get("W_damping")[0] < 0  # the damping it had
     fmu.close()

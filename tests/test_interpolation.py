@@ -22,9 +22,13 @@ from fmu_helpers import INSTANCES
 
 COUPLED = Scene.uniform(3, coupling=True)  # expanded, a_pivot inputs
 RECURSIVE = Scene.uniform(7, coupling=True)  # chain.c
-# joint damping and a force on a bob: more inputs (F_bob1_x/y/z), the energy's books as states
+# joint damping, the air's drag and a force on a bob: more inputs (v_pivot, F_bob1_x/y/z, wind),
+# the energy's books as states
 FORCED = Scene(
-    links=(Link(damping=0.3), Link(damping=0.2, bob_force=True)), joint_damping=True, coupling=True
+    links=(Link(damping=0.3), Link(damping=0.2, bob_force=True)),
+    joint_damping=True,
+    air_drag=True,
+    coupling=True,
 )
 INPUTS = ("a_pivot_x", "a_pivot_y", "a_pivot_z")
 TIGHT = {"rtol": 1e-13, "atol": 1e-13}
