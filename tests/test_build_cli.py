@@ -58,6 +58,7 @@ def test_builds_the_requested_scene(tmp_path, build):
             ["--joint-damping", "1", "--kinematics", "pydy-example"],
             "joint_damping: the joints' damping needs kinematics 'consistent'",
         ),
+        (["--air-drag", "--no-bobs"], "air_drag: the scene has no bob for the air to drag"),
         (["--output", "dist/model.zip"], "must end in .fmu"),
         (["--frobnicate"], "unrecognized arguments: --frobnicate"),
         (

@@ -54,6 +54,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="a viscous torque -C w_rel at every joint [N m s/rad]: parameters c0.. (start C) and "
         "the state W_damping, its work, so that energy - W_damping stays constant",
     )
+    scene.add_argument(
+        "--air-drag",
+        action="store_true",
+        help="the air's quadratic drag on every bob, -1/2 rho C_d A |v_air| v_air: parameters rho, "
+        "C_d0.., A0.. (a sphere's: 0.47 and pi r^2), inputs wind_x/y/z (with --coupling also "
+        "v_pivot_x/y/z, the support's velocity) and the state W_drag, its work",
+    )
     parser.add_argument(
         "--output",
         type=Path,
@@ -130,6 +137,7 @@ def choose_scene(args) -> Scene:
             ("--kinematics", args.kinematics is not None),
             ("--coupling", args.coupling),
             ("--joint-damping", args.joint_damping is not None),
+            ("--air-drag", args.air_drag),
         ]
         if given
     ]
@@ -147,6 +155,7 @@ def choose_scene(args) -> Scene:
         kinematics=args.kinematics or "consistent",
         coupling=args.coupling,
         damping=args.joint_damping,
+        air_drag=args.air_drag,
     )
 
 
