@@ -4,9 +4,10 @@
 
 The seed chain (3 links, expanded equations) and a 10-link chain (recursive formulation),
 each without options, with joint damping (joint_damping: the torques and W_damping), with
-forces on every bob (bob_force: the inputs F_bob<i>, their generalized forces and
-W_external), and with both; all with a moving support (coupling), so that the pivot's work
-W_pivot is in the books of every variant with a force. The right-hand side (x', the books'
+the air's drag on every bob (air_drag: the inputs wind and v_pivot, the drag and W_drag),
+with forces on every bob (bob_force: the inputs F_bob<i>, their generalized forces and
+W_external), with damping and forces, and with all three; all with a moving support
+(coupling), so that the pivot's work W_pivot is in the books of every variant with a force. The right-hand side (x', the books'
 rates included) is timed in a C loop (core.seconds_per_call), medians of 7 repeats taken in
 turn, at a state off equilibrium with nonzero inputs. Prints the table docs/model.md shows
 and writes benchmarks/results/force_cost.csv.
@@ -19,19 +20,23 @@ from conical_pendulum.builder.compiler import load_core
 from results_csv import write_rows
 
 CHAINS = {"3 links, expanded": (3, "expanded"), "10 links, recursive": (10, "recursive")}
-OPTIONS = {
+OPTIONS = {  # a link's fields, and air_drag for the scene
     "none": {},
     "joint damping": {"damping": 2.0},
+    "air drag": {"air_drag": True},
     "bob forces": {"bob_force": True},
     "damping + bob forces": {"damping": 2.0, "bob_force": True},
+    "all three": {"damping": 2.0, "bob_force": True, "air_drag": True},
 }
 REPEATS, CALLS = 7, 100_000
 
 
 def scene(n: int, formulation: str, option: dict) -> Scene:
+    link = {name: value for name, value in option.items() if name != "air_drag"}
     return Scene(
-        links=(Link(**option),) * n,
+        links=(Link(**link),) * n,
         joint_damping="damping" in option,
+        air_drag=option.get("air_drag", False),
         coupling=True,
         formulation=formulation,
     )
