@@ -12,22 +12,26 @@ from fmpy.fmi2 import FMU2Model
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 from conical_pendulum.builder.compiler import load_core
-from differences import richardson
+from differences import richardson, ridders
 from fmu_helpers import Instance
 
 SCENES = {
     "seed": Scene.uniform(3),  # expanded, no inputs
     "coupled": Scene.uniform(3, coupling=True),  # expanded, a_pivot inputs
     "recursive": Scene.uniform(7, coupling=True),  # chain.c, with inputs
-    # the joints' damping, forces on bobs, and the energy's books (states after the rates),
-    # in both formulations
+    # the joints' damping, the air's drag (inputs wind and v_pivot), forces on bobs, and the
+    # energy's books (states after the rates), in both formulations
     "damped": Scene(
         links=(Link(damping=4.0, bob_force=True), Link(damping=2.0), Link(damping=1.0, bob_force=True)),
         joint_damping=True,
+        air_drag=True,
         coupling=True,
     ),
     "damped_recursive": Scene(
-        links=tuple(Link(damping=1.0, bob_force=i == 4) for i in range(7)), joint_damping=True, coupling=True
+        links=tuple(Link(damping=1.0, bob_force=i == 4) for i in range(7)),
+        joint_damping=True,
+        air_drag=True,
+        coupling=True,
     ),
 }
 SEEDS = range(5)
@@ -215,7 +219,7 @@ def test_parameters_are_knowns_of_the_initial_unknowns(native, scene):
     """FMI 2.0's knowns in initialization mode (OMSimulator asks for them there, to start an
     algebraic loop between FMUs): every Real parameter, the settings too. Where a parameter
     may still be set, its column equals Richardson differences of the FMU's own values with
-    it moved by 2e-3 of itself, to 1e-8 of the column's largest entry; the pairs the
+    it moved by 2e-2 to 1e-3 of itself (differences.ridders), to 1e-8 of the column's largest entry; the pairs the
     InitialUnknowns leave out are exactly zero (a setting's whole column), each listed pair
     nonzero at this point. Parameters 20 % off their equal starts: no partial vanishes by
     symmetry."""
@@ -249,7 +253,10 @@ def test_parameters_are_knowns_of_the_initial_unknowns(native, scene):
             fmu.set({name: p[0]})
             return np.array(fmu.fmu.getReal(unknowns))
 
-        derivative = richardson(values, np.array([start]), np.array([start])) / start
+        # the step by Ridders' choice: a column as small as Iyy0's (a link's inertia about its
+        # own axis) beside forces of a thousand newtons needs a step whose rounding is small,
+        # C_d0's one whose truncation is
+        derivative = ridders(values, np.array([start]), np.array([start])) / start
         values([start])
         assert np.abs(derivative - J[:, k]).max() < 1e-8 * np.abs(J[:, k]).max(), name
     fmu.fmu.exitInitializationMode()
