@@ -146,6 +146,11 @@ def _axes(text: str, unit: str, quantities: dict[str, str]) -> dict[str, Describ
     }
 
 
+# What every continuous input of the pendulum does over a communication step
+HELD_INPUT = (
+    "held over each communication step, or (native FMUs) moving as the derivatives the master sets say"
+)
+
 # The scene's quantities: a unit and a description each (the settings and statistics describe
 # themselves in runtime.rules).
 DESCRIBED = {
@@ -173,15 +178,14 @@ DESCRIBED = {
     "A": Described("m2", "frontal area of bob {link}, in its air drag [{unit}]"),
     "rho": Described("kg/m3", "density of the air, in the bobs' drag [{unit}]"),
     **_axes(
-        "velocity of the air (the wind), inertial {axis} (Y up) [{unit}]; held constant over each "
-        "communication step",
+        "velocity of the air (the wind), inertial {axis} (Y up) [{unit}]; " + HELD_INPUT,
         "m/s",
         {f"wind_{c}": c for c in "xyz"},
     ),
     **_axes(
         "velocity of the pivot (the support), inertial {axis} (Y up) [{unit}], which the bobs' air "
-        "drag needs (the chain's own velocities are relative to the pivot); held constant over each "
-        "communication step: connect it with a_pivot",
+        "drag needs (the chain's own velocities are relative to the pivot), connected with a_pivot; "
+        + HELD_INPUT,
         "m/s",
         {f"v_pivot_{c}": c for c in "xyz"},
     ),
@@ -208,8 +212,7 @@ DESCRIBED = {
         "stays constant [{unit}]",
     ),
     **_axes(
-        "force applied to bob {{link}}, inertial {axis} (Y up) [{unit}]; held constant over each "
-        "communication step",
+        "force applied to bob {{link}}, inertial {axis} (Y up) [{unit}]; " + HELD_INPUT,
         "N",
         {f"F_bob_{c}": c for c in "xyz"},
     ),
@@ -217,8 +220,7 @@ DESCRIBED = {
         "J", "total mechanical energy relative to the pivot (kinetic + potential, zero at Y = 0) [{unit}]"
     ),
     **_axes(
-        "acceleration of the pivot (the support), inertial {axis} (Y up) [{unit}]; held over each "
-        "communication step, or (native FMUs) moving as the derivatives the master sets say",
+        "acceleration of the pivot (the support), inertial {axis} (Y up) [{unit}]; " + HELD_INPUT,
         "m/s2",
         {f"a_pivot_{c}": c for c in "xyz"},
     ),
