@@ -247,6 +247,41 @@ def test_failed_build_leaves_no_fmu(fmu_dir):
     assert not path.exists()
 
 
+BUILD_AFTER_A_RUN = """
+import sys, fmpy
+from conical_pendulum import Scene
+from conical_pendulum.builder.fmu import build_fmu
+seed, out = sys.argv[1:]
+first = fmpy.simulate_fmu(seed, stop_time=0.2, output_interval=0.1)  # its pythonfmu, in-process
+loaded = sys.modules["pythonfmu"].__file__
+build_fmu(Scene.uniform(1), out)
+assert sys.modules["pythonfmu"].__file__ == loaded  # put back for the FMU that imported it
+again = fmpy.simulate_fmu(seed, stop_time=0.2, output_interval=0.1)
+assert (first["alpha0"] == again["alpha0"]).all()
+print(fmpy.simulate_fmu(out, stop_time=0.2, output_interval=0.1)["alpha0"][-1])
+"""
+
+
+def test_a_process_that_ran_a_pythonfmu_fmu_builds_another(seed_fmu, fmu_dir):
+    """Running a pythonfmu FMU in-process imports the copy of pythonfmu in its resources, which
+    has no binaries to pack and another Fmi2Slave: a build after it still packs the export
+    library (it failed, 'pythonfmu packed no binary'), and the first FMU runs on."""
+    out = fmu_dir / "AfterARun.fmu"
+    run = subprocess.run(
+        [sys.executable, "-c", BUILD_AFTER_A_RUN, str(seed_fmu), str(out)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    assert float(run.stdout.split()[-1]) != 0.0 and validate_fmu(str(out)) == []
+    with zipfile.ZipFile(out) as archive:
+        assert [n for n in archive.namelist() if n.startswith("binaries/")] == [
+            "binaries/linux64/ConicalPendulum.so"
+        ]
+
+
 def test_fmutool_check_passes(seed_fmu):
     """fmu-manipulation-toolbox: the FMI 2.0 schema and the semantic rules of section 2.2."""
     fmutool = shutil.which("fmutool", path=os.path.dirname(sys.executable)) or shutil.which("fmutool")

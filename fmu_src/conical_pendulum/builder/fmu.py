@@ -9,7 +9,10 @@ mends its modelDescription, and the FMU moves into place only when everything su
 from __future__ import annotations
 
 import ast
+import contextlib
 import hashlib
+import importlib
+import importlib.metadata
 import json
 import os
 import shutil
@@ -178,8 +181,6 @@ def package(
     from `described`, the variables as builder.variables describes them
     (model_description.complete). Returns the entry module's name.
     """
-    from pythonfmu import FmuBuilder  # build time only
-
     digest = runtime_digest()
     runtime_name, entry_name = f"cp_runtime_{digest}", f"{slave_module}_{digest}"
     output.parent.mkdir(parents=True, exist_ok=True)
@@ -192,23 +193,50 @@ def package(
         script = src / f"{entry_name}.py"
         shutil.copy2(RUNTIME / "entry.py", script)
         staged = Path(tmp) / f"{slave_module}.fmu"
-        saved_path, saved_modules = list(sys.path), set(sys.modules)
-        try:
-            FmuBuilder.build_FMU(
-                script,
-                dest=staged,
-                project_files=[runtime, *data_files],
-                canHandleVariableCommunicationStepSize=True,
-                **capabilities,
-            )
-        finally:  # pythonfmu leaves its import of the slave behind
+        saved_path = list(sys.path)
+        try:  # pythonfmu leaves its import of the slave behind: _installed_pythonfmu drops it
+            with _installed_pythonfmu(entry_name, runtime_name) as pythonfmu:
+                pythonfmu.FmuBuilder.build_FMU(
+                    script,
+                    dest=staged,
+                    project_files=[runtime, *data_files],
+                    canHandleVariableCommunicationStepSize=True,
+                    **capabilities,
+                )
+                complete(staged, described, export_library())
+        finally:
             sys.path[:] = saved_path
-            for name in set(sys.modules) - saved_modules:
-                if name == entry_name or name.split(".")[0] == runtime_name:
-                    del sys.modules[name]
-        complete(staged, described, export_library())
         os.replace(staged, output)
     return entry_name
+
+
+@contextlib.contextmanager
+def _installed_pythonfmu(*packages: str):
+    """The installed pythonfmu, imported (build time only), with the modules of `packages`
+    (the FMU's entry and runtime) set aside while it builds, and put back after for the FMUs
+    still using them. A pythonfmu FMU that ran in this process (fmpy loads one in-process)
+    has imported those from its resources, and its own copy of pythonfmu, whose builder finds
+    no binaries to pack and whose Fmi2Slave is not the installed one's; that copy is set
+    aside too."""
+    installed = Path(importlib.metadata.distribution("pythonfmu").locate_file("pythonfmu")).resolve()
+    loaded = sys.modules.get("pythonfmu")
+    shadowed = loaded is not None and Path(loaded.__path__[0]).resolve() != installed
+    tops = (*packages, "pythonfmu") if shadowed else packages
+
+    def ours(name):
+        return name.split(".")[0] in tops
+
+    aside = {name: sys.modules.pop(name) for name in list(sys.modules) if ours(name)}
+    if shadowed:
+        sys.path.insert(0, str(installed.parent))
+    try:
+        yield importlib.import_module("pythonfmu")
+    finally:
+        if shadowed:
+            sys.path.remove(str(installed.parent))
+        for name in [name for name in sys.modules if ours(name)]:
+            del sys.modules[name]
+        sys.modules.update(aside)
 
 
 def fmu_scene(path: Path | str) -> Scene:
