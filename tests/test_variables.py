@@ -112,10 +112,15 @@ def test_both_backends_give_each_variable_the_same_value_reference():
         python, native = (
             described.variables(scene, SETTINGS, backend) for backend in ("pythonfmu", "native")
         )
-        # the same but the solver's rule: the native FMU's has no Radau (it is in scipy)
+        # the same but the solver's rule and description: the native FMU's has no Radau (it is
+        # in scipy)
+        solver = next(v for v in python if v.name == "solver")
         assert [
-            replace(v, rule="solver") if v.name == "solver" else v for v in native[: len(python)]
+            replace(v, rule="solver", description=solver.description) if v.name == "solver" else v
+            for v in native[: len(python)]
         ] == python
+        assert "Radau" in solver.description
+        assert "Radau" not in next(v for v in native if v.name == "solver").description
         assert {v.group for v in native[len(python) :]} == {"derivatives"}
 
 

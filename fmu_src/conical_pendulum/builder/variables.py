@@ -23,7 +23,7 @@ import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields, replace
 
-from ..runtime.rules import RULES, SETTINGS, STATISTICS, rule_of
+from ..runtime.rules import NATIVE_SOLVERS, RULES, SETTINGS, STATISTICS, rule_of, solver_description
 from ..scene import WORKS, Scalar, Scene
 from .structure import dependencies
 
@@ -421,7 +421,8 @@ def variables(scene: Scene, settings: dict, backend: str = "pythonfmu") -> list[
     FMU's solver takes only the solvers in C (its rule "native-solver")."""
     found = variables_of(groups(backend), scene, settings)
     if backend == "native":
-        found = [replace(v, rule="native-solver") if v.rule == "solver" else v for v in found]
+        native = {"rule": "native-solver", "description": solver_description(NATIVE_SOLVERS)}
+        found = [replace(v, **native) if v.rule == "solver" else v for v in found]
     return found
 
 

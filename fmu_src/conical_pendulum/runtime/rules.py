@@ -47,6 +47,11 @@ class Rule:
 NATIVE_SOLVERS = SOLVERS[:3]  # the C solvers; Radau runs on scipy, in the pythonfmu FMU only
 
 
+def solver_description(solvers) -> str:
+    """The `solver` variable's description in an FMU that has `solvers`."""
+    return ", ".join(f"{k} = {SOLVER_TEXTS[name]}" for k, name in enumerate(solvers))
+
+
 def _choose(solvers):
     return (
         f"choose 0 to {len(solvers) - 1} ("
@@ -157,7 +162,7 @@ SETTINGS = {
         "step into steps of at most this (0: no limit)",
         "s",
     ),
-    "solver": Setting(1, True, ", ".join(f"{k} = {text}" for k, text in enumerate(SOLVER_TEXTS.values()))),
+    "solver": Setting(1, True, solver_description(SOLVERS)),
     "max_steps": Setting(100_000, True, "most internal steps per do_step: a step needing more is discarded"),
 }
 
