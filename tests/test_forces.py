@@ -343,6 +343,25 @@ def test_it_agrees_with_mujocos_chain_in_a_wind_by_mjcb_passive(scene):
     assert np.abs(in_still_air - theirs).max() > 1e-2  # what the check tells apart
 
 
+def test_a_support_moving_steadily_through_still_air_is_a_wind_against_it():
+    """Galileo: a pivot moving at v_pivot through a wind w drags the chain as a fixed pivot in
+    the wind w - v_pivot (a_pivot = 0); the coupled scene's v_pivot inputs and the fixed one's
+    wind give the same angles, both formulations."""
+    moving = {"v_pivot_x": 3.0, "v_pivot_z": -2.0, "wind_x": -1.0, "wind_y": 0.5}
+    relative = {"wind_x": -4.0, "wind_y": 0.5, "wind_z": 2.0}
+    times = np.linspace(0, 5, 51)
+    for formulation in ("expanded", "recursive"):
+        fixed = Scene(links=DRAGGED.links, joint_damping=True, air_drag=True, formulation=formulation)
+        runs = [
+            simulate(scene, times, state=STATE, parameters=inputs, rtol=1e-12, atol=1e-12)
+            for scene, inputs in ((replace(fixed, coupling=True), moving), (fixed, relative))
+        ]
+        for name in fixed.state_names():  # angles and rates of order one, the books in joules
+            scale = max(1.0, np.abs(runs[1][name]).max())
+            assert np.abs(runs[0][name] - runs[1][name]).max() < 1e-10 * scale, (formulation, name)
+        assert abs(runs[1]["W_drag"][-1]) > 1.0
+
+
 def test_a_pendulum_leans_into_a_steady_wind_by_drag_over_weight():
     """A bob on a massless link in a steady wind along z settles (the joint's damping takes
     the swing) where the wind's drag, 1/2 rho C_d A w^2, and the weight m g balance: at
