@@ -14,6 +14,13 @@ from conical_pendulum.runtime.rules import BadValue
 SEED_TIMES = np.linspace(0.0, 10.0, 601)  # the seed's 10 s at 60 samples per second
 MIXED = Scene(links=(Link(has_mass=False), Link(has_bob=False), Link()))
 COUPLED = Scene.uniform(2, coupling=True)
+# every force at once: damping, the air's drag (with the pivot's velocity), forces on a bob
+FORCED = Scene(
+    links=(Link(damping=2.0, bob_area=1.5), Link(damping=1.0, has_mass=False, bob_force=True)),
+    joint_damping=True,
+    air_drag=True,
+    coupling=True,
+)
 
 
 def random_points(scene, count, seed=0):
@@ -32,8 +39,8 @@ def relative_error(a, b):
 
 @pytest.mark.parametrize(
     "scene",
-    [Scene.uniform(1), Scene.uniform(2), Scene.uniform(3), MIXED, COUPLED],
-    ids=["n1", "n2", "n3", "mixed", "moving-pivot"],
+    [Scene.uniform(1), Scene.uniform(2), Scene.uniform(3), MIXED, COUPLED, FORCED],
+    ids=["n1", "n2", "n3", "mixed", "moving-pivot", "forces"],
 )
 def test_derivation_equals_sympy_kanes_method(scene):
     eqs = derive(scene)

@@ -5,11 +5,15 @@ set_ang_vel(I, omega*I.z + delta*I.x) contradicts its orient calls, and what sym
 derives depends on the frames it happens to express vectors in, so the only faithful
 reproduction is to run the same derivation. Its expressions grow exponentially with n.
 With kinematics="consistent" it is the reference the fast derivation is tested against,
-with a moving pivot too; the coupled demo's monolithic model builds on `chain`.
+with a moving pivot and the scene's forces too (joint damping, the air's drag from each
+bob's inertial velocity, applied forces: sympy's loads on frames and points); the coupled
+demo's monolithic model builds on `chain`.
 """
 
 import sympy as sm
 import sympy.physics.mechanics as me
+
+from ..scene import PIVOT_VELOCITY, WIND
 
 
 def chain(scene, I, O, p):
@@ -37,9 +41,29 @@ def chain(scene, I, O, p):
         if link.has_bob:
             bodies.append(me.Particle(f"B{i}", P, p[f"m{i}"]))
             loads.append((P, -p[f"m{i}"] * p["g"] * I.y))
+        loads += _forces(scene, I, parent, F, P, p, i)
         parent, joint = F, P
     kd = [omega[i] - alpha[i].diff() for i in range(n)] + [delta[i] - beta[i].diff() for i in range(n)]
     return bodies, loads, alpha + beta, omega + delta, kd
+
+
+def _forces(scene, I, parent, F, P, p, i):
+    """Link i's share of the scene's forces as sympy loads: its joint's damping torque
+    -c w_rel on the link and +c w_rel on its parent, the air's drag on its bob from the bob's
+    velocity in I (the pivot's included) less the wind, and the force applied to its bob."""
+    loads = []
+    if scene.joint_damping:
+        torque = -p[f"c{i}"] * F.ang_vel_in(parent)
+        loads += [(F, torque), (parent, -torque)]
+    if i in scene.dragged_bobs():
+        v_air = P.vel(I) - sum((p[name] * axis for name, axis in zip(WIND, (I.x, I.y, I.z))), me.Vector(0))
+        speed = sm.sqrt(v_air.dot(v_air))
+        loads.append((P, -p["rho"] * p[f"C_d{i}"] * p[f"A{i}"] / 2 * speed * v_air))
+    if scene.links[i].bob_force:
+        loads.append(
+            (P, sum((p[f"F_bob{i}_{c}"] * axis for c, axis in zip("xyz", (I.x, I.y, I.z))), me.Vector(0)))
+        )
+    return loads
 
 
 def kanes_method(scene):
@@ -58,6 +82,7 @@ def kanes_method(scene):
     kane = me.KanesMethod(I, q_ind=q, u_ind=u, kd_eqs=kd)
     kane.kanes_equations(bodies, loads)
     plain = {s: sm.Symbol(name) for s, name in zip(q + u, scene.state_names())}
-    if scene.coupling:
+    if scene.coupling:  # the pivot's acceleration, and its velocity where the drag sees it
         plain.update({v.diff(): p[name] for v, name in zip(pivot_velocity, scene.input_names())})
+        plain.update({v: p[name] for v, name in zip(pivot_velocity, PIVOT_VELOCITY) if name in p})
     return me.msubs(kane.mass_matrix, plain), me.msubs(kane.forcing, plain)
