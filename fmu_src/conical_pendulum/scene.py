@@ -190,27 +190,14 @@ class Scene:
                     f"link[{i}].inertia: must be three finite numbers >= 0 "
                     f"(Ixx, Iyy, Izz), got {link.moments!r}"
                 )
-        if not isinstance(self.coupling, bool):
-            raise SceneError(f"coupling: expected true or false, got {self.coupling!r}")
-        if self.coupling and self.kinematics != "consistent":
-            raise SceneError(
-                "coupling: the pivot's inputs and force need kinematics 'consistent'; "
-                f"the published {self.kinematics!r} equations have no moving support"
-            )
-        if not isinstance(self.joint_damping, bool):
-            raise SceneError(f"joint_damping: expected true or false, got {self.joint_damping!r}")
-        if self.joint_damping and self.kinematics != "consistent":
-            raise SceneError(
-                "joint_damping: the joints' damping needs kinematics 'consistent'; the published "
-                f"{self.kinematics!r} equations have no relative angular velocity to damp"
-            )
+        self._validate_option("coupling", "the pivot's inputs and force need", "have no moving support")
+        self._validate_option(
+            "joint_damping", "the joints' damping needs", "have no relative angular velocity to damp"
+        )
         if not self.joint_damping:
             for i, link in enumerate(self.links):
                 if link.damping != 0:
-                    raise SceneError(
-                        f"link[{i}].damping: {link.damping!r} given, but the scene has no joint "
-                        "damping: set joint_damping = true"
-                    )
+                    raise _given_without(f"link[{i}].damping", link.damping, "joint_damping")
         self._validate_drag()
         for i, link in enumerate(self.links):
             if not isinstance(link.bob_force, bool):
@@ -234,14 +221,19 @@ class Scene:
                     "would be undetermined; give one of them mass or a bob, or drop them"
                 )
 
-    def _validate_drag(self) -> None:
-        if not isinstance(self.air_drag, bool):
-            raise SceneError(f"air_drag: expected true or false, got {self.air_drag!r}")
-        if self.air_drag and self.kinematics != "consistent":
+    def _validate_option(self, name: str, what_needs: str, published_lacks: str) -> None:
+        """A scene option: true or false, and only with the consistent kinematics."""
+        value = getattr(self, name)
+        if not isinstance(value, bool):
+            raise SceneError(f"{name}: expected true or false, got {value!r}")
+        if value and self.kinematics != "consistent":
             raise SceneError(
-                "air_drag: the bobs' drag needs kinematics 'consistent'; the published "
-                f"{self.kinematics!r} equations take no forces"
+                f"{name}: {what_needs} kinematics 'consistent'; the published "
+                f"{self.kinematics!r} equations {published_lacks}"
             )
+
+    def _validate_drag(self) -> None:
+        self._validate_option("air_drag", "the bobs' drag needs", "take no forces")
         if not satisfies(QUANTITIES["rho"][0], self.air_density):
             raise SceneError(
                 f"air_density: must be {RULES[QUANTITIES['rho'][0]].wanted}, got {self.air_density!r}"
@@ -251,16 +243,11 @@ class Scene:
         if self.air_drag:
             return
         if self.air_density != AIR_DENSITY:
-            raise SceneError(
-                f"air_density: {self.air_density!r} given, but the scene has no air drag: set air_drag = true"
-            )
+            raise _given_without("air_density", self.air_density, "air_drag")
         for i, link in enumerate(self.links):
             for name in ("bob_drag_coefficient", "bob_area"):
                 if getattr(link, name) is not None:
-                    raise SceneError(
-                        f"link[{i}].{FILE_NAMES[name]}: {getattr(link, name)!r} given, but the scene "
-                        "has no air drag: set air_drag = true"
-                    )
+                    raise _given_without(f"link[{i}].{FILE_NAMES[name]}", getattr(link, name), "air_drag")
 
     def resolved_formulation(self) -> str:
         """The formulation the core is generated in: as chosen, or for "auto" the faster one
@@ -515,6 +502,13 @@ def scene_from_dict(data: dict) -> Scene:
         if name in data and (isinstance(data[name], bool) or not isinstance(data[name], (int, float))):
             raise SceneError(f"{name}: expected a number, got {data[name]!r}")
     return Scene(**scene_fields)
+
+
+def _given_without(where: str, value, option: str) -> SceneError:
+    """A value given for an option the scene does not have."""
+    return SceneError(
+        f"{where}: {value!r} given, but the scene has no {option.replace('_', ' ')}: set {option} = true"
+    )
 
 
 def _known(table: dict, fields: set, where: str) -> None:
