@@ -337,37 +337,35 @@ static void work_rates(const cp_real *x, const cp_real *p, const Link *links, cp
         damping -= p[CP_DAMPING_INDEX + i] * (x[2 * n + i] * x[2 * n + i] + x[3 * n + i] * x[3 * n + i]);
     dW[CP_WORK_DAMPING] = damping;
 #endif
-#if CP_WORK_DRAG >= 0
-    cp_real drag = 0;  /* the drag times the bob's velocity relative to the pivot */
+#if CP_WORK_DRAG >= 0 || CP_WORK_EXTERNAL >= 0 || CP_WORK_PIVOT >= 0
+    /* each force times the velocity, relative to the pivot, of the point it acts at */
+    cp_real momentum[3] = {0, 0, 0}, drag = 0, external = 0;
     for (int i = 0; i < n; i++) {
         const Link *k = &links[i];
-        cp_real wr[3];
-        if (cp_bob_drag[i] < 0) continue;
+        cp_real wr[3], bob[3];
         cross(k->w, k->r, wr);
-        for (int j = 0; j < 3; j++) drag += k->drag[j] * (k->vel[j] + wr[j]);
-    }
-    dW[CP_WORK_DRAG] = drag;
-#endif
-#if CP_WORK_EXTERNAL >= 0 || CP_WORK_PIVOT >= 0
-    cp_real momentum[3] = {0, 0, 0};
-#ifdef CP_BOB_FORCES
-    cp_real external = 0;
-#endif
-    for (int i = 0; i < n; i++) {
-        const Link *k = &links[i];
+        for (int j = 0; j < 3; j++) bob[j] = k->vel[j] + wr[j];
+#if CP_WORK_PIVOT >= 0
         const cp_link_params *lp = &cp_links[i];
-        cp_real wr[3];
-        cross(k->w, k->r, wr);
         for (int j = 0; j < 3; j++) {
             if (lp->M >= 0) momentum[j] += p[lp->M] * (k->vel[j] + wr[j] / 2);
-            if (lp->m >= 0) momentum[j] += p[lp->m] * (k->vel[j] + wr[j]);
+            if (lp->m >= 0) momentum[j] += p[lp->m] * bob[j];
         }
+#endif
+#ifdef CP_DRAG
+        if (cp_bob_drag[i] >= 0)
+            for (int j = 0; j < 3; j++) drag += k->drag[j] * bob[j];
+#endif
 #ifdef CP_BOB_FORCES
         if (cp_bob_force[i] >= 0)
-            for (int j = 0; j < 3; j++) external += p[cp_bob_force[i] + j] * (k->vel[j] + wr[j]);
+            for (int j = 0; j < 3; j++) external += p[cp_bob_force[i] + j] * bob[j];
 #endif
     }
-#ifdef CP_BOB_FORCES
+    (void)momentum, (void)drag, (void)external;
+#if CP_WORK_DRAG >= 0
+    dW[CP_WORK_DRAG] = drag;
+#endif
+#if CP_WORK_EXTERNAL >= 0
     dW[CP_WORK_EXTERNAL] = external;
 #endif
 #if CP_WORK_PIVOT >= 0  /* the inertial force -m a_pivot on every mass */
