@@ -56,14 +56,17 @@ def _forces(scene, I, parent, F, P, p, i):
         torque = -p[f"c{i}"] * F.ang_vel_in(parent)
         loads += [(F, torque), (parent, -torque)]
     if i in scene.dragged_bobs():
-        v_air = P.vel(I) - sum((p[name] * axis for name, axis in zip(WIND, (I.x, I.y, I.z))), me.Vector(0))
+        v_air = P.vel(I) - _inertial(I, [p[name] for name in WIND])
         speed = sm.sqrt(v_air.dot(v_air))
         loads.append((P, -p["rho"] * p[f"C_d{i}"] * p[f"A{i}"] / 2 * speed * v_air))
     if scene.links[i].bob_force:
-        loads.append(
-            (P, sum((p[f"F_bob{i}_{c}"] * axis for c, axis in zip("xyz", (I.x, I.y, I.z))), me.Vector(0)))
-        )
+        loads.append((P, _inertial(I, [p[f"F_bob{i}_{c}"] for c in "xyz"])))
     return loads
+
+
+def _inertial(I, components) -> me.Vector:
+    """The vector of these x, y, z components in frame I."""
+    return sum((c * axis for c, axis in zip(components, (I.x, I.y, I.z))), me.Vector(0))
 
 
 def kanes_method(scene):
@@ -77,7 +80,7 @@ def kanes_method(scene):
     I = me.ReferenceFrame("I")
     O = me.Point("O")
     pivot_velocity = me.dynamicsymbols("v_pivot_x v_pivot_y v_pivot_z") if scene.coupling else [0] * 3
-    O.set_vel(I, sum((v * axis for v, axis in zip(pivot_velocity, (I.x, I.y, I.z))), me.Vector(0)))
+    O.set_vel(I, _inertial(I, pivot_velocity))
     bodies, loads, q, u, kd = chain(scene, I, O, p)
     kane = me.KanesMethod(I, q_ind=q, u_ind=u, kd_eqs=kd)
     kane.kanes_equations(bodies, loads)

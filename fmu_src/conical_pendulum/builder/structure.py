@@ -110,7 +110,7 @@ def _chain(scene: Scene) -> Dependencies:
     lengths = [frozenset(f"l{k}" for k in range(i + 1)) for i in range(n)]
     inputs, works = set(scene.input_names()), set(scene.work_names())
     # the forces' coefficients, which move nothing but the chain's dynamics (and the books)
-    damping = {s.name for s in scene.parameter_scalars() if s.quantity in ("c", "C_d", "A", "rho")}
+    coefficients = {s.name for s in scene.parameter_scalars() if s.quantity in ("c", "C_d", "A", "rho")}
     everything = frozenset(scene.state_names()) | parameters | inputs
     motion = everything - works  # the chain's motion; the energy's books follow it
     result = {}
@@ -124,13 +124,13 @@ def _chain(scene: Scene) -> Dependencies:
         elif scalar.stem == "link":  # the orientation quaternion
             result[scalar.name] = above[i]
         elif scalar.name == "energy":
-            result[scalar.name] = motion - inputs - damping
+            result[scalar.name] = motion - inputs - coefficients
         elif scalar.name in PIVOT_OUTPUTS:
             result[scalar.name] = motion
         elif scalar.name in FREE_FORCE:
             result[scalar.name] = motion - set(PIVOT_INPUTS)
         elif scalar.name in APPARENT_MASS:
-            result[scalar.name] = above[n - 1] | (parameters - {"g"} - damping)
+            result[scalar.name] = above[n - 1] | (parameters - {"g"} - coefficients)
     names = scene.state_names()
     dim = 2 * n
     result |= {f"der({names[k]})": frozenset({names[k + dim]}) for k in range(dim)}
