@@ -19,7 +19,7 @@ from conical_pendulum.cli import COMMANDS, main, run_command
 from conical_pendulum.errors import install_command
 
 COMMAND = str(Path(sys.executable).with_name("conical-pendulum"))  # the installed console script
-NAMES = ["build", "check", "show", "page", "sweep", "demo", "system"]
+NAMES = ["build", "check", "linearize", "show", "page", "sweep", "demo", "system"]
 
 
 def cli(*args, cwd=None, timeout=300):

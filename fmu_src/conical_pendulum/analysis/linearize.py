@@ -497,15 +497,18 @@ class _Session:
         return jacobian
 
     def _differences(self, pattern, groups, step) -> tuple[np.ndarray, np.ndarray]:
-        """Central differences at h and 2h per group, extrapolated: R = (4 D(h) - D(2h)) / 3;
-        the error estimate |D(h) - D(2h)| / 3 (D(h)'s own, which bounds R's where the h^2
-        term dominates) plus rounding, 4 eps max|f| / h."""
+        """Central differences at h and 2h per group, extrapolated: R = (4 D(h) - D(2h)) / 3.
+        The error estimate of each entry: |D(h) - D(2h)| / 3 (D(h)'s own truncation error,
+        which bounds R's where the h^2 term dominates) plus rounding, 4 eps s / h, with s the
+        size of what f is made of: its largest value, or the terms J_ik x_k where they cancel
+        to a smaller f (y = C x + D u can be near 0 with every term of order 1)."""
         point = np.concatenate([self.x0, self.u0])
         nominal = np.array(
             [self._nominal(name) for name in self.states.names + self.inputs.names] if len(point) else []
         )
         h = step * np.maximum(np.abs(point), nominal)
-        jacobian, error = np.zeros(pattern.shape), np.zeros(pattern.shape)
+        jacobian, truncation = np.zeros(pattern.shape), np.zeros(pattern.shape)
+        largest = np.zeros(pattern.shape[0])  # each unknown's largest value met
         n = len(self.x0)
 
         def values(at):
@@ -521,15 +524,15 @@ class _Session:
             fs = [
                 self._call("evaluating a difference", values, point + k * direction) for k in (1, -1, 2, -2)
             ]
+            largest = np.maximum(largest, np.max(np.abs(fs), axis=0))
             with np.errstate(divide="ignore", invalid="ignore"):
                 near = np.where(scale > 0, (fs[0] - fs[1]) / (2 * scale), 0.0)
                 far = np.where(scale > 0, (fs[2] - fs[3]) / (4 * scale), 0.0)
-                rounding = np.where(
-                    scale > 0, 4 * np.finfo(float).eps * np.max(np.abs(fs), axis=0) / scale, 0.0
-                )
             _scatter(jacobian, pattern, group, (4 * near - far) / 3)
-            _scatter(error, pattern, group, np.abs(near - far) / 3 + rounding)
-        return jacobian, error
+            _scatter(truncation, pattern, group, np.abs(near - far) / 3)
+        size = np.maximum(largest, np.abs(jacobian) @ np.abs(point))
+        rounding = 4 * np.finfo(float).eps * np.outer(size, 1 / np.where(h > 0, h, 1.0))
+        return jacobian, np.where(pattern, truncation + rounding, 0.0)
 
     def _nominal(self, name: str) -> float:
         variable = self._variables.get(name)
@@ -636,20 +639,25 @@ def _indexed(name: str, shape: tuple, k: int) -> str:
 
 
 def _replaced(values: np.ndarray, block: Block, given: dict, what: str, fmu: str) -> np.ndarray:
-    """values with some replaced by name (an array's element by its name, or a whole variable)."""
+    """values with some replaced by name: an element by its name, a whole FMI 3.0 array by
+    its name, or with * and ? every element whose name matches (alpha* = 0: one value for all)."""
+    import fnmatch
+
     values = values.copy()
     index = {name: i for i, name in enumerate(block.names)}
     for name, value in given.items():
+        numbers = np.atleast_1d(np.asarray(value, dtype=float))
         if name in index:
             positions = [index[name]]
+        elif "*" in name or "?" in name:
+            pattern = name.replace("[", "[[]")
+            positions = [i for i, n in enumerate(block.names) if fnmatch.fnmatchcase(n, pattern)]
+            numbers = np.broadcast_to(numbers, (len(positions),)) if len(numbers) == 1 else numbers
         else:
-            whole = [i for i, n in enumerate(block.names) if n.split("[")[0] == name]
-            if not whole:
-                raise UserError(
-                    f"{what} {name!r}: {fmu} has no {what} by that name; it has {', '.join(block.names) or 'none'}"
-                )
-            positions = whole
-        numbers = np.atleast_1d(np.asarray(value, dtype=float))
+            positions = [i for i, n in enumerate(block.names) if n.split("[")[0] == name]
+        if not positions:
+            listed = ", ".join(block.names[:12]) + (", ..." if len(block.names) > 12 else "")
+            raise UserError(f"{what} {name!r}: {fmu} has no {what} by that name; it has {listed or 'none'}")
         if len(numbers) != len(positions):
             raise UserError(f"{what} {name!r}: expected {len(positions)} value(s), got {len(numbers)}")
         if not np.isfinite(numbers).all():
