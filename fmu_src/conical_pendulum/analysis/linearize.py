@@ -141,17 +141,46 @@ class LinearModel:
 
     def modes(self, components: int = 3) -> list[Mode]:
         """A's eigenvalues, each complex pair once, by natural frequency, with each mode's
-        largest components."""
+        largest components among the positions: the states whose derivative is another state
+        (A's row a unit vector: alpha0' = omega0), all states where there are none. Modes of
+        one repeated eigenvalue (a chain's two planes) are given a basis in which each has
+        zeros where the others are largest, so that they do not mix."""
         values, vectors = np.linalg.eig(self.A)
+        order = [k for k in np.argsort(np.abs(values), kind="stable") if values[k].imag >= 0]
+        shown = self._positions()
         found = []
-        for k in np.argsort(np.abs(values), kind="stable"):
-            value = complex(values[k])
-            if value.imag < 0:
-                continue
-            vector = vectors[:, k] / vectors[np.argmax(np.abs(vectors[:, k])), k]
-            largest = np.argsort(-np.abs(vector), kind="stable")[:components]
-            found.append(Mode(value, tuple((self.states[i], complex(vector[i])) for i in largest)))
+        while order:
+            value = values[order[0]]
+            same = [k for k in order if abs(values[k] - value) <= 1e-8 * max(abs(value), 1e-300)]
+            order = [k for k in order if k not in same]
+            for vector in _separated(vectors[:, same], shown):
+                largest = shown[np.argsort(-np.abs(vector[shown]), kind="stable")[:components]]
+                scaled = vector / vector[largest[0]]
+                found.append(
+                    Mode(complex(value), tuple((self.states[i], complex(scaled[i])) for i in largest))
+                )
         return found
+
+    def _positions(self) -> np.ndarray:
+        """The states whose derivative is another state (their A row a unit vector)."""
+        unit = (np.count_nonzero(self.A, axis=1) == 1) & (np.abs(self.A).max(axis=1, initial=0) == 1)
+        return np.nonzero(unit)[0] if unit.any() else np.arange(len(self.states))
+
+
+def _separated(vectors: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
+    """A basis of the columns' span in which each vector is zero at the others' largest
+    entries among `rows` (Gauss-Jordan with full pivoting on those rows)."""
+    basis = [vectors[:, k].copy() for k in range(vectors.shape[1])]
+    for k in range(len(basis)):
+        rest = basis[k:]
+        sizes = [np.abs(v[rows]).max() for v in rest]
+        best = int(np.argmax(sizes))
+        basis[k], basis[k + best] = basis[k + best], basis[k]
+        pivot = rows[np.argmax(np.abs(basis[k][rows]))]
+        for j in range(len(basis)):
+            if j != k:
+                basis[j] = basis[j] - basis[j][pivot] / basis[k][pivot] * basis[k]
+    return basis
 
 
 def describe_modes(modes: list[Mode]) -> list[str]:

@@ -2,9 +2,10 @@
 
     conical-pendulum linearize dist/Chain30.fmu --state 'alpha*=0' --state 'beta*=0' --plot modes.png
 
-At the hanging equilibrium the two planes of swinging separate; in the plane of the alpha
-angles joint k is displaced sideways by sum over i <= k of l_i alpha_i (small angles). Each
-mode is drawn as that displacement against the depth, scaled so that its largest is 1.
+At the hanging equilibrium the two planes of swinging separate. A link's alpha is its angle
+to its parent's, so in that plane link i leans by the sum of the alphas down to it, and the
+joint below link k is displaced sideways by the sum over i <= k of l_i times that lean (small
+angles). Each mode is drawn as that displacement against the depth, its largest scaled to 1.
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ def plot_chain_modes(model, lengths, path, count: int = 4) -> Path:
     depth = np.concatenate([[0.0], np.cumsum(lengths)])
     fig, ax = plt.subplots(figsize=(4.8 + 1.2 * min(count, 6), 6))
     for k in range(min(count, len(omegas))):
-        sideways = np.concatenate([[0.0], np.cumsum(lengths * shapes[:, k])])
+        sideways = np.concatenate([[0.0], np.cumsum(lengths * np.cumsum(shapes[:, k]))])
         sideways /= sideways[np.argmax(np.abs(sideways))]
         label = f"mode {k + 1}: {omegas[k]:.4g} rad/s, {omegas[k] / (2 * math.pi):.4g} Hz"
         ax.plot(sideways + 2.5 * k, -depth, marker="o" if len(lengths) <= 30 else None, ms=3, label=label)
@@ -51,8 +52,8 @@ def plot_chain_modes(model, lengths, path, count: int = 4) -> Path:
     ax.set_xticks([])
     ax.set_xlabel("sideways displacement, each mode scaled to 1 at its largest (offset per mode)")
     ax.set_ylabel("depth below the pivot [m]")
-    ax.set_title(f"lowest modes of a {len(lengths)}-link chain, hanging at rest")
-    ax.legend(loc="lower left", fontsize=8)
+    fig.suptitle(f"lowest modes of a {len(lengths)}-link chain, hanging at rest")
+    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, fontsize=8, frameon=False)
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=110)
