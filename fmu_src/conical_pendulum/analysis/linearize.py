@@ -254,7 +254,9 @@ class _Session:
         if not path.is_file():
             raise UserError(f"{path}: no such FMU")
         try:
-            self.md = read_model_description(str(path))
+            # not validated against the schema: what is read here is checked where it is used,
+            # and the validation costs as much as the rest of a 100-link chain's linearization
+            self.md = read_model_description(str(path), validate=False)
         except Exception as exc:  # fmpy's reasons: not a zip, no or a bad modelDescription.xml
             raise UserError(f"{path}: not an FMU fmpy can read ({exc})") from None
         self.path, self.time = path, float(time)
@@ -277,7 +279,7 @@ class _Session:
             )
         self.directional = _gives_directional_derivatives(path)
         self.messages: list[str] = []
-        self._names = _element_names(path)
+        self._names = _element_names(path) if self.fmi3 else {}
         self._variables = {v.name: v for v in self.md.modelVariables}
         self.states = self._block([u.variable.derivative for u in self.md.derivatives])
         self.inputs = self._block(
@@ -637,19 +639,26 @@ def _continuous_float(variable) -> bool:
 
 def _gives_directional_derivatives(path: Path) -> bool:
     """Whether the Model Exchange interface provides directional derivatives, read from the
-    model description itself (fmpy 0.3 reads FMI 3.0's providesDirectionalDerivatives as False)."""
+    model description itself (fmpy 0.3 reads FMI 3.0's providesDirectionalDerivatives as False);
+    parsed only up to its interfaces, which come before the variables."""
     import xml.etree.ElementTree as ET
     import zipfile
 
-    with zipfile.ZipFile(path) as archive:
-        root = ET.fromstring(archive.read("modelDescription.xml"))
-    interface = root.find("ModelExchange")
-    attribute = (
-        "providesDirectionalDerivatives"
-        if root.get("fmiVersion", "").startswith("3")
-        else "providesDirectionalDerivative"
-    )
-    return interface is not None and interface.get(attribute) == "true"
+    version, found = "", False
+    with zipfile.ZipFile(path) as archive, archive.open("modelDescription.xml") as stream:
+        for _, element in ET.iterparse(stream, events=("start",)):
+            if element.tag == "fmiModelDescription":
+                version = element.get("fmiVersion", "")
+            elif element.tag == "ModelExchange":
+                name = (
+                    "providesDirectionalDerivatives"
+                    if version.startswith("3")
+                    else "providesDirectionalDerivative"
+                )
+                found = element.get(name) == "true"
+            elif element.tag == "ModelVariables":
+                break
+    return found
 
 
 def _element_names(path: Path) -> dict[tuple[str, int], str]:
