@@ -272,6 +272,8 @@ def test_state_space_is_its_own_parameters():
     given = {name: rng.standard_normal((3, 3)) for name in "ABCD"}
     model = linearize(path, parameters={k: v.ravel() for k, v in given.items()}, inputs={"u": [0.5, -1, 2]})
     assert model.method == "differences"
+    with pytest.raises(UserError, match=r"gives no directional derivatives.*use method 'differences'"):
+        linearize(path, method="directional")
     assert model.states == ["x[1]", "x[2]", "x[3]"] and model.inputs == ["u[1]", "u[2]", "u[3]"]
     for name, matrix in given.items():
         part = getattr(model, name)
@@ -353,6 +355,8 @@ def test_refusals_say_what_to_do(built_fmu):
         linearize(path, parameters={"q": 1.0})
     with pytest.raises(UserError, match="method: 'exact'"):
         linearize(path, method="exact")
+    with pytest.raises(UserError, match="time: must be finite"):
+        linearize(path, time=float("inf"))
 
 
 def test_the_command(built_fmu, tmp_path):

@@ -214,6 +214,10 @@ def linearize(
     "differences", or "auto" (directional where given); grouped=False: one call per column."""
     if method not in ("auto", "directional", "differences"):
         raise UserError(f"method: {method!r} is not one of 'auto', 'directional', 'differences'")
+    if not math.isfinite(time):
+        raise UserError(f"time: must be finite, got {time!r}")
+    if not 0 < step <= 0.1:
+        raise UserError(f"step: the differences' relative step must be in (0, 0.1], got {step!r}")
     with _Session(Path(path), time, parameters or {}) as session:
         if method == "directional" and not session.directional:
             raise UserError(
@@ -295,6 +299,14 @@ class _Session:
         self.unzipdir = extract(str(path))
         try:
             self._instantiate(interface.modelIdentifier, parameters)
+        except UserError:
+            self.close()
+            raise
+        except Exception as exc:  # fmpy's: no binary for this platform, a library that does not load
+            self.close()
+            raise UserError(
+                f"{path}: its Model Exchange binary cannot be loaded or instantiated: {exc}"
+            ) from None
         except BaseException:
             self.close()
             raise
