@@ -309,15 +309,48 @@ def test_grouping_by_sparsity():
 
 
 def test_grouped_calls_give_the_same_numbers(built_fmu):
-    """A damped chain (its books' states are columns nothing depends on): grouped, the same
-    matrices bit for bit in fewer calls."""
+    """A damped chain: every column meets every other in the angular accelerations, so no two
+    share a call, and its books' state W_damping, on which nothing depends, costs none; grouped
+    or not, the same matrices bit for bit."""
     scene = Scene(links=(Link(damping=2.0), Link(damping=1.0)), joint_damping=True)
     path = built_fmu(scene, backend="native")
     grouped = linearize(path, states=HANGING)
     single = linearize(path, states=HANGING, grouped=False)
     for name in "ABCD":
         np.testing.assert_array_equal(getattr(grouped, name), getattr(single, name))
-    assert grouped.calls == single.calls == len(scene.state_names()) - 1  # W_damping: no call
+    assert grouped.calls == single.calls == len(scene.state_names()) - 1
+
+
+def test_groups_of_columns_share_a_call(tmp_path):
+    """StateSpace with B = C = 0, its ModelStructure saying so (der(x) on x, y on u: FMI 3.0
+    lists whole arrays): x[k] and u[k] share a call, 3 groups instead of 6 columns, and each
+    entry lands in its own column: A and D as given, B and C zero."""
+    import zipfile
+
+    source = reference_fmu("3.0", "StateSpace")
+    path = tmp_path / "StateSpaceSparse.fmu"
+    with zipfile.ZipFile(source) as original, zipfile.ZipFile(path, "w") as copy:
+        for item in original.infolist():
+            data = original.read(item)
+            if item.filename == "modelDescription.xml":
+                text = data.decode()
+                for vr, depends in (("10", "9"), ("12", "11")):  # y on u, der(x) on x
+                    tag = "Output" if vr == "10" else "ContinuousStateDerivative"
+                    old = f'<{tag} valueReference="{vr}"/>'
+                    assert old in text
+                    text = text.replace(old, f'<{tag} valueReference="{vr}" dependencies="{depends}"/>')
+                data = text.encode()
+            copy.writestr(item, data)
+    rng = np.random.default_rng(2)
+    given = {"A": rng.standard_normal((3, 3)), "B": np.zeros((3, 3)), "C": np.zeros((3, 3))}
+    given["D"] = rng.standard_normal((3, 3))
+    parameters = {k: v.ravel() for k, v in given.items()}
+    grouped = linearize(path, parameters=parameters, inputs={"u": [1.0, -2.0, 0.5]})
+    single = linearize(path, parameters=parameters, inputs={"u": [1.0, -2.0, 0.5]}, grouped=False)
+    assert (grouped.calls, single.calls) == (4 * 3, 4 * 6)  # differences: 4 evaluations a group
+    for name, matrix in given.items():
+        np.testing.assert_allclose(getattr(grouped, name), matrix, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(getattr(grouped, name), getattr(single, name), rtol=0, atol=1e-12)
 
 
 def test_files_and_python_control(built_fmu, tmp_path):
