@@ -169,6 +169,13 @@ class _CommandsFormatter(argparse.RawDescriptionHelpFormatter):
     def _split_lines(self, text, width):
         return text.splitlines()
 
+    def add_argument(self, action):
+        super().add_argument(action)
+        # argparse measures the commands' names at the list's indent, but writes them two
+        # columns further in: a name as long as 'linearize' would push its summary down a line
+        if isinstance(action, argparse._SubParsersAction):
+            self._action_max_length += 2
+
 
 def _parser(prog: str, chosen: str | None) -> Parser:
     parser = Parser(

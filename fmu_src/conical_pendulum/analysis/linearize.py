@@ -255,6 +255,8 @@ class _Session:
     def __init__(self, path: Path, time: float, parameters: dict):
         from fmpy import extract, read_model_description
 
+        if path.is_dir():
+            raise UserError(f"{path}: is a directory, not an FMU")
         if not path.is_file():
             raise UserError(f"{path}: no such FMU")
         try:

@@ -7,7 +7,7 @@ import argparse
 import time
 from pathlib import Path
 
-from ..analysis.linearize import describe_modes, linearize
+from ..analysis import linearize as linear
 from ..builder.fmu import fmu_scene
 from ..errors import UserError
 from .common import positive, start_value
@@ -71,7 +71,7 @@ def run(args) -> int:
         if path.suffix not in (".npz", ".mat"):
             raise UserError(f"--out {path}: write a linear model to a .npz or a .mat file")
     begin = time.perf_counter()
-    model = linearize(
+    model = linear.linearize(
         args.fmu,
         states=dict(args.state),
         inputs=dict(args.input),
@@ -88,7 +88,7 @@ def run(args) -> int:
     if model.error is not None:
         print(f"differences' largest error estimate: {model.error.max():.2g} (per entry: the files' 'error')")
     modes = model.modes()
-    print("\n".join(describe_modes(modes[: args.modes])))
+    print("\n".join(linear.describe_modes(modes[: args.modes])))
     if len(modes) > args.modes:
         print(f"... {len(modes) - args.modes} more (--modes N)")
     for path in args.out:
