@@ -179,6 +179,7 @@ def test_joint_damping_moves_the_eigenvalues_off_the_axis_as_it_says(built_fmu):
         expected = -decay + np.sqrt(complex(decay**2 - G / L)) * np.array([1, -1, 1, -1])
         found = np.linalg.eigvals(model.A)
         assert np.isclose(found, 0, atol=1e-12).sum() == 1  # W_damping
+        assert model.modes()[0].components == (("W_damping", 1.0),)  # it moves no angle
         found = found[np.abs(found) > 1e-9]
         np.testing.assert_allclose(np.sort_complex(found), np.sort_complex(expected), rtol=1e-10)
         if c < 2 * M_BOB * L**2 * math.sqrt(G / L):

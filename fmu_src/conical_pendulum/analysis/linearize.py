@@ -141,23 +141,27 @@ class LinearModel:
 
     def modes(self, components: int = 3) -> list[Mode]:
         """A's eigenvalues, each complex pair once, by natural frequency, with each mode's
-        largest components among the positions: the states whose derivative is another state
-        (A's row a unit vector: alpha0' = omega0), all states where there are none. Modes of
-        one repeated eigenvalue (a chain's two planes) are given a basis in which each has
-        zeros where the others are largest, so that they do not mix."""
+        largest components (above 1e-9 of the largest) among the positions: the states whose
+        derivative is another state (A's row a unit vector: alpha0' = omega0), all states where
+        there are none or the mode moves none. Modes of one repeated eigenvalue (a chain's two
+        planes) are given a basis in which each has zeros where the others are largest, so that
+        they do not mix."""
         values, vectors = np.linalg.eig(self.A)
         order = [k for k in np.argsort(np.abs(values), kind="stable") if values[k].imag >= 0]
-        shown = self._positions()
+        shown, everything = self._positions(), np.arange(len(self.states))
         found = []
         while order:
             value = values[order[0]]
             same = [k for k in order if abs(values[k] - value) <= 1e-8 * max(abs(value), 1e-300)]
             order = [k for k in order if k not in same]
             for vector in _separated(vectors[:, same], shown):
-                largest = shown[np.argsort(-np.abs(vector[shown]), kind="stable")[:components]]
+                # a mode that moves no position (the books' W_damping: lambda = 0) by all states
+                rows = shown if np.abs(vector[shown]).max() > 1e-12 * np.abs(vector).max() else everything
+                largest = rows[np.argsort(-np.abs(vector[rows]), kind="stable")[:components]]
                 scaled = vector / vector[largest[0]]
+                shown_here = [i for i in largest if abs(scaled[i]) > 1e-9]  # not rounding's noise
                 found.append(
-                    Mode(complex(value), tuple((self.states[i], complex(scaled[i])) for i in largest))
+                    Mode(complex(value), tuple((self.states[i], complex(scaled[i])) for i in shown_here))
                 )
         return found
 
