@@ -393,42 +393,32 @@ def test_refusals_say_what_to_do(built_fmu):
         linearize(path, time=float("inf"))
 
 
-def test_the_command(built_fmu, tmp_path):
-    """`conical-pendulum linearize`: modes printed, files written; a bad name is one line."""
-    path = built_fmu(Scene.uniform(3), backend="native")
-    out = tmp_path / "seed.mat"
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "conical_pendulum",
-            "linearize",
-            str(path),
-            "--state",
-            "alpha*=0",
-            "--state",
-            "beta*=0",
-            "--out",
-            str(out),
-            "--out",
-            str(tmp_path / "seed.npz"),
-        ],
+def command(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "conical_pendulum", "linearize", *map(str, args)],
         check=False,
         capture_output=True,
         text=True,
         timeout=120,
         stdin=subprocess.DEVNULL,
     )
+
+
+def test_the_command(built_fmu, tmp_path):
+    """`conical-pendulum linearize`: modes printed, files and the mode shapes written; a bad
+    name, or mode shapes of an FMU that is no chain of this project's, is one line."""
+    path = built_fmu(Scene.uniform(3), backend="native")
+    out, picture = tmp_path / "seed.mat", tmp_path / "modes.png"
+    hanging = ["--state", "alpha*=0", "--state", "beta*=0"]
+    done = command(path, *hanging, "--out", out, "--out", tmp_path / "seed.npz", "--plot", picture)
     assert done.returncode == 0, done.stderr
     assert "0.666647" in done.stdout and "directional" in done.stdout
-    assert out.exists() and (tmp_path / "seed.npz").exists()
-    bad = subprocess.run(
-        [sys.executable, "-m", "conical_pendulum", "linearize", str(path), "--state", "gamma=1"],
-        check=False,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        stdin=subprocess.DEVNULL,
-    )
-    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
-    assert "state 'gamma'" in bad.stderr
+    assert out.exists() and (tmp_path / "seed.npz").exists() and picture.stat().st_size > 10000
+    for args, said in (
+        ([path, "--state", "gamma=1"], "state 'gamma'"),
+        ([reference_fmu("2.0", "VanDerPol"), "--plot", picture], "--plot: draws this project's chains only"),
+        ([path, "--out", tmp_path / "seed.csv"], "a .npz or a .mat file"),
+    ):
+        bad = command(*args)
+        assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
+        assert said in bad.stderr
