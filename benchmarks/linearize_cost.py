@@ -2,8 +2,8 @@
 
     python benchmarks/linearize_cost.py
 
-In one process, on the native FMI 2.0 FMU of Scene.uniform(100) (400 states, 1,401 outputs)
-and of the seed (3 links) for scale, at the hanging equilibrium: analysis.linearize's whole
+In one process, on the native FMI 2.0 and 3.0 FMUs of Scene.uniform(100) (400 states, 1,401
+outputs) and of the seed (3 links) for scale, at the hanging equilibrium: analysis.linearize's whole
 call (reading the model description with fmpy, instantiating, initializing, the
 derivatives, the matrices) by the FMU's directional derivatives grouped by the
 ModelStructure's sparsity (the default), with one directional-derivative call per column,
@@ -48,11 +48,11 @@ def timed(f):
 def main():
     rows = []
     with tempfile.TemporaryDirectory() as folder:
-        for n in (3, 100):
-            path = Path(folder) / f"chain{n}.fmu"
+        for n, fmi_version in ((3, 2), (3, 3), (100, 2), (100, 3)):
+            path = Path(folder) / f"chain{n}_fmi{fmi_version}.fmu"
             begin = time.perf_counter()
-            build_fmu(Scene.uniform(n), path, backend="native")
-            print(f"built {n} links in {time.perf_counter() - begin:.1f} s")
+            build_fmu(Scene.uniform(n), path, backend="native", fmi_version=fmi_version)
+            print(f"built {n} links, FMI {fmi_version}.0, in {time.perf_counter() - begin:.1f} s")
             reading, _ = timed(lambda: read_model_description(str(path), validate=False))
             reference = None
             for name, options in METHODS.items():
@@ -62,6 +62,7 @@ def main():
                 rows.append(
                     {
                         "links": n,
+                        "fmi": f"{fmi_version}.0",
                         "states": len(model.states),
                         "outputs": len(model.outputs),
                         "method": name,
