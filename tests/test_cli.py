@@ -19,7 +19,7 @@ from conical_pendulum.cli import COMMANDS, main, run_command
 from conical_pendulum.errors import install_command
 
 COMMAND = str(Path(sys.executable).with_name("conical-pendulum"))  # the installed console script
-NAMES = ["build", "check", "show", "page", "sweep", "demo", "system"]
+NAMES = ["build", "check", "linearize", "show", "page", "sweep", "demo", "system"]
 
 
 def cli(*args, cwd=None, timeout=300):
@@ -58,6 +58,7 @@ def test_python_m_runs_the_same_command():
     [
         ("build", ["--links", "--scene", "--output", "--no-check", "--coupling", "--native"]),
         ("check", ["FMU", "--stop-time", "--interval", "--rtol"]),
+        ("linearize", ["FMU", "--state NAME=VALUE", "--input", "--parameter", "--method", "--out", "--plot"]),
         ("show", ["--plot", "--gif", "--fps"]),
         ("page", ["FMU", "--out", "--stop-time", "--start NAME=VALUE", "--serve", "--port"]),
         ("sweep", ["--grid", "--random", "--samples", "--workers", "--scheduler", "--out"]),
@@ -461,6 +462,7 @@ def bad_file(folder: Path, kind: str, suffix: str) -> Path:
     [
         ("build", ["--scene", "BAD", "--output", "OUT/x.fmu"], ".toml"),
         ("check", ["BAD"], ".fmu"),
+        ("linearize", ["BAD"], ".fmu"),
         ("show", ["BAD", "--plot", "OUT/p.png"], ".csv"),
         ("page", ["BAD", "--out", "OUT"], ".fmu"),
         ("sweep", ["BAD", "--grid", "l0=5,6", "--out", "OUT/s.parquet"], ".fmu"),
@@ -515,6 +517,7 @@ def test_an_output_where_a_file_or_folder_cannot_be_is_one_line(
 WORK = {  # what each command spends its time in, and a command line that gets there
     "build": ("conical_pendulum.builder.fmu", "build_fmu", ["--no-check", "--output", "OUT/x.fmu"]),
     "check": ("conical_pendulum.analysis.compare", "compare", ["FMU", "--stop-time", "1"]),
+    "linearize": ("conical_pendulum.analysis.linearize", "linearize", ["FMU"]),
     "show": ("conical_pendulum.viz.plots", "plot", ["RESULTS", "--plot", "OUT/p.png"]),
     "page": ("conical_pendulum.analysis.fmpy_runs", "run_fmu", ["FMU", "--out", "OUT"]),
     "sweep": (

@@ -1,8 +1,8 @@
-"""The `conical-pendulum` command (also `python -m conical_pendulum`): one entry point, seven subcommands.
+"""The `conical-pendulum` command (also `python -m conical_pendulum`): one entry point, eight subcommands.
 
 This module is the entry point only: the table of commands (COMMANDS), argparse, the
 dispatch, and the one place where errors become a line and an exit status. Each
-subcommand is a module of its own in commands/ (build, check, show, page, sweep, demo, system),
+subcommand is a module of its own in commands/ (build, check, linearize, show, page, sweep, demo, system),
 with `add_arguments(parser)` and `run(args) -> int`, its options defined once there.
 Only the chosen subcommand's module is imported, so `--help` is quick and `build` needs
 neither the sweep extra (Dask) nor the cosim one (ecospy). Being this package's code, a
@@ -67,6 +67,14 @@ COMMANDS = {
         "run an FMU with fmpy against the native reference of its scene",
         ("conical-pendulum check dist/ConicalPendulum.fmu --stop-time 5",),
         "conical_pendulum.commands.check",
+    ),
+    "linearize": Command(
+        "A, B, C, D of an FMU at an operating point, its modes, as .npz or .mat",
+        (
+            "conical-pendulum linearize dist/ConicalPendulum_native.fmu --state 'alpha*=0' --state 'beta*=0'",
+            "conical-pendulum linearize dist/Chain30.fmu --state 'alpha*=0' --state 'beta*=0' --out chain.mat",
+        ),
+        "conical_pendulum.commands.linearize",
     ),
     "show": Command(
         "plot and animate an fmpy results CSV",
@@ -160,6 +168,13 @@ class _CommandsFormatter(argparse.RawDescriptionHelpFormatter):
 
     def _split_lines(self, text, width):
         return text.splitlines()
+
+    def add_argument(self, action):
+        super().add_argument(action)
+        # argparse measures the commands' names at the list's indent, but writes them two
+        # columns further in: a name as long as 'linearize' would push its summary down a line
+        if isinstance(action, argparse._SubParsersAction):
+            self._action_max_length += 2
 
 
 def _parser(prog: str, chosen: str | None) -> Parser:

@@ -28,6 +28,17 @@ def positive(option: str, value: float) -> float:
     return value
 
 
+def start_value(text: str) -> tuple[str, float]:
+    """NAME=NUMBER, as argparse's type."""
+    name, equals, value = text.partition("=")
+    try:
+        if name and equals:
+            return name, float(value)
+    except ValueError:
+        pass
+    raise argparse.ArgumentTypeError(f"{text!r}: expected NAME=NUMBER")
+
+
 def numbers(text: str) -> list[float]:
     try:
         return sorted({float(s) for s in text.split(",")})

@@ -14,17 +14,7 @@ from fmpy.simulation import settable_in_initialization_mode, settable_in_instant
 from ..analysis import fmpy_runs
 from ..errors import UserError, needs
 from ..viz.pydy_page import write_pydy_page
-from .common import fmu_scene, positive
-
-
-def start_value(text: str) -> tuple[str, float]:
-    name, equals, value = text.partition("=")
-    try:
-        if name and equals:
-            return name, float(value)
-    except ValueError:
-        pass
-    raise argparse.ArgumentTypeError(f"{text!r}: expected NAME=NUMBER")
+from .common import fmu_scene, positive, start_value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
