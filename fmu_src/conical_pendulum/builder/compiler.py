@@ -3,8 +3,9 @@
 The core holds the scene's numerics and, behind the model contract (fmu_model.h), the
 pendulum's model with its variable table (pendulum_model.c and the fmu_config.h of
 builder.pendulum.core_config), which the pythonfmu slave runs on. The cache key covers the
-scene's structure, the solver settings (the variable table's start values) and the
-generator's own sources, so a rebuild of the same scene only loads the cached extension.
+scene's structure, what the variable table is made of (builder.pendulum.core_config_key: the
+solver settings, its starts, and the variable groups) and the generator's own sources, so a
+rebuild of the same scene only loads the cached extension.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from pathlib import Path
 from ..errors import UserError
 from ..scene import Scene
 from .native_model import CSRC, CSRC_FILES
-from .pendulum import DEFAULT_SETTINGS, core_config
+from .pendulum import DEFAULT_SETTINGS, core_config, core_config_key
 
 HERE = Path(__file__).parent
 CORE_CSRC = CSRC / "core"  # the model's numerics: the compiled core's C, and the native FMU's
@@ -100,7 +101,7 @@ def build_core(scene: Scene, cache: Path | None = None, settings: dict | None = 
     """The scene's compiled core, built or found in the cache; settings: the solver settings'
     start values of the model it holds (builder.fmu.checked_settings; None: the defaults)."""
     settings = DEFAULT_SETTINGS if settings is None else settings
-    key = scene.key(generator_version() + json.dumps(settings, sort_keys=True))
+    key = scene.key(generator_version() + core_config_key(settings))
     name = f"cp_core_{key[:16]}"
     directory = (cache or cache_root()) / name
     if (directory / "build.json").exists():

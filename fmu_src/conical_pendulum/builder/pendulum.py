@@ -5,6 +5,7 @@ of the same model compiled into the core for the pythonfmu slave (core_config)."
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from ..runtime.files import MODEL_NAME
@@ -84,6 +85,18 @@ def core_config(scene: Scene, settings: dict) -> str:
     itself; no GUID, which only the FMI glue checks."""
     found = variables_of(groups("native"), scene, settings)
     return config_header(PENDULUM, {"settings": settings}, found, guid="")
+
+
+def core_config_key(settings: dict) -> str:
+    """What core_config's fmu_config.h is made of beyond the scene and the generator's
+    sources, for the compiled core's cache key: the settings (the starts) and the variable
+    groups in order (builder.variables.GROUPS, which a caller may extend)."""
+    layout = [
+        [g.name, g.type, g.causality, g.variability, g.initial, g.c_name, g.named]
+        + [g.members.__module__, g.members.__qualname__]
+        for g in groups("native")
+    ]
+    return json.dumps([settings, layout], sort_keys=True)
 
 
 def write_native_fmu(
