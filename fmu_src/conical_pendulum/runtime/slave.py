@@ -6,7 +6,7 @@ FMU state to the compiled core's Model, pendulum_model.c behind the model contra
 (fmu_model.h): the native FMUs' C checks them and words every refusal and diagnosis. What
 only this FMU has stays here: the FMI mode (pythonfmu keeps none) and Radau (scipy) on the
 model's right-hand side. Shipped in each FMU under a package name unique to the runtime's
-sources and imported through its entry module (runtime/entry.py); needs numpy and the core.
+sources, imported through its entry module (runtime/entry.py); needs numpy and the core.
 """
 
 import functools
@@ -89,6 +89,7 @@ class ConicalPendulum(Fmi2Slave):
         self._model = self._core.Model()  # every variable at its start value
         self._vr = {v["name"]: v["value_reference"] for v in model["variables"]}
         self._mode, self._radau_h = 0, 0.0
+        self._of = {Real: set(), Integer: set()}  # the value references of each type
         for v in model["variables"]:  # in value-reference order: pythonfmu numbers them
             fmi = {
                 "causality": Fmi2Causality[v["causality"]],
@@ -96,6 +97,7 @@ class ConicalPendulum(Fmi2Slave):
             }
             fmi["initial"] = v["initial"] and Fmi2Initial[v["initial"]]
             self.register_variable(KINDS[v["type"]](v["name"], description=v["description"], **fmi))
+            self._of[KINDS[v["type"]]].add(v["value_reference"])
 
     @_fmi_call
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
@@ -238,9 +240,9 @@ class ConicalPendulum(Fmi2Slave):
 
     def _typed(self, vrs, kind):
         """vrs, if each is a variable of kind (Real or Integer) of this FMU."""
-        for vr in vrs:
-            if not isinstance(self.vars.get(vr), kind):
-                raise TypeError(f"value reference {vr} is not {NAMED[kind]} variable")
+        if not self._of[kind].issuperset(vrs):
+            bad = next(vr for vr in vrs if vr not in self._of[kind])
+            raise TypeError(f"value reference {bad} is not {NAMED[kind]} variable")
         return vrs
 
 

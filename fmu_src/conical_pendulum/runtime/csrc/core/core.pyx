@@ -385,9 +385,12 @@ cdef class Model:
     def get_reals(self, vrs):
         """The Real variables vrs (model_get_real), as a list."""
         cdef double value
+        cdef ModelStatus status
         values = []
         for vr in vrs:
-            self._refused(model_get_real(self.m, vr, &value, 0.0, self.message, sizeof(self.message)), vr)
+            status = model_get_real(self.m, vr, &value, 0.0, self.message, sizeof(self.message))
+            if status != MODEL_OK:
+                self._refused(status, vr)
             values.append(value)
         return values
 
