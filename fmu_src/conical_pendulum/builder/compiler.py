@@ -153,24 +153,10 @@ def _compile(name: str, work: Path) -> None:
             "PATH (Debian: apt-get install gcc; or set CC)"
         )
 
-    unoptimized = []
-    for source in UNOPTIMIZED_SOURCES:
-        unoptimized.append(work / Path(source).with_suffix(".o"))
-        subprocess.run(
-            [
-                compiler,
-                "-O0",
-                "-g0",
-                "-fPIC",
-                "-I",
-                str(work),
-                "-c",
-                str(work / source),
-                "-o",
-                str(unoptimized[-1]),
-            ],
-            check=True,
-        )
+    unoptimized = [work / Path(source).with_suffix(".o") for source in UNOPTIMIZED_SOURCES]
+    for source, target in zip(UNOPTIMIZED_SOURCES, unoptimized):
+        command = [compiler, "-O0", "-g0", "-fPIC", "-I", str(work), "-c", str(work / source)]
+        subprocess.run([*command, "-o", str(target)], check=True)
     sources = [f"{name}.pyx", *CORE_SOURCES, *MODEL_SOURCES]
     extension = Extension(
         name,
