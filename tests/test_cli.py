@@ -97,16 +97,16 @@ def test_check_passes_on_the_seed_fmu(seed_fmu):
 
 
 def test_check_fails_an_fmu_that_runs_another_parameter_value(seed_fmu, tmp_path):
-    """The seed FMU with its first link's start value 1e-9 longer (relatively) than its scene
-    says: 6e-10 rad off, which a fixed 1e-8 rad let through; the measured bound does not."""
+    """The seed FMU with its scene's first link 1e-9 longer (relatively) than the FMU runs
+    (its compiled variable table): 6e-10 rad off, which a fixed 1e-8 rad let through; the
+    measured bound does not."""
     wrong = tmp_path / "Wrong.fmu"
     with zipfile.ZipFile(seed_fmu) as source, zipfile.ZipFile(wrong, "w") as target:
         for item in source.infolist():
             data = source.read(item)
             if item.filename == "resources/model.json":
                 model = json.loads(data)
-                l0 = next(v for v in model["variables"] if v["name"] == "l0")
-                l0["start"] *= 1 + 1e-9
+                model["scene"]["links"][0]["length"] *= 1 + 1e-9
                 data = json.dumps(model)
             target.writestr(item, data)
     run = cli("check", wrong)

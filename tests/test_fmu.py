@@ -172,6 +172,37 @@ def test_variables_are_set_only_when_the_standard_allows(seed_fmu, name, initial
     fmu.close(after_fatal=True)
 
 
+def _bad_tolerance(fmu):
+    fmu.fmu.setupExperiment(tolerance=0.0, startTime=0.0)
+
+
+# (what, the instance initialized, its start values, what is done to it)
+SAID_ALIKE = [
+    ("a bad value", False, {}, lambda fmu: fmu.set({"l0": -1.0})),
+    ("a fixed value after initialization", True, {}, lambda fmu: fmu.set({"rtol": 1e-6})),
+    ("a calculated output", False, {}, lambda fmu: fmu.set({"energy": 1.0})),
+    ("a bad setting", False, {}, lambda fmu: fmu.set({"max_steps": 0})),
+    ("a bad tolerance", False, {}, _bad_tolerance),
+    ("a step that cannot complete", True, {"max_steps": 2, "rtol": 1e-13}, lambda fmu: fmu.step(1.0)),
+]
+
+
+@pytest.mark.parametrize("what, initialize, start, action", SAID_ALIKE, ids=[c[0] for c in SAID_ALIKE])
+def test_both_fmus_say_the_same_words(seed_fmu, native_seed_fmu, what, initialize, start, action):
+    """The slave's refusals and diagnoses are the native FMU's C (pendulum_model.c behind
+    fmu_model.h): the same text, word for word, from either FMU."""
+    said = []
+    for path in (seed_fmu, native_seed_fmu):
+        fmu = Instance(path, start_values=start, initialize=initialize)
+        fmu.messages.clear()
+        with pytest.raises(FMICallException):
+            action(fmu)
+        said.append([text for status, text in fmu.messages if status in (2, 3)])
+        fmu.close(after_fatal=True)
+    gc.collect()  # pythonfmu releases a failed instance twice: the slave makes up for it
+    assert said[0] and said[0] == said[1], said
+
+
 def test_step_that_cannot_complete_is_discarded_and_state_kept(seed_fmu):
     fmu = Instance(seed_fmu, start_values={"max_steps": 2, "rtol": 1e-13, "atol": 1e-13})
     before = fmu.get("alpha0", "beta2", "omega1", "energy")

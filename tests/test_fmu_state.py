@@ -3,13 +3,13 @@
 A state that fails is refused with a message naming the field and its value (the native
 FMU: fmi2Error; the pythonfmu FMU: fmi2Fatal, all that pythonfmu 0.7 returns for an
 exception, after the same message as fmi2Error), and the instance stays exactly as it was
-and answers fmi2Reset. A mutation fuzz of serialized states (header intact, body
+and answers fmi2Reset. Both FMUs' states hold the same ModelData (pendulum_model.c's), which
+model_invalid checks. A mutation fuzz of serialized states (header intact, body
 overwritten): each one is refused, or is taken and steps to finite outputs or to a
 discarded step with a message; fmi2Reset works after every one.
 """
 
 import ctypes
-import json
 import math
 import re
 import struct
@@ -19,7 +19,6 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model
-from pythonfmu import Fmi2Slave
 
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 from conical_pendulum.runtime.rules import BadValue, check_value
@@ -74,26 +73,26 @@ def serialized_state(instance):
 
 
 class NativeState:
-    """The native FMU's serialized state: a header (magic, size, GUID), then fmi2_glue.c's
-    SavedState as it lies in memory: the glue's Machine (state word, time, last successful
+    """The native FMU's serialized state: a header (magic, size, GUID), then fmi_layer.c's
+    Saved as it lies in memory: the FMI layer's machine (state word, time, last successful
     time), then pendulum_model.c's ModelData, which this layout follows field by field."""
 
     refused_status = ERROR
-    MODEL = 24  # where the ModelData begins, after the Machine
+    MODEL = 24  # where the ModelData begins, after the machine
+    # what the state holds before the ModelData: (offset, struct format) by name
+    OWN = (("state", 0, "i"), ("time", 8, "d"), ("last_successful_time", 16, "d"), ("mode", 0, "i"))
+    STEPPING = STEP_COMPLETE  # the state word, or the mode, of a stepping instance
 
     def __init__(self, instance, data):
         reals = real_names(instance)
-        n_state = sum(v.name.startswith("der(") for v in instance.md.modelVariables)
+        n_state = sum(v.causality == "output" and v.initial == "exact" for v in instance.md.modelVariables)
         self.reals = {name: k for k, name in enumerate(reals)}
-        size = struct.unpack_from("<I", data, 4)[0]  # the header's: sizeof the SavedState
+        size = self.body_size(data)
         self.header = len(data) - size
         self.data = bytes(data)
         after_r = self.MODEL + 8 * len(reals)
         tail = size - 8 * n_state - 8
-        self.offsets = {
-            "state": 0,
-            "time": 8,
-            "last_successful_time": 16,
+        self.offsets = {name: at for name, at, _ in self.OWN} | {
             "solver": after_r,
             "max_steps": after_r + 4,
             "tolerance": after_r + 8,
@@ -104,9 +103,7 @@ class NativeState:
             "dx_valid": tail + 8 * n_state,
             "outputs_valid": tail + 8 * n_state + 4,
         }
-        self.fields = {
-            "state": "i",
-            "time": "d",
+        self.fields = {name: kind for name, _, kind in self.OWN} | {
             "solver": "i",
             "max_steps": "i",
             "tolerance": "d",
@@ -114,9 +111,7 @@ class NativeState:
             "fsal": "i",
             "dx_valid": "i",
             "outputs_valid": "i",
-            "last_successful_time": "d",
         }
-        self.offsets["mode"], self.fields["mode"] = 0, "i"  # the state word: the slave's mode
         work = (tail - self.offsets["work"]) / 8
         assert work == int(work) and work >= 32 * n_state, "ModelData's layout is not the one assumed"
         # the meaningful part: all but the solvers' scratch after the carried derivative
@@ -125,9 +120,13 @@ class NativeState:
         assert (
             [self.get(name) for name in reals],
             [self.get(name) for name in integer_names(instance)],
-            self.get("time"),
-            self.get("state"),
-        ) == (reals_now, integers_now, instance.time, STEP_COMPLETE), "not the layout assumed"
+            self.time(self.data),
+            self.get("mode"),
+        ) == (reals_now, integers_now, instance.time, self.STEPPING), "not the layout assumed"
+
+    @staticmethod
+    def body_size(data):
+        return struct.unpack_from("<I", data, 4)[0]  # the header's: sizeof the Saved
 
     def offset(self, field):
         return self.MODEL + 8 * self.reals[field] if field in self.reals else self.offsets[field]
@@ -150,36 +149,22 @@ class NativeState:
         return self.get("time", data)
 
 
-class PythonState:
-    """The pythonfmu FMU's serialized state: the slave's _get_fmu_state as JSON (pythonfmu's
-    Fmi2Slave._fmu_state_to_bytes)."""
+class PythonState(NativeState):
+    """The pythonfmu FMU's serialized state: the slave's mode and Radau's carried step
+    (runtime/slave.py's OWN), then the same ModelData, no header."""
 
     refused_status = FATAL
+    MODEL = 16
+    OWN = (("mode", 0, "i"), ("radau_h", 8, "d"))
+    STEPPING = 2  # the slave's MODES.index("step")
 
     def __init__(self, instance, data):
-        self.data = bytes(data)
-        self.state = json.loads(data)
         self.saved_time = instance.time
-        names = real_names(instance)
-        self.paths = {name: ("reals", k) for k, name in enumerate(names)}
-        self.paths.update({name: ("ints", k) for k, name in enumerate(integer_names(instance))})
-        self.paths.update(
-            h=("solver", "h"), fsal=("solver", "fsal"), mode=("mode",), tolerance=("tolerance",)
-        )
-        self.leaves = list(self.paths.values()) + [
-            ("solver", "f", k) for k in range(len(self.state["solver"]["f"]))
-        ]
+        super().__init__(instance, data)
 
-    def with_path(self, path, value):
-        state = json.loads(self.data)
-        node = state
-        for key in path[:-1]:
-            node = node[key]
-        node[path[-1]] = value
-        return Fmi2Slave._fmu_state_to_bytes(state)
-
-    def with_field(self, field, value):
-        return self.with_path(self.paths[field], value)
+    @staticmethod
+    def body_size(data):
+        return len(data)
 
     def time(self, data):
         return self.saved_time  # the pythonfmu FMU's state holds no time: doStep says it
@@ -260,7 +245,7 @@ CASES = [
     ("bad parameter", "l0", -1.0, None, "l0 = -1.0: a length must be positive"),
     ("negative step", "h", -1.0, None, "h = -1.0: the solver's carried step cannot be negative"),
     ("NaN step", "h", math.nan, None, "h = nan: must be finite"),
-    ("no FMI state", "mode", "running", 6, "{}"),
+    ("no FMI state", "mode", 6, None, "{}"),
     ("unknown solver", "solver", 4, 3, "solver = {}: choose 0 to"),
     ("rtol 0", "rtol", 0.0, None, None),
     ("max_steps 0", "max_steps", 0, None, "max_steps = 0: must be at least 1"),
@@ -284,7 +269,7 @@ def test_a_bad_state_is_refused_naming_it_and_changes_nothing(
         message = (
             "instance state = 6: not one state a Co-Simulation instance can be in"
             if backend == "native"
-            else "mode = 'running': choose one of"
+            else "mode = 6: choose one of 0 (instantiated)"
         )
     message = message.format(value)
     bad = state.with_field(field, value)
@@ -372,7 +357,7 @@ def test_reset_and_free_state_are_never_refused(native_seed_fmu):
 SPECIAL = [math.nan, math.inf, -math.inf, -1.0, 1e308, -1e308, 5e-324, 0.0, 0.5, 2.0**53]
 
 
-def native_mutation(state, rng):
+def mutation(state, rng):
     """The saved bytes with one to three overwrites of the body: doubles, int32s, int64s, bytes."""
     data = state.data
     for _ in range(1 if rng.random() < 0.75 else int(rng.integers(2, 4))):
@@ -396,56 +381,6 @@ def native_mutation(state, rng):
         at = min(at, size - len(raw))
         data = state.overwritten(at, raw, data)
     return data
-
-
-PYTHON_VALUES = [
-    math.nan,
-    math.inf,
-    -math.inf,
-    -1,
-    -1.0,
-    2**31 - 1,
-    2**63 - 1,
-    10**400,
-    1e308,
-    0,
-    0.0,
-    1.5,
-    3,
-    None,
-    "x",
-    True,
-    [],
-    {},
-    "instantiated",
-]
-
-
-def python_mutation(state, rng):
-    """A value of the saved dict replaced (serialized as pythonfmu does), a field taken away,
-    or the JSON's bytes overwritten at random."""
-    kind = rng.random()
-    if kind < 0.7:
-        path = state.leaves[rng.integers(len(state.leaves))]
-        if rng.random() < 0.75:
-            value = PYTHON_VALUES[rng.integers(len(PYTHON_VALUES))]
-        else:
-            value = float(rng.standard_normal()) * 10.0 ** int(rng.integers(-300, 300))
-        return state.with_path(path, value)
-    if kind < 0.8:
-        data = json.loads(state.data)
-        field = sorted(data)[rng.integers(len(data))]
-        if rng.random() < 0.5:
-            del data[field]
-        else:
-            data[field] = {"extra": 1}
-        return Fmi2Slave._fmu_state_to_bytes(data)
-    data = bytearray(state.data)
-    for _ in range(int(rng.integers(1, 4))):
-        at = int(rng.integers(0, len(data)))
-        raw = rng.bytes(1) if rng.random() < 0.5 else bytes([b"0123456789-.eN"[rng.integers(14)]])
-        data[at : at + 1] = raw
-    return bytes(data)
 
 
 def outcome(fmu, state, data):
@@ -476,11 +411,10 @@ def outcome(fmu, state, data):
 def test_mutated_states_are_refused_or_run_to_finite_outputs(backend, path):
     fmu = started(path)
     state = codec(backend, fmu, serialized_state(fmu))
-    mutate = native_mutation if backend == "native" else python_mutation
     rng = np.random.default_rng(18)
     outcomes, named = Counter(), Counter()  # what came of them; what the refusals named
     for _ in range(FUZZ_CASES):
-        result = outcome(fmu, state, mutate(state, rng))
+        result = outcome(fmu, state, mutation(state, rng))
         outcomes[result] += 1
         if result == "refused":
             text = next(text for s, text in fmu.messages if s == ERROR)

@@ -1,6 +1,10 @@
 """Scene -> compiled core: derive, generate C, compile with Cython (abi3), cache by hash.
 
-The cache key covers the scene's structure and the generator's own sources, so a
+The core holds the scene's numerics and, behind the model contract (fmu_model.h), the
+pendulum's model with its variable table (pendulum_model.c and the fmu_config.h of
+builder.pendulum.core_config), which the pythonfmu slave runs on. The cache key covers the
+scene's structure, what the variable table is made of (builder.pendulum.core_config_key: the
+solver settings, its starts, and the variable groups) and the generator's own sources, so a
 rebuild of the same scene only loads the cached extension.
 """
 
@@ -12,6 +16,7 @@ import importlib.util
 import json
 import os
 import shutil
+import subprocess
 import sys
 import sysconfig
 import tempfile
@@ -21,18 +26,29 @@ from pathlib import Path
 
 from ..errors import UserError
 from ..scene import Scene
+from .native_model import CSRC, CSRC_FILES
+from .pendulum import DEFAULT_SETTINGS, core_config, core_config_key
 
 HERE = Path(__file__).parent
-CSRC = HERE.parent / "runtime" / "csrc"
 CORE_CSRC = CSRC / "core"  # the model's numerics: the compiled core's C, and the native FMU's
-# Every C file of runtime/csrc by name, whichever role's folder holds it (core/, fmi/: the FMI
-# layers, models/: the models behind fmu_model.h); names are unique, so an FMU's sources/
-# folder holds them side by side.
-CSRC_FILES = {path.name: path for path in sorted(CSRC.glob("*/*.[ch]"))}
+# The C compiled into the core: its numerics, then the model behind fmu_model.h.
+CORE_SOURCES = ("model.c", "dynamics.c", "solvers.c", "diagnosis.c", "cosim.c", "chain.c")
+MODEL_SOURCES = ("rules.c", "variable_table.c", "pendulum_model.c")
+MODEL_FILES = ("fmu_model.h", "variable_table.h", "variable_table.c", "pendulum_model.c")  # not in core/
+# The model compiled again in complex arithmetic (directional and output derivatives), which
+# pendulum_model.c links to and the pythonfmu slave never calls (its FMU declares neither):
+# compiled without optimization, a tenth of the time at -O2 (about 0.7 s against 8.6 s for
+# the seed; the native FMU compiles its own at -O2).
+UNOPTIMIZED_SOURCES = ("directional.c", "second_directional.c")
 GENERATOR_SOURCES = [
     *(HERE / name for name in ("kane.py", "model.py", "codegen.py", "compiler.py")),
-    HERE.parent / "runtime" / "rules.py",  # the statistics' slots (model.h)
+    # the variable table's fmu_config.h (builder.pendulum.core_config)
+    *(HERE / name for name in ("pendulum.py", "fmu_config.py", "variables.py", "c_literals.py")),
+    *sorted((HERE / "templates").glob("*.in")),
+    HERE.parent / "scene.py",  # the variables' names
+    HERE.parent / "runtime" / "rules.py",  # the statistics' slots (model.h), the value rules
     *sorted(CORE_CSRC.glob("*.[chp]*")),
+    *(CSRC_FILES[name] for name in MODEL_FILES),
 ]
 LIMITED_API = "0x030B0000"  # CPython 3.11: one compiled file serves 3.11 and newer
 
@@ -81,8 +97,11 @@ def load_module(name: str, path: Path):
     return module
 
 
-def build_core(scene: Scene, cache: Path | None = None) -> CoreBuild:
-    key = scene.key(generator_version())
+def build_core(scene: Scene, cache: Path | None = None, settings: dict | None = None) -> CoreBuild:
+    """The scene's compiled core, built or found in the cache; settings: the solver settings'
+    start values of the model it holds (builder.fmu.checked_settings; None: the defaults)."""
+    settings = DEFAULT_SETTINGS if settings is None else settings
+    key = scene.key(generator_version() + core_config_key(settings))
     name = f"cp_core_{key[:16]}"
     directory = (cache or cache_root()) / name
     if (directory / "build.json").exists():
@@ -104,11 +123,12 @@ def build_core(scene: Scene, cache: Path | None = None) -> CoreBuild:
             start = time.perf_counter()
             files = generate(equations)
         seconds["codegen"] = time.perf_counter() - start
+        files["fmu_config.h"] = core_config(scene, settings)
         for filename, text in files.items():
             (work / filename).write_text(text)
 
         start = time.perf_counter()
-        for source in CORE_CSRC.glob("*.[ch]"):
+        for source in [*CORE_CSRC.glob("*.[ch]"), *(CSRC_FILES[name] for name in MODEL_FILES)]:
             shutil.copy2(source, work / source.name)
         shutil.copy2(CORE_CSRC / "core.pyx", work / f"{name}.pyx")
         _compile(name, work)
@@ -133,7 +153,11 @@ def _compile(name: str, work: Path) -> None:
             "PATH (Debian: apt-get install gcc; or set CC)"
         )
 
-    sources = [f"{name}.pyx", "model.c", "dynamics.c", "solvers.c", "diagnosis.c", "cosim.c", "chain.c"]
+    unoptimized = [work / Path(source).with_suffix(".o") for source in UNOPTIMIZED_SOURCES]
+    for source, target in zip(UNOPTIMIZED_SOURCES, unoptimized):
+        command = [compiler, "-O0", "-g0", "-fPIC", "-I", str(work), "-c", str(work / source)]
+        subprocess.run([*command, "-o", str(target)], check=True)
+    sources = [f"{name}.pyx", *CORE_SOURCES, *MODEL_SOURCES]
     extension = Extension(
         name,
         [str(work / s) for s in sources],
@@ -141,6 +165,7 @@ def _compile(name: str, work: Path) -> None:
         define_macros=[("Py_LIMITED_API", LIMITED_API), ("CYTHON_LIMITED_API", "1")],
         py_limited_api=True,
         extra_compile_args=["-O2", "-g0"],
+        extra_objects=[str(path) for path in unoptimized],
         extra_link_args=["-s"],
     )
     cwd = os.getcwd()

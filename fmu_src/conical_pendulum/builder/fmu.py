@@ -29,11 +29,11 @@ from ..scene import Scene
 from . import pendulum
 from .compiler import CoreBuild, build_core
 from .model_description import complete, model_description_text
+from .pendulum import DEFAULT_SETTINGS
 from .pythonfmu_export import export_library
 from .variables import Variable, records, variables
 
 RUNTIME = Path(__file__).parents[1] / "runtime"
-DEFAULT_SETTINGS = {name: setting.default for name, setting in SETTINGS.items()}
 
 
 @dataclass
@@ -101,10 +101,12 @@ def build_fmu(
     output, settings = checked_output(output), checked_settings(settings)
     if backend == "native":
         pendulum.check_settings(settings)  # before the core's build
-    core = build_core(scene, cache)
+    # the pythonfmu slave's model is the core's, with these settings' start values; the
+    # native FMU compiles its own from the core's generated C
+    core = build_core(scene, cache, settings if backend == "pythonfmu" else None)
     data = model_data(scene, core, settings, backend, arrays)
     if backend == "native":
-        pendulum.write_native_fmu(scene, core, data, output, platforms, fmi_version)
+        pendulum.write_native_fmu(scene, core.directory, data, output, platforms, fmi_version)
         return FmuBuild(output, core, MODEL_NAME, time.perf_counter() - start)
     with tempfile.TemporaryDirectory(prefix="conical_pendulum_model_") as tmp:
         model_file = Path(tmp) / MODEL_FILE

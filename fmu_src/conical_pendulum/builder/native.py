@@ -23,11 +23,10 @@ from pathlib import Path
 
 from ..errors import UserError
 from ..runtime.files import MODEL_FILE
-from .compiler import CSRC_FILES
 from .fmi2 import FMI2
 from .fmi3 import FMI3
 from .fmu_config import config_header
-from .native_model import Description, NativeModel
+from .native_model import CSRC_FILES, Description, NativeModel
 from .variables import records
 
 # The C files of the FMI layers, which serve every model behind fmu_model.h.

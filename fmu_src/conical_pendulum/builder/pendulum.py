@@ -1,26 +1,32 @@
 """The pendulum as a native model: its C files behind the model contract (fmu_model.h), its
 own lines of fmu_config.h, its FMI 3.0 arrays' dimension, and its native FMU (FMI 2.0 or
-3.0: builder.native packs it, as it packs the cart of builder.cart)."""
+3.0: builder.native packs it, as it packs the cart of builder.cart); and the fmu_config.h
+of the same model compiled into the core for the pythonfmu slave (core_config)."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from ..runtime.files import MODEL_NAME
-from ..runtime.rules import RULES, rule_of
+from ..runtime.rules import RULES, SETTINGS, rule_of
 from ..scene import Scene
 from . import c_literals as c
-from .compiler import CoreBuild
-from .fmu_config import RULE_INDEX
+from .fmu_config import RULE_INDEX, config_header
 from .native import write_model_fmu
 from .native_model import Dimension, NativeModel
-from .variables import Variable, groups
+from .variables import Variable, groups, variables_of
+
+DEFAULT_SETTINGS = {name: setting.default for name, setting in SETTINGS.items()}
 
 
 def _config(data: dict, records: list[Variable]) -> list[str]:
     """The pendulum's own lines of fmu_config.h: its value references checked against the
-    core's arrays (model.h), its Integer settings' starts and rules, the carried step's rule."""
+    core's arrays (model.h), its Integer settings' starts and rules (the solver's from its
+    record: the native FMU's solvers in C, or every solver in the pythonfmu slave's), the
+    carried step's rule."""
     n_state = sum(v.group == "states" for v in records)
+    solver = next(v for v in records if v.name == "solver")
     step_rule, step_what = rule_of("h")
     return c.fill(
         "pendulum_config.h.in",
@@ -29,7 +35,7 @@ def _config(data: dict, records: list[Variable]) -> list[str]:
             [
                 c.define("CP_SOLVER_START", data["settings"]["solver"]),
                 c.define("CP_MAX_STEPS_START", data["settings"]["max_steps"]),
-                c.define("CP_SOLVER_RULE", RULE_INDEX["native-solver"]),
+                c.define("CP_SOLVER_RULE", RULE_INDEX[solver.rule]),
                 c.define("CP_MAX_STEPS_RULE", RULE_INDEX[rule_of("max_steps")[0]]),
                 c.define("CP_STEP_RULE", RULE_INDEX[step_rule]),
                 c.define("CP_STEP_WHAT", c.string(step_what)),
@@ -72,17 +78,38 @@ def check_settings(settings: dict) -> None:
         raise ValueError(f"solver = {settings['solver']}: {RULES['native-solver'].refusal}")
 
 
+def core_config(scene: Scene, settings: dict) -> str:
+    """fmu_config.h of the model the pythonfmu slave holds through the compiled core
+    (builder.compiler): the native FMU's variable table (its value references, the state
+    derivatives' too), but every solver allowed, Radau among them, which the slave runs
+    itself; no GUID, which only the FMI glue checks."""
+    found = variables_of(groups("native"), scene, settings)
+    return config_header(PENDULUM, {"settings": settings}, found, guid="")
+
+
+def core_config_key(settings: dict) -> str:
+    """What core_config's fmu_config.h is made of beyond the scene and the generator's
+    sources, for the compiled core's cache key: the settings (the starts) and the variable
+    groups in order (builder.variables.GROUPS, which a caller may extend)."""
+    layout = [
+        [g.name, g.type, g.causality, g.variability, g.initial, g.c_name, g.named]
+        + [g.members.__module__, g.members.__qualname__]
+        for g in groups("native")
+    ]
+    return json.dumps([settings, layout], sort_keys=True)
+
+
 def write_native_fmu(
     scene: Scene,
-    core: CoreBuild,
+    core_directory: Path,
     data: dict,
     output: Path,
     platforms: tuple[str, ...] = ("linux64",),
     fmi_version: int = 2,
 ) -> None:
     """The native FMU of a scene at `output` (moved into place only when complete), with a
-    binary for each of `platforms` ("linux64", "win64"), from its compiled core and the
-    data its model.json holds; builder.fmu.build_fmu(backend="native") checks the output
+    binary for each of `platforms` ("linux64", "win64"), from its compiled core's generated
+    C (in core_directory) and the data its model.json holds; builder.fmu.build_fmu(backend="native") checks the output
     and the settings (check_settings) and makes both. fmi_version=3: the FMI 3.0 FMU."""
-    generated = {name: core.directory / name for name in ("model.c", "model.h")}
+    generated = {name: core_directory / name for name in ("model.c", "model.h")}
     write_model_fmu(PENDULUM, data, output, platforms, fmi_version, generated)

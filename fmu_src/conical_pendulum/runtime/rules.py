@@ -1,9 +1,10 @@
 """The rules for values and the solver settings, written once for every layer.
 
 The scene checks its numbers with them, the native reference its parameters and start
-values, and each FMU every value a host sets; the messages name the variable, its value
-and the rule, so a user reads the same sentence wherever a value is refused. Shipped
-inside every FMU: standard library only.
+values, and the build writes them into every FMU's C (fmu_config.h: the rules as numbers,
+their words), which applies them to every value a host sets or restores; the messages name
+the variable, its value and the rule, so a user reads the same sentence wherever a value is
+refused. Standard library only; the scene and the build import it, no slave does.
 """
 
 from __future__ import annotations
@@ -174,7 +175,7 @@ STATISTICS = {
 QUANTITIES.update(dict.fromkeys(STATISTICS, ("statistic", "a count")))  # restored states
 
 
-# Why a variable cannot be set: the same words in the pythonfmu slave and the native FMU.
+# Why a variable cannot be set: the words every FMU's C says (fmu_config.h).
 CALCULATED = "{name} is a calculated output: it cannot be set"
 FIXED = (
     "{name} cannot be set after initialization (variability fixed); set it before "

@@ -1,5 +1,7 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, initializedcheck=False
-"""Compiled core of one scene: right-hand side, outputs and solvers, all in C.
+"""Compiled core of one scene: right-hand side, outputs and solvers, all in C, and the
+model behind the model contract (fmu_model.h: pendulum_model.c with the scene's variable
+table) that the pythonfmu slave holds.
 
 Copied to a module name unique to the scene and compiled against the limited API
 (abi3). Imports numpy only.
@@ -63,6 +65,34 @@ cdef extern from "cosim.h":
                       double t, double dt, double *h, double *work, int *fsal, double *stats,
                       cp_failure *failure) noexcept nogil
     int cp_held_rhs(void *ctx, double t, const double *x, double *dx) noexcept nogil
+
+cdef extern from "fmu_model.h":
+    ctypedef struct ModelData:
+        pass
+    ctypedef enum ModelStatus:
+        MODEL_OK, MODEL_DISCARD, MODEL_REFUSED, MODEL_NO_VARIABLE
+    ctypedef struct ModelSizes:
+        size_t data_size
+        int n_real, n_integer, n_state
+    const ModelSizes model_sizes
+    void model_reset(ModelData *m)
+    const char *model_tolerance_refusal(double tolerance, const char *name, char *message,
+                                        size_t size)
+    void model_set_tolerance(ModelData *m, double tolerance)
+    void model_initialize(ModelData *m)
+    ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time,
+                               char *message, size_t size)
+    ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int initialized,
+                                 char *message, size_t size)
+    void model_set_real(ModelData *m, unsigned vr, double value)
+    ModelStatus model_get_integer(const ModelData *m, unsigned vr, int *value)
+    ModelStatus model_check_integer(const ModelData *m, unsigned vr, int value, int initialized,
+                                    char *message, size_t size)
+    void model_set_integer(ModelData *m, unsigned vr, int value)
+    void model_get_states(const ModelData *m, double x[])
+    const char *model_set_states(ModelData *m, const double x[], char *message, size_t size)
+    ModelStatus model_do_step(ModelData *m, double t, double dt, char *message, size_t size)
+    const char *model_invalid(const ModelData *m, char *message, size_t size)
 
 cdef extern from "<math.h>" nogil:
     double INFINITY
@@ -293,17 +323,6 @@ cdef class Stepper:
     def nreject(self):
         return int(self._stats[CP_STAT_N_REJECTED])
 
-    def memory(self):
-        """What the solver carries between steps: step size and cached derivative."""
-        return {"h": self.h, "fsal": self._fsal, "f": np.asarray(self._work[:CP_NSTATE]).tolist()}
-
-    def restore(self, memory):
-        self.h = memory["h"]
-        cdef double[::1] f = np.asarray(memory["f"], dtype=float)
-        _check(f, CP_NSTATE, "solver memory")
-        self._work[:CP_NSTATE] = f
-        self._fsal = memory["fsal"]
-
     def update_outputs(self):
         """Recompute the outputs after the state or the parameters were changed in place."""
         self._fsal = 0
@@ -333,6 +352,122 @@ cdef class Stepper:
         self.configure(method, rtol, atol, max_step, max_steps)
         return self.advance(t, dt)
 
-    def diagnosis(self, int status):
-        """What a user reads about the last failed step (diagnosis.c, as in every FMU)."""
-        return _diagnosis(status, &self._failure)
+
+class Refusal(ValueError):
+    """A value, setting or state the model refuses; the message is the model's (fmu_model.h),
+    the words the native FMUs log."""
+
+
+cdef class Model:
+    """One instance of the model behind the model contract (fmu_model.h): pendulum_model.c
+    with the FMU's variable table, as the native FMUs hold it. The pythonfmu slave keeps
+    its variables, settings and solver memory here and takes its values, checks, steps and
+    FMU states from these methods, so both FMUs answer with the same C.
+
+    A new Model is model_reset's: every variable at its start value. Value references are
+    the FMU's (fmu_config.h); the slave checks that a variable is of the type asked for.
+    """
+    cdef double[::1] _data  # the ModelData, aligned as a double (fmu_model.h)
+    cdef ModelData *m
+    cdef char message[2048]
+
+    def __cinit__(self):
+        self._data = np.zeros((model_sizes.data_size + sizeof(double) - 1) // sizeof(double))
+        self.m = <ModelData *>&self._data[0]
+        model_reset(self.m)
+
+    cdef _refused(self, ModelStatus status, unsigned vr):
+        if status == MODEL_NO_VARIABLE:
+            raise TypeError(f"value reference {vr} is not a variable of this type")
+        if status != MODEL_OK:
+            raise Refusal(self.message.decode())
+
+    def get_reals(self, vrs):
+        """The Real variables vrs (model_get_real), as a list."""
+        cdef double value
+        cdef ModelStatus status
+        values = []
+        for vr in vrs:
+            status = model_get_real(self.m, vr, &value, 0.0, self.message, sizeof(self.message))
+            if status != MODEL_OK:
+                self._refused(status, vr)
+            values.append(value)
+        return values
+
+    def set_reals(self, vrs, values, bint initialized):
+        """Every value checked (model_check_real) before any is taken (model_set_real), as
+        the FMI layers take them; raises Refusal with the model's message."""
+        for vr, value in zip(vrs, values):
+            self._refused(model_check_real(self.m, vr, value, initialized, self.message,
+                                           sizeof(self.message)), vr)
+        for vr, value in zip(vrs, values):
+            model_set_real(self.m, vr, value)
+
+    def get_integers(self, vrs):
+        cdef int value
+        values = []
+        for vr in vrs:
+            self._refused(model_get_integer(self.m, vr, &value), vr)
+            values.append(value)
+        return values
+
+    def set_integers(self, vrs, values, bint initialized):
+        """As set_reals, for Integers (model_check_integer, model_set_integer)."""
+        for vr, value in zip(vrs, values):
+            self._refused(model_check_integer(self.m, vr, value, initialized, self.message,
+                                              sizeof(self.message)), vr)
+        for vr, value in zip(vrs, values):
+            model_set_integer(self.m, vr, value)
+
+    def set_tolerance(self, double tolerance):
+        """The experiment's tolerance, taken at initialize(); Refusal as the model refuses it."""
+        if model_tolerance_refusal(tolerance, NULL, self.message, sizeof(self.message)):
+            raise Refusal(self.message.decode())
+        model_set_tolerance(self.m, tolerance)
+
+    def initialize(self):
+        model_initialize(self.m)
+
+    def do_step(self, double t, double dt):
+        """One communication step (model_do_step): None, or the diagnosis of a discarded one."""
+        if model_do_step(self.m, t, dt, self.message, sizeof(self.message)) == MODEL_OK:
+            return None
+        return self.message.decode()
+
+    def count(self, unsigned vr, double cost):
+        """Adds cost to the statistic vr (n_rhs, n_steps): what a solver outside the model,
+        the slave's Radau, spent on it."""
+        cdef double value
+        self._refused(model_get_real(self.m, vr, &value, 0.0, self.message, sizeof(self.message)), vr)
+        model_set_real(self.m, vr, value + cost)
+
+    @property
+    def states(self):
+        """The continuous states x, as a new array."""
+        x = np.empty(CP_NSTATE)
+        cdef double[::1] out = x
+        model_get_states(self.m, &out[0])
+        return x
+
+    def set_states(self, x_in):
+        """Takes x (model_set_states), or raises Refusal and takes nothing."""
+        cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
+        if model_set_states(self.m, &x[0], self.message, sizeof(self.message)):
+            raise Refusal(self.message.decode())
+
+    @property
+    def data(self):
+        """The ModelData's bytes: what the native FMUs' FMU states hold of the model."""
+        return np.asarray(self._data).view(np.uint8)[: model_sizes.data_size].tobytes()
+
+    @data.setter
+    def data(self, bytes data):
+        """Takes bytes of a ModelData, checked first (model_invalid): Refusal naming the
+        field and its value, and nothing taken."""
+        if len(data) != <Py_ssize_t>model_sizes.data_size:
+            raise Refusal(f"size = {len(data)} bytes: this model's data has {model_sizes.data_size}")
+        candidate = Model()
+        np.asarray(candidate._data).view(np.uint8)[: model_sizes.data_size] = np.frombuffer(data, np.uint8)
+        if model_invalid(candidate.m, self.message, sizeof(self.message)):
+            raise Refusal(self.message.decode())
+        self._data[:] = candidate._data

@@ -13,11 +13,11 @@ typedef struct {
     int whole;            /* the value must be a whole number (a count carried as a Real) */
 } cp_rule;
 
-/* rules.c: what every model of the package applies to a value set through an FMI layer or
- * restored from an FMU state, with the words of runtime/rules.py. */
+/* rules.c: what every model of the package applies to a value set through an FMI layer (or
+ * the pythonfmu slave) or restored from an FMU state, with the words of runtime/rules.py. */
 
-/* A double as Python's repr writes it (1.5e-05, 0.001, -1.0, nan, inf), so that messages
- * read as the pythonfmu FMU's do. */
+/* A double as Python's repr writes it (1.5e-05, 0.001, -1.0, nan, inf), so that the FMUs'
+ * messages read as runtime/rules.py's (the scene's, the build's) do. */
 void cp_python_repr(char *buf, size_t size, double value);
 
 /* NULL if value keeps the rule, or the message refusing it, "<name> = <shown>: must be

@@ -10,7 +10,6 @@
  * through the host's logger. Nothing is allocated after instantiation but what a host asks
  * for (FMU states).
  */
-#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -365,12 +364,11 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
 {
     (void)noSetFMUStatePriorToCurrentPoint;
-    FmiInstance *inst = CHECKED(c, fmi2CompletedIntegratorStep);
-    if (!inst) return fmi2Error;
-    if (!enterEventMode || !terminateSimulation)
-        return REFUSE(inst, "fmi2CompletedIntegratorStep: a pointer is NULL");
-    *enterEventMode = *terminateSimulation = fmi2False;
-    return (fmi2Status)fmi_completed_integrator_step(inst);
+    const FmiStatus status = fmi_completed_integrator_step(
+        CHECKED(c, fmi2CompletedIntegratorStep), "fmi2CompletedIntegratorStep", enterEventMode,
+        terminateSimulation);
+    if (status == FMI_OK) *enterEventMode = *terminateSimulation = fmi2False;
+    return (fmi2Status)status;
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
@@ -446,11 +444,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
 {
     (void)noSetFMUStatePriorToCurrentPoint;
     FmiInstance *inst = CHECKED(c, fmi2DoStep);
-    if (!inst) return fmi2Error;
     const double t = currentCommunicationPoint, dt = communicationStepSize;
-    if (!(fabs(t - inst->machine.time) <= 1e-9 * fmax(1.0, fabs(t))))
-        return REFUSE(inst, "fmi2DoStep: currentCommunicationPoint = %.17g s, but the FMU is "
-                      "at t = %.17g s", t, inst->machine.time);
+    if (fmi_communication_point(inst, "fmi2DoStep", t)) return fmi2Error;
     if (model_do_step(inst->model, t, dt, inst->discarded, sizeof inst->discarded) != MODEL_OK) {
         inst->machine.state = STEP_FAILED;
         return (fmi2Status)fmi_discard(inst, inst->discarded);

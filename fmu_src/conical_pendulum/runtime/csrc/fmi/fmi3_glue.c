@@ -19,7 +19,6 @@
  * derivative are marked EARLY RETURN and ADJOINT below.
  */
 #include <limits.h>
-#include <math.h>
 #include <stdlib.h>
 
 #include "fmi3Functions.h"
@@ -750,12 +749,11 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean noSetFMUState
                                        fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
 {
     (void)noSetFMUStatePriorToCurrentPoint;
-    FmiInstance *inst = CHECKED(c, fmi3CompletedIntegratorStep);
-    if (!inst) return fmi3Error;
-    if (!enterEventMode || !terminateSimulation)
-        return REFUSE(inst, "fmi3CompletedIntegratorStep: a pointer is NULL");
-    *enterEventMode = *terminateSimulation = fmi3False;
-    return (fmi3Status)fmi_completed_integrator_step(inst);
+    const FmiStatus status = fmi_completed_integrator_step(
+        CHECKED(c, fmi3CompletedIntegratorStep), "fmi3CompletedIntegratorStep", enterEventMode,
+        terminateSimulation);
+    if (status == FMI_OK) *enterEventMode = *terminateSimulation = fmi3False;
+    return (fmi3Status)status;
 }
 
 fmi3Status fmi3SetTime(fmi3Instance c, fmi3Float64 time)
@@ -863,9 +861,7 @@ fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 currentCommunicationPoint,
     if (!eventHandlingNeeded || !terminateSimulation || !earlyReturn || !lastSuccessfulTime)
         return REFUSE(inst, "fmi3DoStep: a pointer is NULL");
     const double t = currentCommunicationPoint, dt = communicationStepSize;
-    if (!(fabs(t - inst->machine.time) <= 1e-9 * fmax(1.0, fabs(t))))
-        return REFUSE(inst, "fmi3DoStep: currentCommunicationPoint = %.17g s, but the FMU is "
-                      "at t = %.17g s", t, inst->machine.time);
+    if (fmi_communication_point(inst, "fmi3DoStep", t)) return fmi3Error;
     *eventHandlingNeeded = *terminateSimulation = *earlyReturn = fmi3False;
     double reached = t;
     if (model_do_step_early(inst->model, t, dt, inst->early_return_allowed, &reached,

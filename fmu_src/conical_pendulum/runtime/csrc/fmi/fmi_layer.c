@@ -172,6 +172,14 @@ FmiStatus fmi_exit_initialization(FmiInstance *inst)
     return FMI_OK;
 }
 
+FmiStatus fmi_communication_point(FmiInstance *inst, const char *function, double t)
+{
+    if (!inst) return FMI_ERROR;
+    if (fabs(t - inst->machine.time) <= 1e-9 * fmax(1.0, fabs(t))) return FMI_OK;
+    return fmi_error(inst, "%s: currentCommunicationPoint = %.17g s, but the FMU is at t = %.17g s",
+                     function, t, inst->machine.time);
+}
+
 FmiStatus fmi_get_real(FmiInstance *inst, const char *function, const char *type, unsigned vr,
                        unsigned named, double *value)
 {
@@ -327,9 +335,13 @@ FmiStatus fmi_set_time(FmiInstance *inst, const char *function, double time)
     return FMI_OK;
 }
 
-FmiStatus fmi_completed_integrator_step(FmiInstance *inst)
+FmiStatus fmi_completed_integrator_step(FmiInstance *inst, const char *function,
+                                        const void *enter_event_mode,
+                                        const void *terminate_simulation)
 {
     if (!inst) return FMI_ERROR;
+    if (!enter_event_mode || !terminate_simulation)
+        return fmi_error(inst, "%s: a pointer is NULL", function);
     inst->machine.last_successful_time = inst->machine.time;
     return FMI_OK;
 }

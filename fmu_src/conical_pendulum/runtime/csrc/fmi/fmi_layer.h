@@ -141,6 +141,10 @@ FmiStatus fmi_enter(FmiInstance *inst, int state);
  * Exchange one in event mode. */
 FmiStatus fmi_exit_initialization(FmiInstance *inst);
 
+/* Whether a Co-Simulation step may start at t (DoStep's currentCommunicationPoint): where the
+ * instance is, to 1e-9 relative; refused otherwise, naming both times. */
+FmiStatus fmi_communication_point(FmiInstance *inst, const char *function, double t);
+
 /* The Real (FMI 3.0: Float64, type) variable vr into *value, or refused (FMI_ERROR) or
  * discarded (FMI_DISCARD) as the model says; named: the value reference a refusal names (an
  * FMI 3.0 array's for its element). */
@@ -190,7 +194,11 @@ FmiStatus fmi_get_output_derivative(FmiInstance *inst, const char *function, uns
 /* ---- Model Exchange ------------------------------------------------------------------------ */
 
 FmiStatus fmi_set_time(FmiInstance *inst, const char *function, double time);
-FmiStatus fmi_completed_integrator_step(FmiInstance *inst);
+/* CompletedIntegratorStep: refused if either output pointer (enterEventMode,
+ * terminateSimulation) is NULL; the layer writes false into both on FMI_OK (no events). */
+FmiStatus fmi_completed_integrator_step(FmiInstance *inst, const char *function,
+                                        const void *enter_event_mode,
+                                        const void *terminate_simulation);
 FmiStatus fmi_set_continuous_states(FmiInstance *inst, const char *function, const double x[],
                                     size_t nx);
 FmiStatus fmi_get_continuous_states(FmiInstance *inst, const char *function, double x[], size_t nx);

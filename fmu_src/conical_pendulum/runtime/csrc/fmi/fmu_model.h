@@ -8,12 +8,15 @@
  * rule, never names a model quantity. A model (pendulum_model.c: the n-link conical
  * pendulum) implements these functions and knows nothing of FMI: no fmi2 type, no state
  * machine, no logger; it answers with a ModelStatus and, where something is refused or
- * cannot be computed, a message the FMI layer passes on through the host's logger.
+ * cannot be computed, a message the FMI layer passes on through the host's logger. The
+ * pythonfmu FMU's slave is a third caller: it holds the pendulum's model through the compiled
+ * core (core.pyx's Model: its values, settings, steps and FMU states through these
+ * functions), so every FMU of the package refuses and diagnoses with this code.
  *
  * Messages. Every function that can refuse or fail takes (message, size): on MODEL_REFUSED
  * or MODEL_DISCARD it writes there the whole message (NUL-terminated, cut at size bytes),
- * worded as the pythonfmu FMU words it ("l0 = -1.0: a length must be positive"); the FMI
- * layer prefixes its function's name where it wants one. MODEL_NO_VARIABLE writes nothing:
+ * naming the variable, its value and the rule ("l0 = -1.0: a length must be positive"); the
+ * FMI layer prefixes its function's name where it wants one. MODEL_NO_VARIABLE writes nothing:
  * "value reference 7 is not a Real variable" is the FMI layer's to say, in its standard's
  * words (FMI 3.0 says Float64). The functions named ..._refusal return NULL when the value
  * may be taken, or the message.
