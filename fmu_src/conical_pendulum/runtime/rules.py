@@ -151,12 +151,13 @@ class Setting:
 
 SETTINGS = {
     "rtol": Setting(
-        1e-8,
+        1e-11,
         False,
-        "relative tolerance of the adaptive solvers (replaced by setupExperiment's tolerance when given)",
+        "relative tolerance of the adaptive solvers (setupExperiment's tolerance, when given, "
+        "replaces its start value, not a value set)",
         "1",
     ),
-    "atol": Setting(1e-8, False, "absolute tolerance of the adaptive solvers"),
+    "atol": Setting(1e-11, False, "absolute tolerance of the adaptive solvers"),
     "max_step": Setting(
         0.0,
         False,
@@ -164,7 +165,7 @@ SETTINGS = {
         "step into steps of at most this (0: no limit)",
         "s",
     ),
-    "solver": Setting(1, True, solver_description(SOLVERS)),
+    "solver": Setting(2, True, solver_description(SOLVERS)),
     "max_steps": Setting(100_000, True, "most internal steps per do_step: a step needing more is discarded"),
     "across_points": Setting(
         1,

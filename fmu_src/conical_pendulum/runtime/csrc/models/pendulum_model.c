@@ -21,8 +21,8 @@
 struct ModelData {
     double r[CP_NREAL];           /* Real variables by value reference (fmu_config.h) */
     int solver, max_steps, across_points;  /* the Integer settings */
-    int reserved;                 /* 0 (the padding, named so that a state's bytes are defined) */
-    double tolerance;             /* the experiment's; replaces rtol when > 0 */
+    int rtol_set;                 /* rtol was set: the experiment's tolerance does not replace it */
+    double tolerance;             /* the experiment's; replaces rtol's start value when > 0 */
     double stop_time;             /* the experiment's (INFINITY: none): no step goes beyond */
     cp_flight flight;             /* the integration carried across communication points */
     double work[CP_STEP_WORK_SIZE];  /* scratch of a step */
@@ -157,7 +157,7 @@ void model_set_stop_time(ModelData *m, double stop_time)
 
 void model_initialize(ModelData *m)
 {
-    if (m->tolerance > 0) m->r[CP_VR_RTOL] = m->tolerance;
+    if (m->tolerance > 0 && !m->rtol_set) m->r[CP_VR_RTOL] = m->tolerance;
     invalidate(m);
     update_outputs(m);
 }
@@ -193,6 +193,7 @@ void model_set_real(ModelData *m, unsigned vr, double value)
 {
     if (m->r[vr] != value) invalidate(m);
     if (!is_input(vr)) m->flight.live = 0;  /* an input of the same bits changes nothing */
+    if (vr == CP_VR_RTOL) m->rtol_set = 1;
     m->r[vr] = value;
 }
 
@@ -505,7 +506,7 @@ static const char *flight_invalid(const ModelData *m, char *message, size_t size
 const char *model_invalid(const ModelData *m, char *message, size_t size)
 {
     const struct { const char *name; int value; } flags[] = {
-        {"live", m->flight.live}, {"fsal", m->flight.step.fsal},
+        {"rtol_set", m->rtol_set}, {"live", m->flight.live}, {"fsal", m->flight.step.fsal},
         {"dense", m->flight.step.dense}, {"dx_valid", m->dx_valid},
         {"outputs_valid", m->outputs_valid}};
     for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
