@@ -41,7 +41,7 @@ FMUS = [
     pytest.param(("native", 3), id="native-fmi3"),
     pytest.param(("pythonfmu", 2), id="pythonfmu", marks=UNTIL_I38CORE),
 ]
-SAVED_FMUS = [  # the old behaviour carries its solver memory in a state too: no mark needed
+EVERY_FMU = [  # what ending each integration on the point meets too: no mark needed
     pytest.param(("native", 2), id="native-fmi2"),
     pytest.param(("native", 3), id="native-fmi3"),
     pytest.param(("pythonfmu", 2), id="pythonfmu"),
@@ -187,20 +187,31 @@ def test_an_input_changed_at_one_point_restarts_the_integration_there(built_fmu,
     assert np.abs(states[-1] - before[-1]).max() > 1e-2
 
 
-@pytest.mark.parametrize("kind", FMUS)
+@pytest.mark.parametrize("kind", EVERY_FMU)
 @pytest.mark.parametrize("interval", [1 / 60, 1e-3])
-def test_inputs_changed_at_every_point_cost_at_most_one_step_a_point(built_fmu, kind, interval):
-    """The natural step is longer than the points: each restart takes one step past the next
-    point (x' at the new input, the step, DOP853's three interpolant stages), never more."""
-    steps = 120
-    fmu = open_fmu(built_fmu, kind, COUPLED, {**START, **settings(2, 1e-8)}, None)
-    _, rhs = run(
-        fmu, ["n_steps", "n_rejected"], interval, steps, lambda f, k: f.set({"a_pivot_x": 0.01 * (k % 7)})
-    )
-    accepted, rejected = fmu.get("n_steps", "n_rejected")
-    fmu.close()
-    assert accepted + rejected <= steps
-    assert rhs[-1] <= steps * (1 + 12 + 3) + 2
+def test_inputs_changed_at_every_point_cost_one_step_a_point(built_fmu, coupled_core, kind, interval):
+    """The natural step is longer than the points: a restart for new inputs ends its first
+    integration on the next point, so inputs new at every point cost one step a point (x' at
+    the new input and the step, no interpolant), what ending every integration on the point
+    costs, but for the first step, which starts the integration across the points."""
+    steps, found = 120, {}
+    for across in (1, 0):
+        fmu = open_fmu(built_fmu, kind, COUPLED, {**START, **settings(2, 1e-8, across)}, None)
+        found[across] = run(
+            fmu,
+            [*coupled_core.STATE_NAMES, "n_steps", "n_rejected"],
+            interval,
+            steps,
+            lambda f, k: f.set({"a_pivot_x": 0.01 * (k % 7 + 1)}),
+        )
+        fmu.close()
+    (values, rhs), (on_points, on_points_rhs) = found[1], found[0]
+    accepted, rejected = values[-1, -2:]
+    assert accepted + rejected <= steps + 1
+    assert np.all(np.diff(rhs)[1:] == 1 + 12)
+    assert np.all(np.diff(on_points_rhs)[1:] == 1 + 12)
+    states = len(coupled_core.STATE_NAMES)
+    np.testing.assert_allclose(values[:, :states], on_points[:, :states], rtol=0, atol=1e-6)
 
 
 @pytest.mark.parametrize("kind", [FMUS[0], FMUS[2]])  # FMI 3.0 has no input derivatives
@@ -248,7 +259,7 @@ print(json.dumps(seen))
 """
 
 
-@pytest.mark.parametrize("kind", SAVED_FMUS)
+@pytest.mark.parametrize("kind", EVERY_FMU)
 @pytest.mark.parametrize("solver", [1, 2])
 def test_a_state_saved_inside_a_step_continues_bit_for_bit_in_another_process(
     built_fmu, core, kind, solver, tmp_path

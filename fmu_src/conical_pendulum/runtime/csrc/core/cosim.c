@@ -66,17 +66,22 @@ void cp_flight_inputs(const cp_flight *f, double t, double *p, double (*rates)[2
     }
 }
 
-/* Whether the step in flight may go on from t: live, at the point it left, with the inputs
- * and their rates bit for bit those its polynomials give there. */
+/* Whether the step in flight may go on from t: live, at the point it left (else RESTART),
+ * with the inputs and their rates bit for bit those its polynomials give there (else
+ * NEW_INPUTS). */
+enum { CONTINUE, RESTART, NEW_INPUTS };
+
 static int continues(const cp_flight *f, const cp_settings *s, const double *p,
                      const double (*rates)[2], double t)
 {
-    if (!f->live || s->method == CP_RK4 || t != f->t_point) return 0;
+    if (!f->live || s->method == CP_RK4 || t != f->t_point) return RESTART;
     double p_at[CP_NPARAM], rates_at[CP_NINPUT + 1][2];
     memcpy(p_at, p, CP_NPARAM * sizeof(double));
     cp_flight_inputs(f, t, p_at, rates_at);
     return memcmp(p_at + INPUT0, p + INPUT0, CP_NINPUT * sizeof(double)) == 0
-           && memcmp(rates_at, rates, CP_NINPUT * sizeof rates_at[0]) == 0;
+                   && memcmp(rates_at, rates, CP_NINPUT * sizeof rates_at[0]) == 0
+               ? CONTINUE
+               : NEW_INPUTS;
 }
 
 /* A new integration from (t, x), the inputs' polynomials starting there, the proposed step
@@ -96,10 +101,11 @@ static void restart(cp_flight *f, const double *p, const double (*rates)[2], dou
 }
 
 /* The integration of trial from the point t to t + dt: x_new at the time *t_reached it got to
- * (t + dt on success; on failure with early return, the last accepted step or substep). */
+ * (t + dt on success; on failure with early return, the last accepted step or substep). With
+ * on_point (or without across_points) it ends on t + dt. */
 static int integrate(const cp_settings *s, cp_flight *trial, const cp_system *system,
-                     const double *x, double t, double dt, double t_stop, double *work,
-                     cp_stats *counts, double *x_new, double *t_reached, int early)
+                     const double *x, double t, double dt, double t_stop, int on_point,
+                     double *work, cp_stats *counts, double *x_new, double *t_reached, int early)
 {
     int status = cp_unworkable(s->method, t, dt, s->max_step, s->max_steps);
     *t_reached = t;
@@ -109,7 +115,8 @@ static int integrate(const cp_settings *s, cp_flight *trial, const cp_system *sy
         return cp_rk4(system, t, x_new, dt, s->max_step, s->max_steps, work, counts,
                       early ? t_reached : NULL);
     }
-    const double t_target = t + dt, t_limit = s->across_points ? fmax(t_stop, t_target) : t_target;
+    const double t_target = t + dt;
+    const double t_limit = s->across_points && !on_point ? fmax(t_stop, t_target) : t_target;
     long long attempts = 0;
     status = cp_cover(s->method, system, &trial->step, &trial->rows[0][0], t_target, t_limit,
                       s->rtol, s->atol, s->max_step, s->max_steps, &attempts, work, counts);
@@ -130,7 +137,8 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
                      double *work, double stats[CP_NSTAT], cp_failure *failure, double *reached)
 {
     cp_flight trial = *flight;  /* taken only where the step gets somewhere */
-    if (!continues(&trial, s, p, input_rates, t)) restart(&trial, p, input_rates, t, x);
+    const int why = continues(&trial, s, p, input_rates, t);
+    if (why != CONTINUE) restart(&trial, p, input_rates, t, x);
     double p0[CP_NPARAM], rates0[CP_NINPUT + 1][2];
     const int moving = polynomials(&trial, p, p0, rates0);
     interpolated in = {{p0, 1.0, -1}, p0, (const double(*)[2])rates0, trial.t_inputs, {0}};
@@ -142,8 +150,8 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
     double t_reached = t, p_at[CP_NPARAM], rates_at[CP_NINPUT + 1][2];
     int status = CP_BAD_STEP;
     if (dt >= 0 && dt < INFINITY)
-        status = integrate(s, &trial, &system, x, t, dt, t_stop, work, &counts, x_new, &t_reached,
-                           reached != NULL);
+        status = integrate(s, &trial, &system, x, t, dt, t_stop, why == NEW_INPUTS, work, &counts,
+                           x_new, &t_reached, reached != NULL);
     stats[CP_STAT_N_RHS] += (double)counts.nfev;
     stats[CP_STAT_N_STEPS] += (double)counts.naccept;
     stats[CP_STAT_N_REJECTED] += (double)counts.nreject;

@@ -29,7 +29,10 @@ typedef struct {
  * at the point, keeping the proposed step size) when what it assumed no longer holds: the
  * inputs at the point, or their derivatives, are not bit for bit those of the polynomials it
  * integrated with (cp_flight_inputs), the point is another, or the caller dropped it (live
- * 0: a parameter, state or setting set, an early return). RK4 restarts at every point. */
+ * 0: a parameter, state or setting set, an early return). A restart for new inputs ends its
+ * first integration on the next point, so that inputs set anew at every point (a coupled
+ * co-simulation) cost what ending every integration on the point costs, with no interpolant
+ * to pay for. RK4 restarts at every point. */
 typedef struct {
     int live;           /* 1: the next step may continue the integration */
     int reserved;       /* 0 (the padding, named so that a state's bytes are all defined) */

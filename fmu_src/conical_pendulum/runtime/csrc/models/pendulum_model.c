@@ -89,13 +89,19 @@ static const char *real_rule_refusal(unsigned vr, double value, char *message, s
                            cp_real_what[vr], message, size);
 }
 
-/* What was computed from the values is forgotten, and the integration restarts. */
-static void invalidate(ModelData *m)
+/* What was computed from the values is forgotten. */
+static void forget_values(ModelData *m)
 {
-    m->flight.live = 0;
     m->dx_valid = 0;
     m->outputs_valid = 0;
     m->rates_valid = 0;
+}
+
+/* ... and the integration restarts. */
+static void invalidate(ModelData *m)
+{
+    forget_values(m);
+    m->flight.live = 0;
 }
 
 static void update_outputs(ModelData *m)
@@ -191,8 +197,9 @@ ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int 
 
 void model_set_real(ModelData *m, unsigned vr, double value)
 {
-    if (m->r[vr] != value) invalidate(m);
-    if (!is_input(vr)) m->flight.live = 0;  /* an input of the same bits changes nothing */
+    if (m->r[vr] != value) forget_values(m);
+    /* an input: the step decides (cosim.h), an input of the same bits changing nothing */
+    if (!is_input(vr)) m->flight.live = 0;
     if (vr == CP_VR_RTOL) m->rtol_set = 1;
     m->r[vr] = value;
 }
