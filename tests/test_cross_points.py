@@ -260,7 +260,7 @@ print(json.dumps(seen))
 
 
 @pytest.mark.parametrize("kind", EVERY_FMU)
-@pytest.mark.parametrize("solver", [1, 2])
+@pytest.mark.parametrize("solver", [0, 1, 2])
 def test_a_state_saved_inside_a_step_continues_bit_for_bit_in_another_process(
     built_fmu, core, kind, solver, tmp_path
 ):

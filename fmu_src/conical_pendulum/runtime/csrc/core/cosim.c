@@ -112,8 +112,10 @@ static int integrate(const cp_settings *s, cp_flight *trial, const cp_system *sy
     if (status) return status;
     if (s->method == CP_RK4) {
         memcpy(x_new, x, CP_NSTATE * sizeof(double));
-        return cp_rk4(system, t, x_new, dt, s->max_step, s->max_steps, work, counts,
-                      early ? t_reached : NULL);
+        status = cp_rk4(system, t, x_new, dt, s->max_step, s->max_steps, work, counts,
+                        early ? t_reached : NULL);
+        if (status == CP_OK) *t_reached = t + dt;
+        return status;
     }
     const double t_target = t + dt;
     const double t_limit = s->across_points && !on_point ? fmax(t_stop, t_target) : t_target;
@@ -164,7 +166,8 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
             memcpy(x, x_new, CP_NSTATE * sizeof(double));
             memcpy(y, y_new, CP_NOUTPUT * sizeof(double));
             trial.t_point = t_reached;
-            trial.live &= status == CP_OK;  /* an early return restarts where it stopped */
+            /* an early return restarts where it stopped; RK4 at every point */
+            trial.live &= status == CP_OK && s->method != CP_RK4;
             *flight = trial;
         } else {  /* the pivot force where M is singular: cp_rhs says where */
             int found = cp_rhs(&model_at, x_new, work);
