@@ -148,7 +148,7 @@ def test_across_points_off_ends_every_integration_on_the_point(built_fmu, core, 
         np.testing.assert_array_equal(states[k + 1], values[: core.NSTATE])
 
 
-@pytest.mark.parametrize("kind", FMUS)
+@pytest.mark.parametrize("kind", EVERY_FMU)
 def test_rk4_stays_fixed_step(built_fmu, kind):
     """RK4 ends every step on the point whatever across_points says: 4 right-hand sides a point."""
     fmu = open_fmu(built_fmu, kind, SEED, {**START, "solver": 0, "across_points": 1}, 1.0)
