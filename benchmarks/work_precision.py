@@ -1,6 +1,6 @@
 """Work against precision: every FMU solver and the native alternatives, in one run.
 
-    python benchmarks/work_precision.py [--quick]
+    python benchmarks/work_precision.py [--quick] [--points-only]
 
 Scenarios: "seed" (3 links, the seed's start, 10 s, 601 samples) and "hard" (5 links,
 angles up to 120 degrees and spinning, 10 s). For each solver and setting: the largest
@@ -9,9 +9,22 @@ against a reference (scipy DOP853 at 1e-13, whose own error is estimated against
 1e-12), the wall time (median of repeats), right-hand-side evaluations, and the
 relative energy drift over 1000 s.
 
-The FMU's solvers are driven exactly as the FMU drives them (the compiled core's
-Stepper, one call per 1/60 s communication step), without the FMI interface; one
-row measures the FMU itself through fmpy.simulate_fmu at its default settings.
+The FMU's solvers ending every integration on the point (across_points = 0) are driven
+exactly as the FMU drives them (the compiled core's Stepper, one call per 1/60 s
+communication step), without the FMI interface; one row measures the FMU itself through
+fmpy.simulate_fmu at its default settings.
+
+Across communication points (issue 37): the seed's native FMU (FMI 2.0, fmpy's low-level
+API, stop time declared) at 60 Hz and at 1 ms, RK45 and DOP853 at rtol = atol from 1e-4
+to 1e-12 (with 3e-11 and 1e-11, around the default), across_points 1 and 0, beside the
+core's uninterrupted dense-output run of the same method and tolerance on the same points
+(core.integrate_grid): right-hand sides, the ratio to the uninterrupted run's, the largest
+angle error over the points against the reference (scipy DOP853 at 1e-13 on the same
+points), and the seconds of the FMU's run (one run; fmpy's Python loop included, which
+dominates at 1 ms). Writes benchmarks/results/work_precision_points.csv. What a restart
+costs (an input set to a new value at every point, the coupled seed):
+benchmarks/results/work_precision_restarts.csv.
+
 PyDy's pipeline of the seed integrates the published (pydy-example) equations, so its
 error is taken against the reference of that model.
 Writes benchmarks/results/work_precision.csv and work_precision_<scenario>.png.
@@ -103,7 +116,14 @@ def energy_drift(core, p, states):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true", help="fewer settings, no 1000 s runs")
+    parser.add_argument(
+        "--points-only", action="store_true", help="only the runs across communication points"
+    )
     args = parser.parse_args()
+    if args.points_only:
+        write_rows("work_precision_points", across_points_rows(args.quick))
+        write_rows("work_precision_restarts", restart_rows())
+        return
     tolerances = [1e-4, 1e-6, 1e-8, 1e-10] if not args.quick else [1e-6, 1e-9]
     long_horizon = 0.0 if args.quick else 1000.0
     rows = []
@@ -197,6 +217,136 @@ def main():
             rows.append(fmu_row(scene, core, p, reference, ref_outputs, bob_index))
     write_rows("work_precision", rows)
     plot(rows)
+    write_rows("work_precision_points", across_points_rows(args.quick))
+    write_rows("work_precision_restarts", restart_rows())
+
+
+def fmu_points_run(path, solver, tol, across, interval, steps, names, push=None):
+    """The native FMU from 0 through steps points: the states at every point, n_rhs, seconds."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzipped = extract(str(path))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier)
+    fmu.instantiate()
+    fmu.setInteger([vr["solver"], vr["across_points"]], [solver, across])
+    fmu.setReal([vr["rtol"], vr["atol"]], [tol, tol])
+    times = list(_added(interval, steps))
+    fmu.setupExperiment(startTime=0.0, stopTime=times[-1])
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    refs = [vr[n] for n in names]
+    start = time.perf_counter()
+    rows = [fmu.getReal(refs)]
+    for k in range(steps):
+        if push:
+            fmu.setReal([vr[push]], [0.01 * (k % 7)])  # a new value at every point
+        fmu.doStep(times[k], interval)
+        rows.append(fmu.getReal(refs))
+    seconds = time.perf_counter() - start
+    nfev = int(fmu.getReal([vr["n_rhs"]])[0])
+    fmu.terminate()
+    fmu.freeInstance()
+    return np.array(times), np.array(rows), nfev, seconds
+
+
+def across_points_rows(quick):
+    """The seed's native FMU at 60 Hz and 1 ms, across points and on them, beside the core's
+    uninterrupted run of the same method and tolerance."""
+    import tempfile
+
+    from conical_pendulum.builder.fmu import build_fmu
+
+    scene = Scene.uniform(3)
+    core = load_core(scene)
+    p, x0 = np.array(scene.parameters()), np.array(scene.initial_state())
+    tolerances = [1e-4, 1e-6, 1e-8, 1e-10, 3e-11, 1e-11, 1e-12] if not quick else [1e-6, 1e-10]
+    rows = []
+    print("\nseed, the native FMU across communication points (n_rhs, ratio to the uninterrupted run)")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = build_fmu(scene, Path(tmp) / "ConicalPendulum.fmu", backend="native").path
+        for label, interval, steps in (("60 Hz", STEP, 600), ("1 ms", 1e-3, 10_000)):
+            times = np.array(list(_added(interval, steps)))
+            sol = solve_ivp(
+                lambda t, x: core.rhs(x, p),
+                (0.0, times[-1]),
+                x0,
+                "DOP853",
+                t_eval=times,
+                rtol=1e-13,
+                atol=1e-13,
+            )
+            reference = sol.y.T
+            for method, solver in (("rk45", 1), ("dop853", 2)):
+                for tol in tolerances:
+                    grid, grid_nfev = core.integrate_grid(x0, p, times, tol, tol, method=method)
+                    grid_error = float(np.abs(grid[:, :6] - reference[:, :6]).max())
+                    found = {"points": label, "solver": method, "rtol": tol, "core_nfev": grid_nfev}
+                    found["core_angle_error"] = grid_error
+                    for across in (1, 0):
+                        _, states, nfev, seconds = fmu_points_run(
+                            path, solver, tol, across, interval, steps, scene.state_names()
+                        )
+                        key = "across" if across else "on_points"
+                        found[f"{key}_nfev"] = nfev
+                        found[f"{key}_ratio"] = nfev / grid_nfev
+                        found[f"{key}_angle_error"] = float(np.abs(states[:, :6] - reference[:, :6]).max())
+                        found[f"{key}_seconds"] = seconds
+                    rows.append(found)
+                    print(
+                        f"  {label:>5} {method:<6} {tol:7.0e}  core {grid_nfev:>7} ({grid_error:7.1e})  "
+                        f"across {found['across_nfev']:>7} x{found['across_ratio']:.2f} "
+                        f"({found['across_angle_error']:7.1e}, {found['across_seconds']:.2f} s)  "
+                        f"on points {found['on_points_nfev']:>7} x{found['on_points_ratio']:.1f} "
+                        f"({found['on_points_angle_error']:7.1e}, {found['on_points_seconds']:.2f} s)",
+                        flush=True,
+                    )
+    return rows
+
+
+def restart_rows():
+    """What a restart costs: the coupled seed (a_pivot inputs), 10 s, its native FMU with
+    a_pivot_x set to a new value at every point or never, across the points and on them."""
+    import tempfile
+
+    from conical_pendulum.builder.fmu import build_fmu
+
+    scene = Scene.uniform(3, coupling=True)
+    rows = []
+    print("\ncoupled seed, a_pivot_x new at every point or never: n_rhs, accepted steps")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = build_fmu(scene, Path(tmp) / "ConicalPendulum.fmu", backend="native").path
+        for label, interval, steps in (("60 Hz", STEP, 600), ("1 ms", 1e-3, 10_000)):
+            for method, solver in (("rk45", 1), ("dop853", 2)):
+                for tol in (1e-6, 1e-8, 1e-11):
+                    found = {"points": label, "solver": method, "rtol": tol}
+                    for across in (1, 0):
+                        for push in (None, "a_pivot_x"):
+                            key = ("across" if across else "on_points") + ("_changing" if push else "_held")
+                            _, states, nfev, _ = fmu_points_run(
+                                path, solver, tol, across, interval, steps, ["n_steps"], push
+                            )
+                            found[f"{key}_nfev"], found[f"{key}_steps"] = nfev, int(states[-1][0])
+                    rows.append(found)
+                    print(
+                        f"  {label:>5} {method:<6} {tol:7.0e}  across: held {found['across_held_nfev']:>7} "
+                        f"changing {found['across_changing_nfev']:>7} ({found['across_changing_steps']} steps)  "
+                        f"on points: held {found['on_points_held_nfev']:>7} changing "
+                        f"{found['on_points_changing_nfev']:>7}",
+                        flush=True,
+                    )
+    return rows
+
+
+def _added(interval, steps):
+    """The communication points as a master reaches them: one addition per step."""
+    t = 0.0
+    yield t
+    for _ in range(steps):
+        t += interval
+        yield t
 
 
 def seed_pipeline_rows(times, tolerances, long_horizon):

@@ -62,8 +62,8 @@ class Instance:
         if initialize:
             self.initialize()
 
-    def initialize(self):
-        self.fmu.setupExperiment(startTime=0.0)
+    def initialize(self, stop_time=None):
+        self.fmu.setupExperiment(startTime=0.0, stopTime=stop_time)
         self.fmu.enterInitializationMode()
         self.fmu.exitInitializationMode()
 
@@ -162,8 +162,8 @@ class Instance3:
         if initialize:
             self.initialize()
 
-    def initialize(self):
-        self.fmu.enterInitializationMode(startTime=0.0)
+    def initialize(self, stop_time=None):
+        self.fmu.enterInitializationMode(startTime=0.0, stopTime=stop_time)
         self.fmu.exitInitializationMode()
 
     def set(self, values):

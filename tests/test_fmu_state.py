@@ -26,7 +26,7 @@ from fmu_helpers import Instance
 
 DISCARD, ERROR, FATAL = 2, 3, 4
 STEP = 1 / 60
-STEPS_BEFORE = 5  # communication steps before the state is taken: fsal and h in use
+STEPS_BEFORE = 5  # communication steps before the state is taken: a step in flight
 FUZZ_CASES = 500  # per FMU
 STEP_COMPLETE = 4  # the native FMU's state word in stepComplete (fmi2_glue.c)
 
@@ -86,19 +86,29 @@ class NativeState:
     def __init__(self, instance, data):
         reals = real_names(instance)
         n_state = sum(v.causality == "output" and v.initial == "exact" for v in instance.md.modelVariables)
+        n_input = sum(v.causality == "input" for v in instance.md.modelVariables)
         self.reals = {name: k for k, name in enumerate(reals)}
         size = self.body_size(data)
         self.header = len(data) - size
         self.data = bytes(data)
         after_r = self.MODEL + 8 * len(reals)
+        flight = after_r + 32  # cosim.h's cp_flight, its cp_step after live, reserved, t_point
         tail = size - 8 * n_state - 8
         self.offsets = {name: at for name, at, _ in self.OWN} | {
             "solver": after_r,
             "max_steps": after_r + 4,
-            "tolerance": after_r + 8,
-            "h": after_r + 16,
-            "fsal": after_r + 24,
-            "work": after_r + 32,
+            "across_points": after_r + 8,
+            "tolerance": after_r + 16,
+            "stop_time": after_r + 24,
+            "live": flight,
+            "t_point": flight + 8,
+            "t0": flight + 16,
+            "t1": flight + 24,
+            "h": flight + 32,
+            "fsal": flight + 40,
+            "dense": flight + 44,
+            "rows": flight + 48,
+            "work": flight + 48 + 8 * (10 * n_state + 1 + 3 * (n_input + 1)),
             "dx": tail,
             "dx_valid": tail + 8 * n_state,
             "outputs_valid": tail + 8 * n_state + 4,
@@ -106,16 +116,19 @@ class NativeState:
         self.fields = {name: kind for name, _, kind in self.OWN} | {
             "solver": "i",
             "max_steps": "i",
+            "across_points": "i",
             "tolerance": "d",
+            "live": "i",
             "h": "d",
             "fsal": "i",
+            "dense": "i",
             "dx_valid": "i",
             "outputs_valid": "i",
         }
         work = (tail - self.offsets["work"]) / 8
         assert work == int(work) and work >= 32 * n_state, "ModelData's layout is not the one assumed"
-        # the meaningful part: all but the solvers' scratch after the carried derivative
-        self.meaningful = np.r_[0 : self.offsets["work"] + 8 * n_state, tail:size]
+        # the meaningful part: all but the solvers' scratch
+        self.meaningful = np.r_[0 : self.offsets["work"], tail:size]
         reals_now, integers_now = values(instance)  # taken where the state was
         assert (
             [self.get(name) for name in reals],

@@ -58,12 +58,28 @@ def model_description(described: Description) -> bytes:
     categories = ET.SubElement(root, "LogCategories")
     for name, text in LOG_CATEGORIES.items():
         ET.SubElement(categories, "Category", name=name, description=text)
-    ET.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime="10.0", stepSize=repr(model.step_size))
+    default_experiment(root, described)
     index = {v.name: str(v.value_reference + 1) for v in records}  # its place in ModelVariables
     _model_variables(ET.SubElement(root, "ModelVariables"), records, index)
     _model_structure(ET.SubElement(root, "ModelStructure"), records, index)
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def default_experiment(root: ET.Element, described: Description) -> None:
+    """The DefaultExperiment: 10 s at the model's step size, and, where the model has a relative
+    tolerance (rtol), its start as the tolerance: what a Model Exchange host integrates with,
+    and what a co-simulation master passing it on leaves the FMU's own tolerance at."""
+    rtol = [v.start for v in described.records if v.name == "rtol"]
+    tolerance = {"tolerance": repr(float(rtol[0]))} if rtol else {}
+    ET.SubElement(
+        root,
+        "DefaultExperiment",
+        startTime="0.0",
+        stopTime="10.0",
+        stepSize=repr(described.model.step_size),
+        **tolerance,
+    )
 
 
 def _model_variables(variables: ET.Element, records: list[Variable], index: dict[str, str]) -> None:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 from ..runtime.rules import RULES
 from . import c_literals as c
+from .fmi2 import default_experiment
 from .native_model import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
 from .units import TIME, attributes, declared, enumerations, unit_definitions
 from .variables import Variable, describe, model_structure
@@ -167,7 +168,7 @@ def model_description(described: Description) -> bytes:
     categories = ET.SubElement(root, "LogCategories")
     for category, text in LOG_CATEGORIES.items():
         ET.SubElement(categories, "Category", name=category, description=text)
-    ET.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime="10.0", stepSize=repr(model.step_size))
+    default_experiment(root, described)
     variables_ = layout(records)
     vr = {m.name: str(v.value_reference) for v in variables_ for m in v.members}  # an element: its array's
     _model_variables(ET.SubElement(root, "ModelVariables"), described, variables_, vr)

@@ -37,6 +37,8 @@ def _config(data: dict, records: list[Variable]) -> list[str]:
                 c.define("CP_MAX_STEPS_START", data["settings"]["max_steps"]),
                 c.define("CP_SOLVER_RULE", RULE_INDEX[solver.rule]),
                 c.define("CP_MAX_STEPS_RULE", RULE_INDEX[rule_of("max_steps")[0]]),
+                c.define("CP_ACROSS_POINTS_START", data["settings"]["across_points"]),
+                c.define("CP_ACROSS_POINTS_RULE", RULE_INDEX[rule_of("across_points")[0]]),
                 c.define("CP_STEP_RULE", RULE_INDEX[step_rule]),
                 c.define("CP_STEP_WHAT", c.string(step_what)),
             ]

@@ -89,6 +89,7 @@ RULES = {
         items=tuple(SOLVER_TEXTS.items())[: len(NATIVE_SOLVERS)],
         type_name="Solver",
     ),
+    "switch": Rule("choose 0 (off) or 1 (on)", "0 or 1", low=0.0, high=2.0),
     "hold-order": Rule(
         "choose 0 (held over the step) or 1 (extrapolated linearly)", "0 or 1", low=0.0, high=2.0
     ),
@@ -118,6 +119,7 @@ QUANTITIES = {
     "atol": ("positive", "a tolerance"),
     "max_step": ("non-negative", "the largest internal step"),
     "max_steps": ("count", ""),
+    "across_points": ("switch", ""),
     "solver": ("solver", ""),
     "m_cart": ("positive", "a mass"),
     "k_cart": ("non-negative", "a stiffness"),
@@ -150,12 +152,13 @@ class Setting:
 
 SETTINGS = {
     "rtol": Setting(
-        1e-8,
+        1e-11,
         False,
-        "relative tolerance of the adaptive solvers (replaced by setupExperiment's tolerance when given)",
+        "relative tolerance of the adaptive solvers (setupExperiment's tolerance, when given, "
+        "replaces its start value, not a value set)",
         "1",
     ),
-    "atol": Setting(1e-8, False, "absolute tolerance of the adaptive solvers"),
+    "atol": Setting(1e-11, False, "absolute tolerance of the adaptive solvers"),
     "max_step": Setting(
         0.0,
         False,
@@ -163,8 +166,15 @@ SETTINGS = {
         "step into steps of at most this (0: no limit)",
         "s",
     ),
-    "solver": Setting(1, True, solver_description(SOLVERS)),
+    "solver": Setting(2, True, solver_description(SOLVERS)),
     "max_steps": Setting(100_000, True, "most internal steps per do_step: a step needing more is discarded"),
+    "across_points": Setting(
+        1,
+        True,
+        "1: RK45 and DOP853 step across communication points with their own step size and answer "
+        "each point from the step's dense output, restarting there only when an input, state or "
+        "setting changes; 0: every do_step ends its integration on the point. RK4 always does",
+    ),
 }
 
 STATISTICS = {

@@ -26,9 +26,9 @@ cdef extern from "solvers.h":
     int CP_RK4, CP_RK45, CP_DOP853
     int CP_WORK_SIZE(int dim)
     int cp_unworkable(int method, double t, double dt, double max_step, long long max_steps)
-    int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double *out,
-                       double rtol, double atol, double max_step, long long max_steps,
-                       double *work, cp_stats *stats) noexcept nogil
+    int cp_dense_grid(int method, const cp_system *sys, const double *times, int ntimes,
+                      double *out, double rtol, double atol, double max_step,
+                      long long max_steps, double *work, cp_stats *stats) noexcept nogil
 
 cdef extern from "dynamics.h":
     int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT
@@ -224,12 +224,16 @@ def outputs(x_in, p_in):
 
 
 def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
-                   double max_step=0.0, long long max_steps=10**7):
-    """States at every time, by the core's DOP853 with dense output: (array, nfev).
+                   double max_step=0.0, long long max_steps=10**7, str method="dop853"):
+    """States at every time, by the core's DOP853 (or method="rk45") with dense output:
+    (array, nfev).
 
     One integration over the whole grid, as solve_ivp(method="DOP853", t_eval=times)
     does, with no Python per step. Raises CoreError or RuntimeError on failure.
     """
+    if method not in ("rk45", "dop853"):
+        raise ValueError(f"method: 'rk45' or 'dop853', not {method!r}")
+    cdef int solver = METHODS[method]
     cdef const double[::1] p = _vector(p_in, CP_NPARAM, "parameters")
     cdef const double[::1] times = np.ascontiguousarray(times_in, dtype=float)
     if times.shape[0] < 1 or np.any(np.diff(times) < 0):
@@ -244,12 +248,12 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     _system(&system, &model, &p[0], &stats)
     cdef int status
     with nogil:
-        status = cp_dop853_grid(&system, &times[0], times.shape[0], &out[0, 0], rtol, atol,
-                                max_step, max_steps, &work[0], &stats)
+        status = cp_dense_grid(solver, &system, &times[0], times.shape[0], &out[0, 0], rtol,
+                               atol, max_step, max_steps, &work[0], &stats)
     if status >= CP_SINGULAR:
         raise CoreError(status, model.bad_dof, model.pivot_ratio)
     if status:
-        raise RuntimeError(f"DOP853 failed: {STATUS[status]}")
+        raise RuntimeError(f"{method.upper()} failed: {STATUS[status]}")
     return result, stats.nfev
 
 

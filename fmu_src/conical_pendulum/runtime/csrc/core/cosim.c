@@ -5,18 +5,13 @@
 
 #include "dynamics.h"
 
-int cp_cosim_step(const cp_settings *s, const double *p, double *x, double *y, double t,
-                  double dt, double *h, double *work, int *fsal, double stats[CP_NSTAT],
-                  cp_failure *failure)
-{
-    return cp_cosim_step_early(s, p, x, y, t, dt, h, work, fsal, stats, failure, NULL, NULL);
-}
+#define INPUT0 (CP_NPARAM - CP_NINPUT)  /* the inputs end p (model.h) */
 
 void cp_input_at(const double *p, const double (*rates)[2], double tau, double *p_at)
 {
     memcpy(p_at, p, CP_NPARAM * sizeof(double));
     for (int k = 0; k < CP_NINPUT; k++) {
-        const int i = CP_NPARAM - CP_NINPUT + k;  /* the inputs end p (model.h) */
+        const int i = INPUT0 + k;
         p_at[i] = p[i] + tau * (rates[k][0] + 0.5 * tau * rates[k][1]);
     }
 }
@@ -43,47 +38,173 @@ static int interpolated_rhs(void *ctx, double t, const double *x, double *dx)
     return cp_rhs(&in->model, x, dx);
 }
 
-int cp_cosim_step_early(const cp_settings *s, const double *p, double *x, double *y, double t,
-                        double dt, double *h, double *work, int *fsal, double stats[CP_NSTAT],
-                        cp_failure *failure, double *reached, const double (*input_rates)[2])
+/* The polynomials' start: p with the inputs where the flight's integration started, and
+ * their rates there. Whether any input moves. */
+static int polynomials(const cp_flight *f, const double *p, double *p0, double (*rates)[2])
 {
-    interpolated in = {{p, 1.0, -1}, p, input_rates, t, {0}};
-    cp_model *const model_at = &in.model;  /* its p: the inputs where the state is */
-    if (input_rates && CP_NINPUT) in.model.p = in.p_at;
-    else input_rates = NULL;
-    cp_system system = {CP_NSTATE, input_rates ? interpolated_rhs : cp_held_rhs,
-                        input_rates ? (void *)&in : (void *)model_at};
-    cp_stats counts = {0, 0, 0};
-    double *x_start = work + CP_WORK_SIZE(CP_NSTATE), *y_new = x_start + CP_NSTATE;
-    double t_reached = t;
-    int status = CP_BAD_STEP;
-    if (dt >= 0 && dt < INFINITY) {
-        memcpy(x_start, x, CP_NSTATE * sizeof(double));
-        status = cp_integrate(s->method, &system, t, x, dt, s->rtol, s->atol, s->max_step,
-                              s->max_steps, h, work, fsal, &counts, reached ? &t_reached : NULL);
+    int moving = 0;
+    memcpy(p0, p, CP_NPARAM * sizeof(double));
+    for (int k = 0; k < CP_NINPUT; k++) {
+        p0[INPUT0 + k] = f->inputs[k][0];
+        rates[k][0] = f->inputs[k][1];
+        rates[k][1] = f->inputs[k][2];
+        moving |= rates[k][0] != 0.0 || rates[k][1] != 0.0;
     }
+    return moving;
+}
+
+void cp_flight_inputs(const cp_flight *f, double t, double *p, double (*rates)[2])
+{
+    double p0[CP_NPARAM], p_at[CP_NPARAM], rates0[CP_NINPUT + 1][2];
+    const double tau = t - f->t_inputs;
+    polynomials(f, p, p0, rates0);
+    cp_input_at(p0, (const double(*)[2])rates0, tau, p_at);
+    for (int k = 0; k < CP_NINPUT; k++) {
+        p[INPUT0 + k] = p_at[INPUT0 + k];
+        rates[k][0] = rates0[k][0] + tau * rates0[k][1];
+        rates[k][1] = rates0[k][1];
+    }
+}
+
+/* Whether the step in flight may go on from t: live, at the point it left (else RESTART),
+ * with the inputs and their rates bit for bit those its polynomials give there (else
+ * NEW_INPUTS). */
+enum { CONTINUE, RESTART, NEW_INPUTS };
+
+static int continues(const cp_flight *f, const cp_settings *s, const double *p,
+                     const double (*rates)[2], double t)
+{
+    if (!f->live || s->method == CP_RK4 || t != f->t_point) return RESTART;
+    double p_at[CP_NPARAM], rates_at[CP_NINPUT + 1][2];
+    memcpy(p_at, p, CP_NPARAM * sizeof(double));
+    cp_flight_inputs(f, t, p_at, rates_at);
+    return memcmp(p_at + INPUT0, p + INPUT0, CP_NINPUT * sizeof(double)) == 0
+                   && memcmp(rates_at, rates, CP_NINPUT * sizeof rates_at[0]) == 0
+               ? CONTINUE
+               : NEW_INPUTS;
+}
+
+/* A new integration from (t, x), the inputs' polynomials starting there, the proposed step
+ * size kept. */
+static void restart(cp_flight *f, const double *p, const double (*rates)[2], double t,
+                    const double *x)
+{
+    f->live = 1;
+    f->reserved = 0;
+    f->t_point = f->t_inputs = t;
+    cp_step_begin(&f->step, &f->rows[0][0], CP_NSTATE, t, x, f->step.h);
+    for (int k = 0; k < CP_NINPUT; k++) {
+        f->inputs[k][0] = p[INPUT0 + k];
+        f->inputs[k][1] = rates[k][0];
+        f->inputs[k][2] = rates[k][1];
+    }
+}
+
+/* The integration of trial from the point t to t + dt: x_new at the time *t_reached it got to
+ * (t + dt on success; on failure with early return, the last accepted step or substep). With
+ * on_point (or without across_points) it ends on t + dt. */
+static int integrate(const cp_settings *s, cp_flight *trial, const cp_system *system,
+                     const double *x, double t, double dt, double t_stop, int on_point,
+                     double *work, cp_stats *counts, double *x_new, double *t_reached, int early)
+{
+    int status = cp_unworkable(s->method, t, dt, s->max_step, s->max_steps);
+    *t_reached = t;
+    if (status) return status;
+    if (s->method == CP_RK4) {
+        memcpy(x_new, x, CP_NSTATE * sizeof(double));
+        status = cp_rk4(system, t, x_new, dt, s->max_step, s->max_steps, work, counts,
+                        early ? t_reached : NULL);
+        if (status == CP_OK) *t_reached = t + dt;
+        return status;
+    }
+    const double t_target = t + dt;
+    const double t_limit = s->across_points && !on_point ? fmax(t_stop, t_target) : t_target;
+    long long attempts = 0;
+    status = cp_cover(s->method, system, &trial->step, &trial->rows[0][0], t_target, t_limit,
+                      s->rtol, s->atol, s->max_step, s->max_steps, &attempts, work, counts);
+    if (status == CP_OK) {
+        cp_step_state(s->method, &trial->step, &trial->rows[0][0], CP_NSTATE, t_target, x_new);
+        *t_reached = t_target;
+        return cp_all_finite(CP_NSTATE, x_new) ? CP_OK : CP_NONFINITE;
+    }
+    if (early && trial->step.t1 > t) {  /* the last accepted step, where x' was computed */
+        memcpy(x_new, trial->rows[CP_ROW_X1], CP_NSTATE * sizeof(double));
+        *t_reached = trial->step.t1;
+    }
+    return status;
+}
+
+int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input_rates)[2],
+                     double *x, double *y, double t, double dt, double t_stop, cp_flight *flight,
+                     double *work, double stats[CP_NSTAT], cp_failure *failure, double *reached)
+{
+    cp_flight trial = *flight;  /* taken only where the step gets somewhere */
+    const int why = continues(&trial, s, p, input_rates, t);
+    if (why != CONTINUE) restart(&trial, p, input_rates, t, x);
+    double p0[CP_NPARAM], rates0[CP_NINPUT + 1][2];
+    const int moving = polynomials(&trial, p, p0, rates0);
+    interpolated in = {{p0, 1.0, -1}, p0, (const double(*)[2])rates0, trial.t_inputs, {0}};
+    if (moving) in.model.p = in.p_at;
+    cp_system system = {CP_NSTATE, moving ? interpolated_rhs : cp_held_rhs,
+                        moving ? (void *)&in : (void *)&in.model};
+    cp_stats counts = {0, 0, 0};
+    double *x_new = work + CP_WORK_SIZE(CP_NSTATE), *y_new = x_new + CP_NSTATE;
+    double t_reached = t, p_at[CP_NPARAM], rates_at[CP_NINPUT + 1][2];
+    int status = CP_BAD_STEP;
+    if (dt >= 0 && dt < INFINITY)
+        status = integrate(s, &trial, &system, x, t, dt, t_stop, why == NEW_INPUTS, work, &counts,
+                           x_new, &t_reached, reached != NULL);
     stats[CP_STAT_N_RHS] += (double)counts.nfev;
     stats[CP_STAT_N_STEPS] += (double)counts.naccept;
     stats[CP_STAT_N_REJECTED] += (double)counts.nreject;
-    /* the outputs where the state now is: at t + dt, or where an early return stopped */
-    if ((status == CP_OK || t_reached > t) && CP_NOUTPUT) {
-        if (input_rates) cp_input_at(p, input_rates, status == CP_OK ? dt : t_reached - t, in.p_at);
-        cp_eval_outputs(x, model_at->p, y_new);
+    if (t_reached > t || status == CP_OK) {  /* the outputs where the state got to */
+        memcpy(p_at, p, CP_NPARAM * sizeof(double));
+        cp_flight_inputs(&trial, t_reached, p_at, rates_at);
+        cp_model model_at = {p_at, 1.0, -1};
+        if (CP_NOUTPUT) cp_eval_outputs(x_new, p_at, y_new);
         if (cp_all_finite(CP_NOUTPUT, y_new)) {
+            memcpy(x, x_new, CP_NSTATE * sizeof(double));
             memcpy(y, y_new, CP_NOUTPUT * sizeof(double));
+            trial.t_point = t_reached;
+            /* an early return restarts where it stopped; RK4 at every point */
+            trial.live &= status == CP_OK && s->method != CP_RK4;
+            *flight = trial;
         } else {  /* the pivot force where M is singular: cp_rhs says where */
-            int found = cp_rhs(model_at, x, work);
+            int found = cp_rhs(&model_at, x_new, work);
             if (status == CP_OK) status = found == CP_OK ? CP_NONFINITE : found;
-            memcpy(x, x_start, CP_NSTATE * sizeof(double));
-            *fsal = 0;
+            in.model.bad_dof = model_at.bad_dof;
+            in.model.pivot_ratio = model_at.pivot_ratio;
             t_reached = t;
         }
     }
-    if (reached) *reached = status == CP_OK ? t + dt : t_reached;
+    if (reached) *reached = t_reached;
     if (status != CP_OK) {
-        cp_failure f = {t, dt, model_at->bad_dof, model_at->pivot_ratio, s->rtol, s->atol, s->max_step,
-                        s->max_steps, t_reached};
+        cp_failure f = {t, dt, in.model.bad_dof, in.model.pivot_ratio, s->rtol, s->atol,
+                        s->max_step, s->max_steps, t_reached};
         *failure = f;
     }
+    return status;
+}
+
+int cp_cosim_step(const cp_settings *s, const double *p, double *x, double *y, double t,
+                  double dt, double *h, double *work, int *fsal, double stats[CP_NSTAT],
+                  cp_failure *failure)
+{
+    static const double held[CP_NINPUT + 1][2];
+    cp_settings on_points = *s;
+    cp_flight flight;
+    memset(&flight, 0, sizeof flight);
+    on_points.across_points = 0;
+    restart(&flight, p, held, t, x);
+    flight.step.h = *h;
+    if (*fsal) {  /* work starts with x' at x */
+        memcpy(flight.rows[CP_ROW_F1], work, CP_NSTATE * sizeof(double));
+        flight.step.fsal = 1;
+    }
+    int status = cp_cosim_advance(&on_points, p, held, x, y, t, dt, INFINITY, &flight, work, stats,
+                                  failure, NULL);
+    *h = flight.step.h;
+    *fsal = s->method != CP_RK4 && flight.step.fsal;
+    if (*fsal) memcpy(work, flight.rows[CP_ROW_F1], CP_NSTATE * sizeof(double));
     return status;
 }

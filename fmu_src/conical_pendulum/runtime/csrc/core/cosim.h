@@ -13,31 +13,67 @@ typedef struct {
     int method;           /* CP_RK4, CP_RK45 or CP_DOP853 */
     double rtol, atol, max_step;
     long long max_steps;
+    int across_points;    /* RK45 and DOP853 step across the communication points (cp_flight) */
 } cp_settings;
 
 /* Doubles of work a step needs: the solvers', then the state at t and the new outputs. */
 #define CP_STEP_WORK_SIZE (CP_WORK_SIZE(CP_NSTATE) + CP_NSTATE + CP_NOUTPUT)
 
-/* Advance x from t to t + dt and write the outputs there into y; p holds the parameters
- * and inputs. *h and *fsal are the solvers' memory (cp_integrate); stats (right-hand
- * sides, accepted and rejected steps, at model.h's CP_STAT_*) grow by what the step cost,
- * failed or not. Returns
- * CP_OK, or a status with *failure filled for cp_diagnose, x and y as they were. */
+/* The integration a co-simulation carries from one communication point to the next: plain
+ * data, which an FMU state copies and serializes byte for byte. With across_points, RK45 and
+ * DOP853 take their own steps whatever the points: a point inside the step in flight is
+ * answered from the step's dense output, and the next communication step continues from the
+ * step's end, never from the interpolated state. Without it, each communication step ends
+ * its integration on the point (the step in flight ends there), and the next continues from
+ * there with the step size and x' it carried. The integration restarts (from the caller's x,
+ * at the point, keeping the proposed step size) when what it assumed no longer holds: the
+ * inputs at the point, or their derivatives, are not bit for bit those of the polynomials it
+ * integrated with (cp_flight_inputs), the point is another, or the caller dropped it (live
+ * 0: a parameter, state or setting set, an early return). A restart for new inputs ends its
+ * first integration on the next point, so that inputs set anew at every point (a coupled
+ * co-simulation) cost what ending every integration on the point costs, with no interpolant
+ * to pay for. RK4 restarts at every point. */
+typedef struct {
+    int live;           /* 1: the next step may continue the integration */
+    int reserved;       /* 0 (the padding, named so that a state's bytes are all defined) */
+    double t_point;     /* the communication point the caller's x and outputs are at */
+    cp_step step;       /* the solver's last accepted step (solvers.h) */
+    double rows[CP_FLIGHT_ROWS][CP_NSTATE];
+    double t_inputs;    /* where the inputs' polynomials start: the integration's start */
+    double inputs[CP_NINPUT + 1][3];  /* each input there: u, u', u'' (+1: C has no empty array) */
+} cp_flight;
+
+/* Advance the co-simulation from the communication point t (x, y: the state and outputs there)
+ * to t + dt, continuing the step in flight when nothing it assumed changed (cp_flight), else
+ * restarting at t from x; p holds the parameters and the inputs at t, input_rates (CP_NINPUT
+ * rows, not NULL) their first and second time derivatives at t: over the integration every
+ * input follows its Taylor polynomial, evaluated at each stage's time. No step ends after
+ * t_stop (the experiment's stop time, INFINITY: none), unless the point is beyond it. x and y
+ * become the state and outputs at t + dt (the outputs with the inputs there: cp_flight_inputs);
+ * stats (right-hand sides, accepted and rejected steps, at model.h's CP_STAT_*) grow by what
+ * the step cost, failed or not. Returns CP_OK, or a status with *failure filled for
+ * cp_diagnose: then, with reached NULL, x, y and the flight are as they were; with reached
+ * not NULL (early return), x and y are at the last point the solver reached where x' was
+ * computed (RK45 and DOP853: the last accepted step; RK4: the last completed substep) and the
+ * outputs there are finite, or as they were at t, and the flight restarts there. *reached
+ * (when not NULL) is the time of x on return: t + dt on success; failure->kept says it too.
+ * work: CP_STEP_WORK_SIZE doubles of scratch. */
+int cp_cosim_advance(const cp_settings *settings, const double *p, const double (*input_rates)[2],
+                     double *x, double *y, double t, double dt, double t_stop, cp_flight *flight,
+                     double *work, double stats[CP_NSTAT], cp_failure *failure, double *reached);
+
+/* The inputs as the flight's integration has them at t: their values into p's input entries
+ * (p: CP_NPARAM values, the parameters untouched) and their first and second derivatives into
+ * rates (CP_NINPUT rows), as cp_input_at evaluates the polynomials. */
+void cp_flight_inputs(const cp_flight *flight, double t, double *p, double (*rates)[2]);
+
+/* cp_cosim_advance of one communication step that ends its integration on the point (the old
+ * behaviour, which the Stepper of core.pyx keeps): inputs held as p has them, *h and *fsal the
+ * solver's memory between steps (the proposed step size; whether work starts with x' at x),
+ * no stop time, no early return. */
 int cp_cosim_step(const cp_settings *settings, const double *p, double *x, double *y, double t,
                   double dt, double *h, double *work, int *fsal, double stats[CP_NSTAT],
                   cp_failure *failure);
-
-/* cp_cosim_step with early return when reached is not NULL: on failure x and y are left at
- * the last point the solver reached where x' was computed (cp_integrate) and its outputs are
- * finite, or as they were at t; *reached is that time (t + dt on success), and
- * failure->kept says it too. With input_rates not NULL (CP_NINPUT rows of the first and
- * second time derivatives of the inputs at t: cp_input_at's rates), every input follows its
- * Taylor polynomial over the step, evaluated at each stage's time, and y is computed with the
- * inputs where the state ends; NULL holds them, as p has them. */
-int cp_cosim_step_early(const cp_settings *settings, const double *p, double *x, double *y,
-                        double t, double dt, double *h, double *work, int *fsal,
-                        double stats[CP_NSTAT], cp_failure *failure, double *reached,
-                        const double (*input_rates)[2]);
 
 /* cp_rhs as a solver's system's right-hand side (ctx a cp_model): the inputs held as its p
  * has them, whatever t. */

@@ -36,7 +36,7 @@ static double rms(int n, const double *v, const double *scale)
     return sqrt(s / n);
 }
 
-/* cp_integrate has checked that ceil(dt / max_step) <= max_steps. On failure, good holds the
+/* cp_rk4 has checked that ceil(dt / max_step) <= max_steps. On failure, good holds the
  * last point where x' was computed (x itself when none was) and *done the substeps that led
  * there. */
 static int rk4(const cp_system *sys, double t, double *x, double dt, double max_step, double *work,
@@ -119,8 +119,10 @@ static double error_norm(const tableau *tb, int n, const double *K, double h, co
 
 /* Working memory of the adaptive pairs, carved from the caller's work array. */
 typedef struct {
-    double *K, *y, *y_new, *tmp, *scale, *err, *F;
+    double *K, *y, *y_new, *tmp, *scale, *err;
 } rk_memory;
+
+#define CARVED_ROWS 21  /* the rows carve() takes: K's 16 and five vectors */
 
 static rk_memory carve(int n, double *work)
 {
@@ -131,7 +133,6 @@ static rk_memory carve(int n, double *work)
     m.tmp = m.y_new + n;
     m.scale = m.tmp + n;
     m.err = m.scale + n;
-    m.F = m.err + n;            /* 7 rows: DOP853's interpolant */
     return m;
 }
 
@@ -190,60 +191,9 @@ static int one_step(const tableau *tb, const cp_system *sys, double t, double t_
     }
 }
 
-/* Move to the new point: y <- y_new, K[0] <- x' there (first same as last). */
-static void advance(const tableau *tb, int n, rk_memory *m)
-{
-    memcpy(m->y, m->y_new, n * sizeof(double));
-    memcpy(m->K, m->K + tb->stages * n, n * sizeof(double));
-}
-
-static int start(const tableau *tb, const cp_system *sys, double t, const double *x, double interval,
-                 double rtol, double atol, double max_step, int fsal, rk_memory *m,
-                 double *h_abs, cp_stats *stats)
-{
-    int status;
-    memcpy(m->y, x, sys->dim * sizeof(double));
-    if (!fsal && (status = eval(sys, t, m->y, m->K, stats))) return status;
-    if (!(*h_abs > 0) || !isfinite(*h_abs))
-        return initial_step(sys, t, m->y, m->K, interval, rtol, atol, max_step, tb->order, m->tmp,
-                            m->err, m->scale, stats, h_abs);
-    return CP_OK;
-}
-
-/* On failure with reached not NULL, x is left at the last accepted step (x' was computed
- * there), *reached its time, and *h_io the step proposed from it. */
-static int adaptive(const tableau *tb, const cp_system *sys, double t, double *x, double dt,
-                    double rtol, double atol, double max_step, long long max_steps, double *h_io,
-                    double *work, int fsal, cp_stats *stats, double *reached)
-{
-    int n = sys->dim, status;
-    rk_memory m = carve(n, work);
-    double t_start = t, t_end = t + dt, h_abs = *h_io, t_new, h;
-    long long attempts = 0;
-    if (!(max_step > 0)) max_step = INFINITY;
-    if ((status = start(tb, sys, t, x, dt, rtol, atol, max_step, fsal, &m, &h_abs, stats))) return status;
-    while (t < t_end) {
-        status = one_step(tb, sys, t, t_end, &m, rtol, atol, max_step, max_steps, &attempts,
-                          &h_abs, &t_new, &h, stats);
-        if (status) {
-            if (reached && t > t_start && cp_all_finite(n, m.y)) {
-                memcpy(x, m.y, n * sizeof(double));
-                *reached = t;
-                *h_io = h_abs;
-            }
-            return status;
-        }
-        advance(tb, n, &m);
-        t = t_new;
-    }
-    if (!cp_all_finite(n, m.y)) return CP_NONFINITE;
-    *h_io = h_abs;
-    memcpy(x, m.y, n * sizeof(double));
-    return CP_OK;
-}
-
-/* scipy's DOP853._dense_output_impl: three more stages, then the interpolant F. */
-static int dop853_interpolant(const cp_system *sys, double t, double h, rk_memory *m, cp_stats *stats)
+/* scipy's DOP853._dense_output_impl: three more stages, then the interpolant F (7 rows). */
+static int dop853_interpolant(const cp_system *sys, double t, double h, rk_memory *m, double *F,
+                              cp_stats *stats)
 {
     int n = sys->dim, status, stages = DOP853_STAGES;
     double *K = m->K;
@@ -259,85 +209,140 @@ static int dop853_interpolant(const cp_system *sys, double t, double h, rk_memor
     const double *f_old = K, *f_new = K + stages * n;
     for (int i = 0; i < n; i++) {
         double delta = m->y_new[i] - m->y[i];
-        m->F[i] = delta;
-        m->F[n + i] = h * f_old[i] - delta;
-        m->F[2 * n + i] = 2 * delta - h * (f_new[i] + f_old[i]);
+        F[i] = delta;
+        F[n + i] = h * f_old[i] - delta;
+        F[2 * n + i] = 2 * delta - h * (f_new[i] + f_old[i]);
         for (int r = 0; r < 4; r++) {
             double s = 0.0;
             for (int j = 0; j < 16; j++) s += DOP853_D[r][j] * K[j * n + i];
-            m->F[(3 + r) * n + i] = h * s;
+            F[(3 + r) * n + i] = h * s;
         }
     }
     return CP_OK;
 }
 
-/* Dop853DenseOutput._call_impl at x = (t - t_old) / h. */
-static void dop853_evaluate(int n, const rk_memory *m, double x, double *out)
+/* scipy's RK45._dense_output_impl: Q = K^T P (4 rows), no more stages. */
+static void rk45_interpolant(int n, const rk_memory *m, double *Q)
 {
-    for (int i = 0; i < n; i++) {
-        double y = 0.0;
-        for (int k = 6, odd = 0; k >= 0; k--, odd ^= 1) {
-            y += m->F[k * n + i];
-            y *= odd ? 1 - x : x;
+    for (int r = 0; r < 4; r++)
+        for (int i = 0; i < n; i++) {
+            double s = 0.0;
+            for (int j = 0; j < 7; j++) s += m->K[j * n + i] * RK45_P[j][r];
+            Q[r * n + i] = s;
         }
-        out[i] = y + m->y[i];
-    }
 }
 
-int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double *out,
-                   double rtol, double atol, double max_step, long long max_steps, double *work,
-                   cp_stats *stats)
+void cp_step_begin(cp_step *step, double *rows, int dim, double t, const double *x, double h)
 {
-    const tableau *tb = &DOP853_TABLEAU;
-    int n = sys->dim, status, next = 1;
+    step->t0 = step->t1 = t;
+    step->h = h;
+    step->fsal = step->dense = 0;
+    memcpy(rows + CP_ROW_X1 * dim, x, dim * sizeof(double));
+}
+
+int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, double t_target,
+             double t_limit, double rtol, double atol, double max_step, long long max_steps,
+             long long *attempts, double *work, cp_stats *stats)
+{
+    const tableau *tb = method == CP_RK45 ? &RK45_TABLEAU : &DOP853_TABLEAU;
+    int n = sys->dim, status;
+    size_t size = n * sizeof(double);
     rk_memory m = carve(n, work);
-    double t = times[0], t_end = times[ntimes - 1], h_abs = 0.0, t_new, h;
-    long long attempts = 0;
+    double *x0 = rows + CP_ROW_X0 * n, *x1 = rows + CP_ROW_X1 * n, *f1 = rows + CP_ROW_F1 * n;
+    double *dense = rows + CP_ROW_DENSE * n;
     if (!(max_step > 0)) max_step = INFINITY;
-    if (ntimes < 2) return CP_OK;
-    status = start(tb, sys, t, out, t_end - t, rtol, atol, max_step, 0, &m, &h_abs, stats);
-    if (status) return status;
-    while (t < t_end) {
-        status = one_step(tb, sys, t, t_end, &m, rtol, atol, max_step, max_steps, &attempts,
-                          &h_abs, &t_new, &h, stats);
+    if (step->t1 >= t_target) return CP_OK;
+    if (!step->fsal) {
+        if ((status = eval(sys, step->t1, x1, f1, stats))) return status;
+        step->fsal = 1;
+    }
+    if (!(step->h > 0) || !isfinite(step->h)) {
+        status = initial_step(sys, step->t1, x1, f1, t_limit - step->t1, rtol, atol, max_step,
+                              tb->order, m.tmp, m.err, m.scale, stats, &step->h);
         if (status) return status;
-        if (next < ntimes && times[next] <= t_new) {
-            if ((status = dop853_interpolant(sys, t, h, &m, stats))) return status;
-            for (; next < ntimes && times[next] <= t_new; next++) {
-                if (times[next] == t_new) memcpy(out + next * n, m.y_new, n * sizeof(double));
-                else dop853_evaluate(n, &m, (times[next] - t) / h, out + next * n);
-            }
+    }
+    while (step->t1 < t_target) {
+        double h_abs = step->h, t_new, h;
+        memcpy(m.y, x1, size);
+        memcpy(m.K, f1, size);
+        status = one_step(tb, sys, step->t1, t_limit, &m, rtol, atol, max_step, max_steps,
+                          attempts, &h_abs, &t_new, &h, stats);
+        if (status) return status;
+        if (!cp_all_finite(n, m.y_new)) return CP_NONFINITE;
+        int crosses = t_new > t_target;  /* the target is answered from this step's interpolant */
+        if (crosses) {
+            if (method == CP_RK45) rk45_interpolant(n, &m, dense);
+            else if ((status = dop853_interpolant(sys, step->t1, h, &m, dense, stats))) return status;
         }
-        advance(tb, n, &m);
-        t = t_new;
+        memcpy(x0, m.y, size);
+        memcpy(x1, m.y_new, size);
+        memcpy(f1, m.K + tb->stages * n, size);
+        step->t0 = step->t1;
+        step->t1 = t_new;
+        step->h = h_abs;
+        step->dense = crosses;
     }
     return CP_OK;
 }
 
-int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
-                 double rtol, double atol, double max_step, long long max_steps,
-                 double *h, double *work, int *fsal, cp_stats *stats, double *reached)
+void cp_step_state(int method, const cp_step *step, const double *rows, int dim, double t,
+                   double *x)
+{
+    const double *x0 = rows + CP_ROW_X0 * dim, *dense = rows + CP_ROW_DENSE * dim;
+    if (t == step->t1) {
+        memcpy(x, rows + CP_ROW_X1 * dim, dim * sizeof(double));
+        return;
+    }
+    double h = step->t1 - step->t0, s = (t - step->t0) / h;
+    for (int i = 0; i < dim; i++) {
+        double y = 0.0;
+        if (method == CP_RK45) {  /* RkDenseOutput._call_impl: x0 + h Q (s, s^2, s^3, s^4) */
+            double power = s;
+            for (int r = 0; r < 4; r++, power *= s) y += dense[r * dim + i] * power;
+            x[i] = h * y + x0[i];
+        } else {  /* Dop853DenseOutput._call_impl */
+            for (int k = 6, odd = 0; k >= 0; k--, odd ^= 1) {
+                y += dense[k * dim + i];
+                y *= odd ? 1 - s : s;
+            }
+            x[i] = y + x0[i];
+        }
+    }
+}
+
+int cp_dense_grid(int method, const cp_system *sys, const double *times, int ntimes, double *out,
+                  double rtol, double atol, double max_step, long long max_steps, double *work,
+                  cp_stats *stats)
+{
+    int n = sys->dim, status;
+    double *rows = work + CARVED_ROWS * n;  /* the step in flight after the solver's memory */
+    cp_step step;
+    long long attempts = 0;
+    if (ntimes < 2) return CP_OK;
+    cp_step_begin(&step, rows, n, times[0], out, 0.0);
+    for (int k = 1; k < ntimes; k++) {
+        status = cp_cover(method, sys, &step, rows, times[k], times[ntimes - 1], rtol, atol,
+                          max_step, max_steps, &attempts, work, stats);
+        if (status) return status;
+        cp_step_state(method, &step, rows, n, times[k], out + k * n);
+    }
+    return CP_OK;
+}
+
+int cp_rk4(const cp_system *sys, double t, double *x, double dt, double max_step,
+           long long max_steps, double *work, cp_stats *stats, double *reached)
 {
     int status;
+    long long done;
     if (reached) *reached = t;
     if (dt <= 0) return CP_OK;
-    if ((status = cp_unworkable(method, t, dt, max_step, max_steps))) return status;
-    if (method == CP_RK4) {
-        long long done;
-        *fsal = 0;
-        status = rk4(sys, t, x, dt, max_step, work, stats, &done);
-        if (status == CP_OK) {
-            if (reached) *reached = t + dt;
-        } else if (reached && done > 0) {  /* the last substep where x' was computed */
-            memcpy(x, work + 6 * sys->dim, sys->dim * sizeof(double));
-            *reached = t + done * (dt / (long long)cp_fewest_steps(dt, max_step));
-        }
-        return status;
+    if ((status = cp_unworkable(CP_RK4, t, dt, max_step, max_steps))) return status;
+    status = rk4(sys, t, x, dt, max_step, work, stats, &done);
+    if (status == CP_OK) {
+        if (reached) *reached = t + dt;
+    } else if (reached && done > 0) {  /* the last substep where x' was computed */
+        memcpy(x, work + 6 * sys->dim, sys->dim * sizeof(double));
+        *reached = t + done * (dt / (long long)cp_fewest_steps(dt, max_step));
     }
-    const tableau *tb = method == CP_RK45 ? &RK45_TABLEAU : &DOP853_TABLEAU;
-    status = adaptive(tb, sys, t, x, dt, rtol, atol, max_step, max_steps, h, work, *fsal, stats,
-                      reached);
-    *fsal = status == CP_OK;   /* on success work starts with x' at the new x */
-    if (status == CP_OK && reached) *reached = t + dt;
     return status;
 }

@@ -44,7 +44,8 @@ static inline double cp_min_step(double t0, double t1)
     return 10 * (nextafter(t, INFINITY) - t);
 }
 
-/* Doubles of scratch memory cp_integrate needs for a system of size dim. */
+/* Doubles of scratch memory the solvers need for a system of size dim (cp_dense_grid keeps
+ * its step in flight in it too). */
 #define CP_WORK_SIZE(dim) (32 * (dim))
 
 /* CP_OK, or why a step by dt from t cannot be taken with these settings, whatever the
@@ -60,28 +61,55 @@ static inline int cp_unworkable(int method, double t, double dt, double max_step
     return CP_OK;
 }
 
-/* Advance x from t to t + dt. RK4 splits dt evenly into steps of at most max_step.
- * RK45 and DOP853 control the error as scipy's solvers do (RMS norm of the error over
- * atol + rtol * max(|x|, |x_new|), same safety factor and limits); *h carries the
- * proposed step from one call to the next (<= 0: choose one as scipy does). At most
- * max_steps steps are attempted, by every method: a step that max_step would split into
- * more fails at once (CP_TOO_MANY_STEPS), and so does a max_step below what t can resolve
- * (CP_MAX_STEP_UNRESOLVED), before any work. A new x that is not finite fails
- * (CP_NONFINITE). On failure x is left as it was at t, unless reached is not NULL (early
- * return): then x is left at the last point the method reached where x' was computed (RK45
- * and DOP853: the last accepted step; RK4: the last completed substep), or at t if there is
- * none. *reached (when not NULL) is the time of x on return: t + dt on success.
- * *fsal says whether work still holds x' at x from the last call (first same as last);
- * the caller clears it whenever it changes x or the parameters. */
-int cp_integrate(int method, const cp_system *sys, double t, double *x, double dt,
-                 double rtol, double atol, double max_step, long long max_steps,
-                 double *h, double *work, int *fsal, cp_stats *stats, double *reached);
+/* RK4, a fixed-step method: advance x from t to t + dt in even steps of at most max_step
+ * (one step when max_step is 0), after checking cp_unworkable. A new x that is not finite
+ * fails (CP_NONFINITE). On failure x is left as it was at t, unless reached is not NULL (early
+ * return): then x is left at the last completed substep (where x' was computed), or at t if
+ * there is none. *reached (when not NULL) is the time of x on return: t + dt on success. */
+int cp_rk4(const cp_system *sys, double t, double *x, double dt, double max_step,
+           long long max_steps, double *work, cp_stats *stats, double *reached);
 
-/* DOP853 from times[0] (state in out[0..dim)) through times[ntimes - 1], writing the
- * state at every time into out (row-major, ntimes x dim) from the method's 7th-order
- * dense output, as scipy's solve_ivp(method="DOP853", t_eval=times) does. */
-int cp_dop853_grid(const cp_system *sys, const double *times, int ntimes, double *out,
-                   double rtol, double atol, double max_step, long long max_steps, double *work,
-                   cp_stats *stats);
+/* The last accepted step of RK45 or DOP853, the step in flight: what lets one integration run
+ * across the times a caller asks for (cp_cover) and answer each from the step that holds it,
+ * by its dense output, while the integration itself continues from the step's end only. Plain
+ * data; its vectors are CP_FLIGHT_ROWS rows of dim doubles the caller keeps beside it. */
+typedef struct {
+    double t0, t1;  /* the step's start and end (equal: no step yet, the integration starts at t1) */
+    double h;       /* the step size proposed after it (<= 0: chosen as scipy does) */
+    int fsal;       /* the CP_ROW_F1 row holds x' at t1 */
+    int dense;      /* the CP_ROW_DENSE rows hold the step's interpolant (needed inside it only) */
+} cp_step;
+
+/* The rows: x at t0 and t1, x' at t1, then the interpolant's coefficients (DOP853's 7 rows of
+ * F, RK45's 4 rows of Q, as scipy's dense outputs hold them). */
+enum { CP_ROW_X0, CP_ROW_X1, CP_ROW_F1, CP_ROW_DENSE, CP_FLIGHT_ROWS = CP_ROW_DENSE + 7 };
+
+/* An integration that starts at (t, x), with the step size h proposed (<= 0: to be chosen). */
+void cp_step_begin(cp_step *step, double *rows, int dim, double t, const double *x, double h);
+
+/* Steps of method (CP_RK45 or CP_DOP853) from the end of the step in flight until it reaches
+ * t_target, none ending after t_limit (>= t_target): the error controlled as scipy's solvers
+ * control it (RMS norm of the error over atol + rtol * max(|x|, |x_new|), same safety factor
+ * and limits). A last step that ends after t_target comes with its interpolant. Nothing to do
+ * when the step in flight already reaches t_target. *attempts counts the steps attempted
+ * (accepted or rejected) against max_steps (CP_TOO_MANY_STEPS). On failure the step in flight
+ * is the last one accepted; on success it holds t_target (cp_step_state). */
+int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, double t_target,
+             double t_limit, double rtol, double atol, double max_step, long long max_steps,
+             long long *attempts, double *work, cp_stats *stats);
+
+/* The state at t, step->t0 <= t <= step->t1, into x: the step's end at t1, else its dense
+ * output (DOP853's 7th-order interpolant, the Dormand-Prince continuous extension of order 4
+ * for RK45), which step->dense says the rows hold. */
+void cp_step_state(int method, const cp_step *step, const double *rows, int dim, double t,
+                   double *x);
+
+/* method (CP_RK45 or CP_DOP853) from times[0] (state in out[0..dim)) through times[ntimes - 1],
+ * writing the state at every time into out (row-major, ntimes x dim) from the method's dense
+ * output, as scipy's solve_ivp(method=..., t_eval=times) does: one integration, cp_cover to
+ * each time. */
+int cp_dense_grid(int method, const cp_system *sys, const double *times, int ntimes, double *out,
+                  double rtol, double atol, double max_step, long long max_steps, double *work,
+                  cp_stats *stats);
 
 #endif

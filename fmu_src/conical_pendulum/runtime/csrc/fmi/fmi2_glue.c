@@ -202,10 +202,8 @@ void fmi2FreeInstance(fmi2Component c)
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
-    (void)stopTimeDefined;
-    (void)stopTime;
     return (fmi2Status)fmi_setup_experiment(CHECKED(c, fmi2SetupExperiment), toleranceDefined,
-                                            tolerance, startTime);
+                                            tolerance, startTime, stopTimeDefined, stopTime);
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)

@@ -257,9 +257,10 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean toleranceDefi
                                        fmi3Float64 tolerance, fmi3Float64 startTime,
                                        fmi3Boolean stopTimeDefined, fmi3Float64 stopTime)
 {
-    (void)stopTimeDefined, (void)stopTime;
     FmiInstance *inst = CHECKED(c, fmi3EnterInitializationMode);
-    if (fmi_setup_experiment(inst, toleranceDefined, tolerance, startTime)) return fmi3Error;
+    if (fmi_setup_experiment(inst, toleranceDefined, tolerance, startTime, stopTimeDefined,
+                             stopTime))
+        return fmi3Error;
     return (fmi3Status)fmi_enter(inst, INITIALIZATION);
 }
 fmi3Status fmi3ExitInitializationMode(fmi3Instance c)

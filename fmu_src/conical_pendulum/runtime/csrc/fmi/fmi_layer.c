@@ -142,7 +142,7 @@ FmiStatus fmi_reset(FmiInstance *inst)
 }
 
 FmiStatus fmi_setup_experiment(FmiInstance *inst, int tolerance_defined, double tolerance,
-                               double start_time)
+                               double start_time, int stop_time_defined, double stop_time)
 {
     if (!inst) return FMI_ERROR;
     const FmiStandard *standard = inst->standard;
@@ -152,7 +152,11 @@ FmiStatus fmi_setup_experiment(FmiInstance *inst, int tolerance_defined, double 
         return fmi_error(inst, "%s%s", standard->experiment, message);
     if (!isfinite(start_time))
         return fmi_error(inst, "%sstartTime = %g: must be finite", standard->experiment, start_time);
+    if (stop_time_defined && !(isfinite(stop_time) && stop_time >= start_time))
+        return fmi_error(inst, "%sstopTime = %g: must be finite and not before startTime = %g",
+                         standard->experiment, stop_time, start_time);
     model_set_tolerance(inst->model, tolerance_defined ? tolerance : 0.0);
+    model_set_stop_time(inst->model, stop_time_defined ? stop_time : INFINITY);
     inst->machine.time = inst->machine.last_successful_time = start_time;
     return FMI_OK;
 }

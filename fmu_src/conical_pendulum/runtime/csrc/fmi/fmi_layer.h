@@ -130,9 +130,10 @@ FmiStatus fmi_set_debug_logging(FmiInstance *inst, const char *function, int on,
 FmiStatus fmi_reset(FmiInstance *inst);
 
 /* The experiment (FMI 2.0's fmi2SetupExperiment, FMI 3.0's fmi3EnterInitializationMode): the
- * tolerance, if defined, refused as the model refuses it, and the start time. */
+ * tolerance, if defined, refused as the model refuses it, the start time, and the stop time,
+ * if defined, refused unless finite and not before the start. */
 FmiStatus fmi_setup_experiment(FmiInstance *inst, int tolerance_defined, double tolerance,
-                               double start_time);
+                               double start_time, int stop_time_defined, double stop_time);
 
 /* The instance into state (EnterInitializationMode, Terminate, EnterEventMode, ...). */
 FmiStatus fmi_enter(FmiInstance *inst, int state);

@@ -89,8 +89,13 @@ void model_reset(ModelData *m);
  * model names its own field, in the check of a restored state). */
 const char *model_tolerance_refusal(double tolerance, const char *name, char *message, size_t size);
 
-/* Takes the experiment's tolerance (0: none), which model_initialize applies. */
+/* Takes the experiment's tolerance (0: none), which model_initialize applies (the pendulum:
+ * to rtol, unless a value of rtol was set). */
 void model_set_tolerance(ModelData *m, double tolerance);
+
+/* Takes the experiment's stop time (INFINITY: none; else finite, the FMI layer checks it): a
+ * model whose solver steps across communication points takes no step beyond it. */
+void model_set_stop_time(ModelData *m, double stop_time);
 
 /* Leaving initialization: the experiment's tolerance applied to the model's settings, what
  * was carried forgotten, the outputs computed at the start. */

@@ -93,6 +93,11 @@ void model_set_tolerance(ModelData *m, double tolerance)
     (void)m, (void)tolerance;
 }
 
+void model_set_stop_time(ModelData *m, double stop_time)
+{
+    (void)m, (void)stop_time;  /* the cart's steps are exact: nothing integrates beyond a point */
+}
+
 void model_initialize(ModelData *m)
 {
     m->has_last = 0;

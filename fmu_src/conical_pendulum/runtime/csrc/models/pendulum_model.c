@@ -20,11 +20,12 @@
 /* Everything an instance of the model holds: plain data, copied as a whole in FMU states. */
 struct ModelData {
     double r[CP_NREAL];           /* Real variables by value reference (fmu_config.h) */
-    int solver, max_steps;        /* the Integer settings */
-    double tolerance;             /* the experiment's; replaces rtol when > 0 */
-    double h;                     /* the solvers' proposed step, carried between steps */
-    int fsal;                     /* work holds x' at x */
-    double work[CP_STEP_WORK_SIZE];
+    int solver, max_steps, across_points;  /* the Integer settings */
+    int rtol_set;                 /* rtol was set: the experiment's tolerance does not replace it */
+    double tolerance;             /* the experiment's; replaces rtol's start value when > 0 */
+    double stop_time;             /* the experiment's (INFINITY: none): no step goes beyond */
+    cp_flight flight;             /* the integration carried across communication points */
+    double work[CP_STEP_WORK_SIZE];  /* scratch of a step */
     double dx[CP_NSTATE];         /* Model Exchange: x' at x when dx_valid */
     int dx_valid, outputs_valid;
     /* the inputs' first and second time derivatives as the master set them (0: held); the
@@ -57,16 +58,29 @@ static int is_output(unsigned vr)  /* a calculated output, not a state or a stat
     return vr >= CP_VR_OUTPUT && vr < CP_VR_STATISTICS;
 }
 
-static int is_integer(unsigned vr)
+static int is_input(unsigned vr)
 {
-    return vr == CP_VR_SOLVER || vr == CP_VR_MAX_STEPS;
+    return vr >= CP_VR_INPUT && vr < CP_VR_INPUT + CP_NINPUT;
 }
 
-/* NULL if an Integer setting (solver or max_steps) may take value, or the message refusing it. */
+static int is_integer(unsigned vr)
+{
+    return vr == CP_VR_SOLVER || vr == CP_VR_MAX_STEPS || vr == CP_VR_ACROSS_POINTS;
+}
+
+/* The Integer setting vr (is_integer) in m. */
+static int *integer_setting(ModelData *m, unsigned vr)
+{
+    return vr == CP_VR_SOLVER ? &m->solver : vr == CP_VR_MAX_STEPS ? &m->max_steps : &m->across_points;
+}
+
+/* NULL if an Integer setting may take value, or the message refusing it. */
 static const char *integer_refusal(unsigned vr, int value, char *message, size_t size)
 {
-    const cp_rule *rule = &cp_rules[vr == CP_VR_SOLVER ? CP_SOLVER_RULE : CP_MAX_STEPS_RULE];
-    return cp_integer_refusal(cp_variable_name(vr), value, rule, "", message, size);
+    const int rule = vr == CP_VR_SOLVER      ? CP_SOLVER_RULE
+                     : vr == CP_VR_MAX_STEPS ? CP_MAX_STEPS_RULE
+                                             : CP_ACROSS_POINTS_RULE;
+    return cp_integer_refusal(cp_variable_name(vr), value, &cp_rules[rule], "", message, size);
 }
 
 static const char *real_rule_refusal(unsigned vr, double value, char *message, size_t size)
@@ -75,13 +89,19 @@ static const char *real_rule_refusal(unsigned vr, double value, char *message, s
                            cp_real_what[vr], message, size);
 }
 
-/* What was computed from the values or carried by the solvers is forgotten. */
-static void invalidate(ModelData *m)
+/* What was computed from the values is forgotten. */
+static void forget_values(ModelData *m)
 {
-    m->fsal = 0;
     m->dx_valid = 0;
     m->outputs_valid = 0;
     m->rates_valid = 0;
+}
+
+/* ... and the integration restarts. */
+static void invalidate(ModelData *m)
+{
+    forget_values(m);
+    m->flight.live = 0;
 }
 
 static void update_outputs(ModelData *m)
@@ -120,6 +140,8 @@ void model_reset(ModelData *m)
     memcpy(m->r, cp_real_start, sizeof cp_real_start);
     m->solver = CP_SOLVER_START;
     m->max_steps = CP_MAX_STEPS_START;
+    m->across_points = CP_ACROSS_POINTS_START;
+    m->stop_time = INFINITY;
 }
 
 const char *model_tolerance_refusal(double tolerance, const char *name, char *message,
@@ -134,9 +156,14 @@ void model_set_tolerance(ModelData *m, double tolerance)
     m->tolerance = tolerance;
 }
 
+void model_set_stop_time(ModelData *m, double stop_time)
+{
+    m->stop_time = stop_time;
+}
+
 void model_initialize(ModelData *m)
 {
-    if (m->tolerance > 0) m->r[CP_VR_RTOL] = m->tolerance;
+    if (m->tolerance > 0 && !m->rtol_set) m->r[CP_VR_RTOL] = m->tolerance;
     invalidate(m);
     update_outputs(m);
 }
@@ -170,14 +197,17 @@ ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int 
 
 void model_set_real(ModelData *m, unsigned vr, double value)
 {
-    if (m->r[vr] != value) invalidate(m);
+    if (m->r[vr] != value) forget_values(m);
+    /* an input: the step decides (cosim.h), an input of the same bits changing nothing */
+    if (!is_input(vr)) m->flight.live = 0;
+    if (vr == CP_VR_RTOL) m->rtol_set = 1;
     m->r[vr] = value;
 }
 
 ModelStatus model_get_integer(const ModelData *m, unsigned vr, int *value)
 {
     if (!is_integer(vr)) return MODEL_NO_VARIABLE;
-    *value = vr == CP_VR_SOLVER ? m->solver : m->max_steps;
+    *value = *integer_setting((ModelData *)m, vr);
     return MODEL_OK;
 }
 
@@ -195,7 +225,8 @@ ModelStatus model_check_integer(const ModelData *m, unsigned vr, int value, int 
 
 void model_set_integer(ModelData *m, unsigned vr, int value)
 {
-    *(vr == CP_VR_SOLVER ? &m->solver : &m->max_steps) = value;
+    *integer_setting(m, vr) = value;
+    m->flight.live = 0;
 }
 
 /* ---- Model Exchange ---- */
@@ -335,29 +366,6 @@ ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], si
 
 /* ---- input and output derivatives ---- */
 
-static int is_input(unsigned vr)
-{
-    return vr >= CP_VR_INPUT && vr < CP_VR_INPUT + CP_NINPUT;
-}
-
-/* Whether some input moves over a step. */
-static int interpolated(const ModelData *m)
-{
-    for (int k = 0; k < CP_NINPUT; k++)
-        if (m->input_rates[k][0] != 0.0 || m->input_rates[k][1] != 0.0) return 1;
-    return 0;
-}
-
-/* The inputs tau along their polynomials: their values and rates there, the new point the
- * polynomials start from (what the master sets next replaces it). */
-static void advance_inputs(ModelData *m, double tau)
-{
-    for (int k = 0; k < CP_NINPUT; k++) {
-        double *u = &m->r[CP_VR_INPUT + k], *rate = m->input_rates[k];
-        *u += tau * (rate[0] + 0.5 * tau * rate[1]);
-        rate[0] += tau * rate[1];
-    }
-}
 
 ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr)
 {
@@ -426,19 +434,18 @@ ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_ret
                                 double *last_successful_time, char *message, size_t size)
 {
     const cp_settings settings = {m->solver, m->r[CP_VR_RTOL], m->r[CP_VR_ATOL],
-                                  m->r[CP_VR_MAX_STEP], m->max_steps};
+                                  m->r[CP_VR_MAX_STEP], m->max_steps, m->across_points};
     cp_failure failure;
     double reached = t;
-    int status = cp_cosim_step_early(&settings, m->r, X(m), Y(m), t, dt, &m->h, m->work,
-                                     &m->fsal, STATS(m), &failure,
-                                     early_return_allowed ? &reached : NULL,
-                                     interpolated(m) ? (const double(*)[2])m->input_rates : NULL);
+    int status = cp_cosim_advance(&settings, m->r, (const double(*)[2])m->input_rates, X(m), Y(m),
+                                  t, dt, m->stop_time, &m->flight, m->work, STATS(m), &failure,
+                                  early_return_allowed ? &reached : NULL);
     if (last_successful_time) *last_successful_time = status == CP_OK ? t + dt : reached;
     /* valid where the state moved (cosim.c computed them there); at t, computed again */
     m->outputs_valid = status == CP_OK || reached > t;
-    if (status == CP_OK || reached > t) {
+    if (status == CP_OK || reached > t) {  /* the inputs along their polynomials, where it got */
         m->dx_valid = m->rates_valid = 0;
-        advance_inputs(m, (status == CP_OK ? t + dt : reached) - t);
+        cp_flight_inputs(&m->flight, status == CP_OK ? t + dt : reached, m->r, m->input_rates);
     }
     if (status != CP_OK) {
         cp_diagnose(message, size, status, &failure);
@@ -449,16 +456,66 @@ ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_ret
 
 /* ---- FMU states ---- */
 
+/* NULL if the step in flight can be continued (cosim.h): its times finite and in order (the
+ * point inside the step, the interpolant there where the point is before the step's end), the
+ * proposed step finite and not negative, the vectors it holds finite (the interpolant's as
+ * many rows as the solver's has), the inputs' polynomials finite; or the message. */
+static const char *flight_invalid(const ModelData *m, char *message, size_t size)
+{
+    const cp_flight *f = &m->flight;
+    const cp_step *step = &f->step;
+    const struct { const char *name; double value; } times[] = {
+        {"t_point", f->t_point}, {"t0", step->t0}, {"t1", step->t1}, {"t_inputs", f->t_inputs}};
+    for (size_t k = 0; k < sizeof times / sizeof times[0]; k++) {
+        char name[64];
+        snprintf(name, sizeof name, "step in flight: %s", times[k].name);
+        if (cp_real_refusal(name, times[k].value, &cp_rules[CP_FINITE_RULE], "", message, size))
+            return message;
+    }
+    if (cp_real_refusal("h", step->h, &cp_rules[CP_STEP_RULE], CP_STEP_WHAT, message, size))
+        return message;
+    if (!f->live) return NULL;  /* the next step restarts from the state */
+    if (!(step->t0 <= f->t_point && f->t_point <= step->t1 && f->t_inputs <= f->t_point)
+        || (f->t_point < step->t1 && !step->dense)) {
+        snprintf(message, size, "step in flight: t_inputs = %.17g, t0 = %.17g, t_point = %.17g, "
+                 "t1 = %.17g (dense output %d): the point must lie in the step, after the "
+                 "inputs' start, and inside it only with the step's interpolant",
+                 f->t_inputs, step->t0, f->t_point, step->t1, step->dense);
+        return message;
+    }
+    const int used[CP_FLIGHT_ROWS] = {1, 1, step->fsal, step->dense, step->dense, step->dense,
+                                      step->dense, m->solver == CP_DOP853 && step->dense,
+                                      m->solver == CP_DOP853 && step->dense,
+                                      m->solver == CP_DOP853 && step->dense};
+    char name[64];
+    for (int row = 0; row < CP_FLIGHT_ROWS; row++)
+        for (int k = 0; used[row] && k < CP_NSTATE; k++) {
+            snprintf(name, sizeof name, "step in flight: row %d, entry %d", row, k);
+            if (cp_real_refusal(name, f->rows[row][k], &cp_rules[CP_FINITE_RULE], "", message, size))
+                return message;
+        }
+    for (int k = 0; k < CP_NINPUT; k++)
+        for (int order = 0; order < 3; order++) {
+            snprintf(name, sizeof name, "step in flight: input %d, derivative %d", k, order);
+            if (cp_real_refusal(name, f->inputs[k][order], &cp_rules[CP_FINITE_RULE], "", message,
+                                size))
+                return message;
+        }
+    return NULL;
+}
+
 /* Every Real keeps its variable's rule as model_check_real applies it (the outputs where
- * they are valid), and the statistics are counts; solver and max_steps keep theirs as
+ * they are valid), and the statistics are counts; the Integer settings keep theirs as
  * model_check_integer applies them, the tolerance is 0 (none) or keeps
- * model_tolerance_refusal's; the carried step is finite and not negative, the flags are 0
- * or 1, the carried derivatives are finite where they are valid, and so are the inputs'
- * derivatives. */
+ * model_tolerance_refusal's, the stop time is a time or none; the flags are 0 or 1, the
+ * carried derivatives are finite where they are valid, and so are the inputs' derivatives;
+ * the step in flight can be continued (flight_invalid). */
 const char *model_invalid(const ModelData *m, char *message, size_t size)
 {
     const struct { const char *name; int value; } flags[] = {
-        {"fsal", m->fsal}, {"dx_valid", m->dx_valid}, {"outputs_valid", m->outputs_valid}};
+        {"rtol_set", m->rtol_set}, {"live", m->flight.live}, {"fsal", m->flight.step.fsal},
+        {"dense", m->flight.step.dense}, {"dx_valid", m->dx_valid},
+        {"outputs_valid", m->outputs_valid}};
     for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
         if (flags[k].value != 0 && flags[k].value != 1) {
             snprintf(message, size, "%s = %d: must be 0 or 1", flags[k].name, flags[k].value);
@@ -473,21 +530,20 @@ const char *model_invalid(const ModelData *m, char *message, size_t size)
         if (real_rule_refusal(vr, m->r[vr], message, size)) return message;
     }
     if (integer_refusal(CP_VR_SOLVER, m->solver, message, size)
-        || integer_refusal(CP_VR_MAX_STEPS, m->max_steps, message, size))
+        || integer_refusal(CP_VR_MAX_STEPS, m->max_steps, message, size)
+        || integer_refusal(CP_VR_ACROSS_POINTS, m->across_points, message, size))
         return message;
     if (m->tolerance != 0.0 && model_tolerance_refusal(m->tolerance, NULL, message, size))
         return message;
-    if (cp_real_refusal("h", m->h, &cp_rules[CP_STEP_RULE], CP_STEP_WHAT, message, size))
+    if (m->stop_time != INFINITY
+        && cp_real_refusal("stop_time", m->stop_time, &cp_rules[CP_FINITE_RULE], "", message, size))
         return message;
+    if (flight_invalid(m, message, size)) return message;
     char name[160];
-    for (int k = 0; k < CP_NSTATE; k++) {
-        snprintf(name, sizeof name, "carried %s", cp_variable_name(CP_VR_DERIVATIVE + k));
-        if ((m->fsal && cp_real_refusal(name, m->work[k], &cp_rules[CP_FINITE_RULE], "", message,
-                                        size))
-            || (m->dx_valid && cp_real_refusal(cp_variable_name(CP_VR_DERIVATIVE + k), m->dx[k],
-                                               &cp_rules[CP_FINITE_RULE], "", message, size)))
+    for (int k = 0; k < CP_NSTATE; k++)
+        if (m->dx_valid && cp_real_refusal(cp_variable_name(CP_VR_DERIVATIVE + k), m->dx[k],
+                                           &cp_rules[CP_FINITE_RULE], "", message, size))
             return message;
-    }
     for (int k = 0; k < CP_NINPUT; k++)
         for (int order = 1; order <= 2; order++) {
             snprintf(name, sizeof name, "derivative %d of %s", order,
