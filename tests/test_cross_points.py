@@ -5,12 +5,8 @@ carries the step in flight.
 
 Compared with the compiled core's uninterrupted dense-output run (core.integrate_grid: the
 same cp_cover the FMUs call), with scipy's dense output, and with the old behaviour
-(across_points = 0, core.pyx's Stepper).
-
-The pythonfmu FMU runs the slave's Stepper, which still ends every integration on the point,
-until the slave holds the pendulum model's data through the core (branch i38core): the cases
-marked UNTIL_I38CORE pass once that is merged (strict=False: they then report XPASS, and the
-mark is to go).
+(across_points = 0, core.pyx's Stepper). The pythonfmu FMU holds the same model through
+the compiled core, so every case runs on both kinds of FMU.
 """
 
 import json
@@ -32,14 +28,10 @@ SEED = Scene.uniform(3)
 COUPLED = Scene.uniform(3, coupling=True)  # a_pivot inputs
 START = {"alpha0": 0.6, "delta1": 0.4}
 METHODS = {1: "rk45", 2: "dop853"}  # the FMU's solver values
-UNTIL_I38CORE = pytest.mark.xfail(
-    reason="the pythonfmu slave's Stepper ends each integration on the point until i38core is merged",
-    strict=False,
-)
 FMUS = [
     pytest.param(("native", 2), id="native-fmi2"),
     pytest.param(("native", 3), id="native-fmi3"),
-    pytest.param(("pythonfmu", 2), id="pythonfmu", marks=UNTIL_I38CORE),
+    pytest.param(("pythonfmu", 2), id="pythonfmu"),
 ]
 EVERY_FMU = [  # what ending each integration on the point meets too: no mark needed
     pytest.param(("native", 2), id="native-fmi2"),
@@ -214,7 +206,7 @@ def test_inputs_changed_at_every_point_cost_one_step_a_point(built_fmu, coupled_
     np.testing.assert_allclose(values[:, :states], on_points[:, :states], rtol=0, atol=1e-6)
 
 
-@pytest.mark.parametrize("kind", [FMUS[0], FMUS[2]])  # FMI 3.0 has no input derivatives
+@pytest.mark.parametrize("kind", [FMUS[0]])  # FMI 3.0 has none, the pythonfmu FMU holds inputs
 def test_input_derivatives_of_the_same_bits_continue_the_integration(built_fmu, kind):
     """An input moving as its derivatives say, set again at each point as the model left it:
     one integration along the polynomial, the uninterrupted run's cost."""

@@ -121,21 +121,12 @@ def test_model_description_matches_the_pythonfmu_fmu_and_is_complete(fmus):
     assert not {d.name for d in feedthrough["energy"]} & {"a_pivot_x", "a_pivot_y", "a_pivot_z"}
 
 
-# The pythonfmu slave's Stepper ends every integration on the point until it holds the
-# pendulum model's data through the core (branch i38core): across points, the two FMUs agree
-# once that is merged (strict=False: then XPASS, and the mark is to go).
-UNTIL_I38CORE = pytest.mark.xfail(
-    reason="the pythonfmu slave's Stepper ends each integration on the point until i38core is merged",
-    strict=False,
-)
-
-
 @pytest.mark.parametrize("scene", list(SCENES))
 @pytest.mark.parametrize(
     "settings",
     [
-        pytest.param({}, marks=UNTIL_I38CORE),
-        pytest.param({"solver": 2, "rtol": 1e-11, "atol": 1e-11}, marks=UNTIL_I38CORE),
+        {},
+        {"solver": 2, "rtol": 1e-11, "atol": 1e-11},
         {"across_points": 0},
         {"solver": 2, "rtol": 1e-11, "atol": 1e-11, "across_points": 0},
         {"solver": 0, "max_step": 0.005},

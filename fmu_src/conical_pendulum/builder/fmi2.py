@@ -70,16 +70,20 @@ def default_experiment(root: ET.Element, described: Description) -> None:
     """The DefaultExperiment: 10 s at the model's step size, and, where the model has a relative
     tolerance (rtol), its start as the tolerance: what a Model Exchange host integrates with,
     and what a co-simulation master passing it on leaves the FMU's own tolerance at."""
-    rtol = [v.start for v in described.records if v.name == "rtol"]
-    tolerance = {"tolerance": repr(float(rtol[0]))} if rtol else {}
     ET.SubElement(
         root,
         "DefaultExperiment",
         startTime="0.0",
         stopTime="10.0",
         stepSize=repr(described.model.step_size),
-        **tolerance,
+        **experiment_tolerance(described.records),
     )
+
+
+def experiment_tolerance(records: list[Variable]) -> dict[str, str]:
+    """The DefaultExperiment's tolerance attribute: rtol's start, where the model has an rtol."""
+    rtol = [v.start for v in records if v.name == "rtol"]
+    return {"tolerance": repr(float(rtol[0]))} if rtol else {}
 
 
 def _model_variables(variables: ET.Element, records: list[Variable], index: dict[str, str]) -> None:

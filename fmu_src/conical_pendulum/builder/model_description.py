@@ -7,7 +7,7 @@ import zipfile
 from pathlib import Path
 
 from ..scene import Scene
-from .fmi2 import type_definitions, typed, write_structure
+from .fmi2 import experiment_tolerance, type_definitions, typed, write_structure
 from .units import unit_definitions
 from .variables import Variable, model_structure
 
@@ -51,6 +51,7 @@ def complete(fmu: Path, described: list[Variable], library: Path) -> None:
         value = {"start": v.start_text()} if written.get("start") is not None else {}
         var.remove(written)
         ET.SubElement(var, *typed(v, value))
+    root.find("DefaultExperiment").attrib.update(experiment_tolerance(described))  # as the native FMUs'
     where = [child.tag for child in root].index("CoSimulation") + 1  # FMI 2.0's order of elements
     definitions = ET.Element("definitions")
     unit_definitions(definitions, described)

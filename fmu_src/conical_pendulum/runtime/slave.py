@@ -1,12 +1,11 @@
 """ConicalPendulum: FMI 2.0 co-simulation slave on the model the native FMUs hold.
 
 One class for every scene: it registers the variables MODEL_FILE in the FMU's resources
-describes (written by conical_pendulum.builder.fmu) and hands every value, setting, step and
-FMU state to the compiled core's Model, pendulum_model.c behind the model contract
-(fmu_model.h): the native FMUs' C checks them and words every refusal and diagnosis. What
-only this FMU has stays here: the FMI mode (pythonfmu keeps none) and Radau (scipy) on the
-model's right-hand side. Shipped in each FMU under a package name unique to the runtime's
-sources, imported through its entry module (runtime/entry.py); needs numpy and the core.
+describes (conical_pendulum.builder.fmu) and hands every value, setting, step and FMU state
+to the compiled core's Model, pendulum_model.c behind fmu_model.h, whose C checks them and
+words every refusal and diagnosis. Only the FMI mode (pythonfmu keeps none) and Radau (scipy)
+stay here. Shipped under a package name unique to the runtime's sources, imported through its
+entry module (runtime/entry.py); needs numpy and the core.
 """
 
 import functools
@@ -103,6 +102,8 @@ class ConicalPendulum(Fmi2Slave):
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         if tolerance is not None:
             self._refusing(self._model.set_tolerance, tolerance)
+        if stop_time is not None and math.isfinite(stop_time) and stop_time >= start_time:
+            self._model.set_stop_time(stop_time)  # one a native FMU would refuse is no bound here
 
     @_fmi_call
     def enter_initialization_mode(self):
@@ -141,10 +142,8 @@ class ConicalPendulum(Fmi2Slave):
     def set_integer(self, vrs, values):
         self._refusing(self._model.set_integers, self._typed(vrs, Integer), values, self._mode == STEPPING)
 
-    get_boolean = _fmi_call(Fmi2Slave.get_boolean)
-    set_boolean = _fmi_call(Fmi2Slave.set_boolean)
-    get_string = _fmi_call(Fmi2Slave.get_string)
-    set_string = _fmi_call(Fmi2Slave.set_string)
+    get_boolean, set_boolean = _fmi_call(Fmi2Slave.get_boolean), _fmi_call(Fmi2Slave.set_boolean)
+    get_string, set_string = _fmi_call(Fmi2Slave.get_string), _fmi_call(Fmi2Slave.set_string)
 
     @_fmi_call
     def _get_fmu_state(self):

@@ -79,6 +79,7 @@ cdef extern from "fmu_model.h":
     const char *model_tolerance_refusal(double tolerance, const char *name, char *message,
                                         size_t size)
     void model_set_tolerance(ModelData *m, double tolerance)
+    void model_set_stop_time(ModelData *m, double stop_time)
     void model_initialize(ModelData *m)
     ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time,
                                char *message, size_t size)
@@ -428,6 +429,10 @@ cdef class Model:
         if model_tolerance_refusal(tolerance, NULL, self.message, sizeof(self.message)):
             raise Refusal(self.message.decode())
         model_set_tolerance(self.m, tolerance)
+
+    def set_stop_time(self, double stop_time):
+        """The experiment's stop time (INFINITY: none), beyond which no solver step goes."""
+        model_set_stop_time(self.m, stop_time)
 
     def initialize(self):
         model_initialize(self.m)
