@@ -299,7 +299,8 @@ def test_a_missing_optional_package_is_one_line_saying_what_to_install(
     hide(monkeypatch, hidden)
     # a module an earlier test imported would not import its package again: drop them
     # (and from their packages: `from ..analysis import sweep` takes the package's attribute)
-    for module in ("conical_pendulum.analysis.sweep", "conical_pendulum.commands.sweep"):
+    dropped = ("conical_pendulum.analysis.sweep", "conical_pendulum.commands.sweep")
+    for module in [name for name in sys.modules if name.startswith(dropped)]:  # and the package's modules
         monkeypatch.delitem(sys.modules, module, raising=False)
         package, _, attribute = module.rpartition(".")
         if package in sys.modules:

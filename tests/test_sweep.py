@@ -21,9 +21,19 @@ import pytest
 from distributed import Client, LocalCluster
 
 from conical_pendulum.analysis import runner
-from conical_pendulum.analysis import sweep as sweep_module
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.analysis.sweep import LoadedFmu, SweepResults, grid, random_samples, sweep
+from conical_pendulum.analysis.sweep import (
+    LoadedFmu,
+    SweepResults,
+    dataset,
+    grid,
+    random_samples,
+    sweep,
+    worker,
+)
+from conical_pendulum.analysis.sweep import cluster as clusters
+from conical_pendulum.analysis.sweep import loop as client_loop
+from conical_pendulum.analysis.sweep import runs as run_tables
 from shapes import MODES, build_shapes_fmus
 
 # a start that needs more than 25 internal steps in the communication step from 1.5 s to 2 s
@@ -156,7 +166,7 @@ def test_non_finite_outputs_fail_the_run(seed_fmu, monkeypatch):
     try:
         rows, ok, message = fmu.run({}, 1.0, 0.1, ["energy", "bob2_x"])
         assert ok and message == "" and rows["time"][-1] == 1.0
-        monkeypatch.setattr(sweep_module, "run_fmu", poisoned)
+        monkeypatch.setattr(worker, "run_fmu", poisoned)
         rows, ok, message = fmu.run({}, 1.0, 0.1, ["energy", "bob2_x"])
         assert not ok and message == "non-finite values in energy"
     finally:
@@ -164,7 +174,7 @@ def test_non_finite_outputs_fail_the_run(seed_fmu, monkeypatch):
 
 
 def test_the_dataset_round_trips(seed_fmu, cluster, tmp_path, monkeypatch):
-    monkeypatch.setattr(sweep_module, "PART_SECONDS", 0.0)  # a file per batch: a dataset of several
+    monkeypatch.setattr(dataset, "PART_SECONDS", 0.0)  # a file per batch: a dataset of several
     out = tmp_path / "sweep.parquet"
     runs = grid({"l0": [5.0, -1.0], "solver": [1, 2], "beta1": [0.0, 0.3]})
     handle = sweep(
@@ -227,7 +237,7 @@ def test_the_dataset_round_trips(seed_fmu, cluster, tmp_path, monkeypatch):
 def test_pyarrow_dask_and_duckdb_read_the_dataset(seed_fmu, cluster, tmp_path, monkeypatch):
     duckdb = pytest.importorskip("duckdb")
     dd = pytest.importorskip("dask.dataframe")
-    monkeypatch.setattr(sweep_module, "PART_SECONDS", 0.0)
+    monkeypatch.setattr(dataset, "PART_SECONDS", 0.0)
     out = tmp_path / "sweep.parquet"
     handle = sweep(
         seed_fmu,
@@ -307,24 +317,24 @@ def test_runs_are_held_as_columns(seed_fmu):
 
     md = read_model_description(str(seed_fmu))
     samples = random_samples({"l0": (5, 15), "alpha0": (0, 0.5)}, 10**6, seed=1)
-    table = sweep_module._run_table(md, samples)
+    table = run_tables.run_table(md, samples)
     assert table.memory_usage(index=False).sum() == 2 * 8 * 10**6
     assert sum(values.nbytes for values in samples.columns.values()) == 2 * 8 * 10**6
-    as_dicts = sweep_module._run_table(md, list(samples[:1000]) + [{"l0": 7.0}])
+    as_dicts = run_tables.run_table(md, list(samples[:1000]) + [{"l0": 7.0}])
     start = float(next(v.start for v in md.modelVariables if v.name == "alpha0"))
     assert as_dicts.iloc[:1000].equals(table.iloc[:1000])
     assert as_dicts.iloc[1000].to_dict() == {"l0": 7.0, "alpha0": start}  # left alone: its start
-    solvers = sweep_module._run_table(md, grid({"solver": [1, 2], "l0": [5.0]}))
+    solvers = run_tables.run_table(md, grid({"solver": [1, 2], "l0": [5.0]}))
     assert solvers["solver"].dtype == np.int64 and list(solvers["solver"]) == [1, 2]
     for runs, message in [
         ([{"l0": 5.0}, {"l0": "x"}], "run 1: l0 = 'x' is not a number"),
         ([{"l0": 5.0}, (("l0", 5.0),)], "run 1: .* is not a mapping"),
         (grid({"solver": [1.0, 1.5]}), "run 1: solver = 1.5: solver is an Enumeration variable"),
-        (sweep_module.Runs({"l0": np.array(["5"])}), "runs: l0 holds <U1 values, not numbers"),
+        (run_tables.Runs({"l0": np.array(["5"])}), "runs: l0 holds <U1 values, not numbers"),
         ([], "no runs to do"),
     ]:
         with pytest.raises(ValueError, match=message):
-            sweep_module._run_table(md, runs)
+            run_tables.run_table(md, runs)
 
 
 def test_dask_keeps_no_history_of_the_runs(seed_fmu, cluster, tmp_path, monkeypatch):
@@ -332,7 +342,7 @@ def test_dask_keeps_no_history_of_the_runs(seed_fmu, cluster, tmp_path, monkeypa
     batches' runs and rows, which grew the client up to 25,000 runs. The sweep's client and
     its local scheduler keep LOW_LEVEL_LOG, on a local cluster and on a running one."""
     kept = []
-    made = sweep_module._client
+    made = clusters.connect
 
     @contextlib.contextmanager
     def watched(*args, **kwargs):
@@ -346,7 +356,7 @@ def test_dask_keeps_no_history_of_the_runs(seed_fmu, cluster, tmp_path, monkeypa
                 logs += [scheduler.transition_log]
             kept.append([log.maxlen for log in logs])
 
-    monkeypatch.setattr(sweep_module, "_client", watched)
+    monkeypatch.setattr(client_loop, "connect", watched)
     runs = grid({"l0": [5.0, 6.0, 7.0]})
     sweep(seed_fmu, runs, out=tmp_path / "local.parquet", stop_time=0.1, progress=False)
     sweep(
@@ -358,7 +368,7 @@ def test_dask_keeps_no_history_of_the_runs(seed_fmu, cluster, tmp_path, monkeypa
         scheduler=cluster.scheduler_address,
     )
     assert len(kept[0]) > 2 and len(kept[1]) == 1
-    assert all(maxlen == sweep_module.LOW_LEVEL_LOG for logs in kept for maxlen in logs)
+    assert all(maxlen == clusters.LOW_LEVEL_LOG for logs in kept for maxlen in logs)
 
 
 def command(*args, cwd):
@@ -525,7 +535,7 @@ def test_the_command_reports_a_crashing_run_and_exits_1(crashing_fmu, tmp_path):
 
 def interrupted_after(batches: int, monkeypatch):
     """Ctrl-C, as the client's main thread gets it, once that many batches are written."""
-    add = sweep_module._Progress.add
+    add = client_loop.Progress.add
     calls = []
 
     def interrupting(self, runs, failed):
@@ -534,7 +544,7 @@ def interrupted_after(batches: int, monkeypatch):
         if len(calls) == batches:
             raise KeyboardInterrupt
 
-    monkeypatch.setattr(sweep_module._Progress, "add", interrupting)
+    monkeypatch.setattr(client_loop.Progress, "add", interrupting)
 
 
 def test_an_interrupted_sweep_resumes_to_the_same_dataset(seed_fmu, cluster, tmp_path, monkeypatch):
@@ -548,7 +558,7 @@ def test_an_interrupted_sweep_resumes_to_the_same_dataset(seed_fmu, cluster, tmp
     }
     whole = sweep(seed_fmu, runs, out=tmp_path / "whole", **settings).to_pandas()
     out = tmp_path / "resumed"
-    monkeypatch.setattr(sweep_module, "PART_SECONDS", 0.0)
+    monkeypatch.setattr(dataset, "PART_SECONDS", 0.0)
     with monkeypatch.context() as interrupt:
         interrupted_after(5, interrupt)
         with pytest.raises(KeyboardInterrupt):
@@ -570,7 +580,7 @@ def test_a_killed_command_resumes_to_the_same_dataset(seed_fmu, cluster, tmp_pat
     args += ["--interval", "0.1", "--outputs", "energy,bob2_x", "--batch", "1", "--workers", "1"]
     out = tmp_path / "s.parquet"
     script = (
-        "import sys; from conical_pendulum.analysis import sweep; sweep.PART_SECONDS = 0.0; "
+        "import sys; from conical_pendulum.analysis.sweep import dataset; dataset.PART_SECONDS = 0.0; "
         "from conical_pendulum.cli import main; sys.exit(main(sys.argv[1:]))"
     )
     client = subprocess.Popen(

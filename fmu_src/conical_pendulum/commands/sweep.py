@@ -1,5 +1,5 @@
 """`conical-pendulum sweep`: many runs of an FMU as Dask tasks, streamed into a Parquet
-dataset (analysis/sweep.py; the sweep extra)."""
+dataset (analysis/sweep/; the sweep extra)."""
 
 from __future__ import annotations
 
