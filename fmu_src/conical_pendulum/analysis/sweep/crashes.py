@@ -1,16 +1,24 @@
-"""Crash forensics: each worker process notes the run it is in, in a file of its host, and
-faulthandler adds the fatal signal that kills it; the client reads the notes the dead left
-and fails a run that killed its worker twice, with the signal."""
+"""Crash forensics: each worker process notes the run it is in, in a file of its host;
+faulthandler adds the fatal signal that kills it, its nanny (guard.py) how it ended and
+whether it ran out of time. The client reads the notes the dead left, fails a run that
+killed its worker twice, or ran out of time once, naming the signal, and removes what
+they left behind."""
 
 from __future__ import annotations
 
-import contextlib
+import logging
 import os
+import re
+import shutil
+import signal
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
+logger = logging.getLogger(__name__)
 LOST_TIMES = 4  # a run lost with its worker this often, no note saying it was running, fails
+EXIT, EXCEEDED = "exit ", "exceeded "  # the lines a nanny's guard adds to a dead worker's note
 
 # faulthandler's words for the fatal signals it catches
 FATAL_SIGNALS = {
@@ -23,25 +31,84 @@ FATAL_SIGNALS = {
 
 
 def notes_folder(plugin: str) -> Path:
-    """Where a host's worker processes of one sweep note the run they are in."""
+    """Where a host's worker processes of one sweep note the run they are in (a file named
+    by the process id) and extract the FMU (`<pid>.fmu`)."""
     return Path(tempfile.gettempdir()) / plugin
 
 
-def read_notes(plugin: str) -> dict[int, tuple[int | None, str]]:
-    """On a worker: the notes its host's dead worker processes of this sweep left, as
-    {pid: (the run it was in or None, faulthandler's words for the signal or "")}; read
-    once, then removed."""
+def extracted(plugin: str, pid: int) -> Path:
+    return notes_folder(plugin) / f"{pid}.fmu"
+
+
+def watched(plugin: str, pid: int) -> Path:
+    """A mark that a nanny watches that worker process and will note how it ended."""
+    return notes_folder(plugin) / f"{pid}.watched"
+
+
+@dataclass(frozen=True)
+class Death:
+    """A dead worker process, as its note tells: the run it was in (None: none), faulthandler's
+    words for the fatal signal, the exit code its nanny saw, and the time it exceeded."""
+
+    run: int | None
+    fatal: str = ""
+    exit_code: int | None = None
+    exceeded: str = ""
+
+    def cause(self) -> str:
+        if self.fatal:
+            return (
+                f"{FATAL_SIGNALS[self.fatal]}, {self.fatal.lower()}"
+                if self.fatal in FATAL_SIGNALS
+                else self.fatal
+            )
+        if self.exit_code is not None and self.exit_code < 0:
+            name = signal.Signals(-self.exit_code).name if -self.exit_code in signal.valid_signals() else ""
+            name = name or f"signal {-self.exit_code}"
+            return f"{name}, killed from outside, e.g. out of memory" if name == "SIGKILL" else name
+        if self.exit_code is not None:
+            return f"exit status {self.exit_code}"
+        return "no fatal signal caught: killed from outside, e.g. SIGKILL or out of memory"
+
+    @classmethod
+    def of(cls, text: str) -> Death:
+        first, _, rest = text.partition("\n")
+        fatal = re.search(r"^Fatal Python error: (.*)$", rest, re.MULTILINE)
+        code = re.search(rf"^{EXIT}(-?\d+)$", rest, re.MULTILINE)
+        exceeded = re.search(rf"^({EXCEEDED}.*)$", rest, re.MULTILINE)
+        return cls(
+            int(first) if first.isdigit() else None,
+            fatal.group(1) if fatal else "",
+            int(code.group(1)) if code else None,
+            exceeded.group(1) if exceeded else "",
+        )
+
+
+def read_notes(plugin: str) -> dict[int, Death]:
+    """On a worker or nanny (or a local cluster's client): the notes this host's dead worker
+    processes of this sweep left, once their nanny has added how each ended; read once,
+    then removed with the FMU each extracted."""
     found = {}
     folder = notes_folder(plugin)
-    for note in folder.iterdir() if folder.is_dir() else ():
-        if process_runs(int(note.name)):
+    for entry in folder.iterdir() if folder.is_dir() else ():
+        name, dot, kind = entry.name.partition(".")
+        if not name.isdigit() or process_runs(int(name)):
             continue
-        first, _, rest = note.read_text().partition("\n")
-        fatal = [line for line in rest.splitlines() if line.startswith("Fatal Python error: ")]
-        cause = fatal[0].removeprefix("Fatal Python error: ") if fatal else ""
-        found[int(note.name)] = (int(first) if first.isdigit() else None, cause)
-        note.unlink()
+        pid = int(name)
+        if not dot:
+            text = entry.read_text(errors="replace")
+            if watched(plugin, pid).exists() and f"\n{EXIT}" not in text:
+                continue  # its nanny has yet to say how it ended
+            found[pid] = Death.of(text)
+            entry.unlink(missing_ok=True)
+        elif kind == "fmu" and not (folder / name).exists():
+            shutil.rmtree(entry, ignore_errors=True)
     return found
+
+
+def remove_notes(plugin: str):
+    """The sweep's notes folder of this host removed, whatever is left in it."""
+    shutil.rmtree(notes_folder(plugin), ignore_errors=True)
 
 
 def process_runs(pid: int) -> bool:
@@ -59,62 +126,76 @@ def process_runs(pid: int) -> bool:
         return True
 
 
-def death_message(causes: list[str]) -> str:
-    """A failed run's message when its worker process died: twice running it, as the notes
-    say, or lost LOST_TIMES times with it and no note saying why."""
-    fatal = causes[-1] if causes else ""
-    if fatal:
-        cause = f"{FATAL_SIGNALS[fatal]}, {fatal.lower()}" if fatal in FATAL_SIGNALS else fatal
-    elif causes:
-        cause = "no fatal signal caught: killed from outside, e.g. SIGKILL or out of memory"
-    else:
+def verdict(deaths: list[Death], lost: int) -> str | None:
+    """A run's message from the deaths noted while it ran and the times its task was lost
+    alone, or None: run it again. Out of time once, or killing the worker twice, fails it."""
+    for death in deaths:
+        if death.exceeded:
+            return f"{death.exceeded}: its worker process was ended ({death.cause()})"
+    if len(deaths) >= 2:
+        return f"the worker process died running this run, twice ({deaths[-1].cause()})"
+    if lost >= LOST_TIMES and not deaths:
         return f"the worker process was lost {LOST_TIMES} times with this run, with no note of why"
-    return f"the worker process died running this run, twice ({cause})"
+    return None
 
 
 class Deaths:
-    """The worker processes that died, read from their notes: which run each was in and the
-    signal; a task lost with its worker may have been only waiting there, the notes tell."""
+    """The worker processes that died, read from their notes: which run each was in and how
+    it ended; a task lost with its worker may have been only waiting there, the notes tell.
+    A local cluster's notes are read here, a running cluster's by its workers and nannies."""
 
-    def __init__(self, client, plugin: str):
-        self.client, self.plugin = client, plugin
+    def __init__(self, client, plugin: str, local: bool):
+        self.client, self.plugin, self.local = client, plugin, local
         self.notes, self.of_run, self.lost = {}, {}, {}
 
     def read(self, pid: int | None = None, wait: float = 5.0):
-        """Reads the notes left; with `pid`, waits up to `wait` s for that process's (a host
-        whose only worker died has none to read it until the nanny starts another)."""
+        """Reads the notes left; with `pid`, waits up to `wait` s for that process's (its
+        nanny notes how it ended; on a running cluster, a host whose only worker died has
+        none to read it until the nanny starts another)."""
         end = time.monotonic() + wait
         while True:
-            for found in self.client.run(
-                read_notes, self.plugin, on_error="ignore"
-            ).values():  # some may be dying
-                for dead, (run, cause) in found.items():
-                    self.notes[dead] = run, cause
-                    if run is not None:
-                        self.of_run.setdefault(run, []).append(cause)
+            for found in self._found():
+                for dead, death in found.items():
+                    self.notes[dead] = death
+                    if death.run is not None:
+                        self.of_run.setdefault(death.run, []).append(death)
             if pid is None or pid in self.notes or time.monotonic() > end:
                 return
-            time.sleep(0.25)
+            time.sleep(0.1)
 
-    def failed(self, run: int, pid: int | None) -> str | None:
-        """After the task of that run alone was lost with its worker: the run's message when
-        it has killed a worker twice (or was lost LOST_TIMES times, no note saying why), else
-        None: try it again."""
-        self.read(pid)
-        self.lost[run] = self.lost.get(run, 0) + 1
-        causes = self.of_run.get(run, [])
-        if len(causes) >= 2 or (self.lost[run] >= LOST_TIMES and not causes):
-            return death_message(causes)
-        return None
+    def _found(self) -> list[dict[int, Death]]:
+        if self.local:
+            return [read_notes(self.plugin)]
+        found = []
+        for nanny in (False, True):  # some may be dying: ignored
+            found += self.client.run(read_notes, self.plugin, nanny=nanny, on_error="ignore").values()
+        return found
 
+    def lost_with(self, first: int, last: int, pid: int | None) -> tuple[list, list[int]]:
+        """After the task of runs first..last was lost with its worker: the runs failed now,
+        as summary rows, and those to run again, each alone."""
+        self.read(pid, wait=5.0 if self.local else 30.0)
+        killer = self.notes[pid].run if pid in self.notes else None
+        failed, again = [], []
+        for run in range(first, last + 1):
+            if first == last and killer in (None, run):  # not only waiting on a worker another run killed
+                self.lost[run] = self.lost.get(run, 0) + 1
+            message = verdict(self.of_run.get(run, []), self.lost.get(run, 0))
+            if message:
+                failed.append((run, False, message, 0))
+            else:
+                again.append(run)
+        return failed, again
 
-def stop_workers_noting(deaths: Deaths, plugin: str):
-    """The dead workers' notes read (and removed), then the plugin unregistered."""
-    deaths.read()
-    deaths.client.unregister_worker_plugin(plugin)
-    deaths.client.run(_removenotes_folder, plugin, on_error="ignore")  # emptied by teardowns and reads
-
-
-def _removenotes_folder(plugin: str):
-    with contextlib.suppress(OSError):
-        notes_folder(plugin).rmdir()
+    def stop(self):
+        """The dead workers' notes read, the plugins unregistered, the notes folders removed."""
+        self.read()
+        for nanny in (False, True):
+            try:  # a worker dying now does not answer: its folder goes below
+                self.client.unregister_worker_plugin(self.plugin, nanny=nanny)
+            except Exception as exc:
+                logger.debug("sweep: unregistering %s: %s", self.plugin, exc)
+        for nanny in (False, True):
+            self.client.run(remove_notes, self.plugin, nanny=nanny, on_error="ignore")
+        if self.local:
+            remove_notes(self.plugin)

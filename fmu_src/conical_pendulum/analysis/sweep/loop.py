@@ -19,20 +19,22 @@ from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
-from distributed import as_completed
+from distributed import wait
 from distributed.scheduler import KilledWorker
 from fmpy import read_model_description
 
 from ...progress import bar
 from . import dataset
-from .cluster import connect
-from .crashes import Deaths, stop_workers_noting
+from .cluster import NoWorkers, Workers, connect
+from .crashes import Deaths
+from .guard import Guard
 from .results import SweepResults
 from .runs import check_outputs, dataset_inputs, run_table
 from .worker import FmuPlugin, run_batch
 
 logger = logging.getLogger(__name__)
 LOOPS = ("runner", "fmpy")  # sweep()'s loop: analysis.runner's compiled loop, or fmpy's own
+WAIT_SECONDS = 1.0  # the longest the client waits for a batch before it looks at the workers
 
 
 def _duration(seconds: float) -> str:
@@ -134,12 +136,15 @@ def _warn_of_fallbacks(client, plugin: str):
             logger.warning("sweep: worker %s runs fmpy's loop, not the compiled runner: %s", worker, reason)
 
 
-def _run(client, plan: Plan, parts: dataset.Parts, deaths: Deaths, shown: Progress, batch: int | None):
-    """The loop: batches in flight, at most three per worker thread, written as they finish."""
+def _run(client, plan: Plan, parts: dataset.Parts, deaths: Deaths, shown: Progress, options: dict):
+    """The loop: batches in flight, at most three per worker thread, written as they finish;
+    never a wait without bound: when no worker has been alive for `no_workers_timeout` s,
+    NoWorkers."""
     plugin = deaths.plugin
     threads = sum(client.nthreads().values())
-    size = batch or max(1, min(25, math.ceil(len(plan.done) / (4 * threads))))
-    todo, running, finished = dataset.batches(np.flatnonzero(~plan.done), size), {}, as_completed()
+    size = options["batch"] or max(1, min(25, math.ceil(len(plan.done) / (4 * threads))))
+    todo, running = dataset.batches(np.flatnonzero(~plan.done), size), {}
+    workers = Workers(client, options["no_workers_timeout"])
 
     def submit():
         while todo and len(running) < 3 * threads:  # bounded: the client's memory stays flat
@@ -152,27 +157,39 @@ def _run(client, plan: Plan, parts: dataset.Parts, deaths: Deaths, shown: Progre
                 run_batch, plugin, numbered, plan.stop_time, plan.output_interval, plan.outputs, pure=False
             )
             running[task] = first, last
-            finished.add(task)
 
     shown.show()
     submit()
-    for task in finished:
-        first, last = running.pop(task)
-        try:
-            summary, rows = task.result()
-        except KilledWorker as exc:
-            summary, rows = None, None
-            if last > first:  # find the run that killed it: each alone
-                todo.extendleft((index, index) for index in range(last, first - 1, -1))
-            elif message := deaths.failed(first, getattr(exc.last_worker, "pid", None)):
-                summary = [(first, False, message, 0)]
-            else:
-                todo.appendleft((first, first))
-        del task
-        if summary is not None:
-            parts.write(dataset.batch_table(summary, rows, plan.columns, plan.schema))
-            shown.add(len(summary), sum(not ok for _, ok, _, _ in summary))
+    while running:
+        with contextlib.suppress(TimeoutError):
+            wait(list(running), timeout=WAIT_SECONDS, return_when="FIRST_COMPLETED")
+        for task in [task for task in running if task.done()]:
+            first, last = running.pop(task)
+            try:
+                summary, rows = task.result()
+            except KilledWorker as exc:
+                rows = None
+                summary, again = deaths.lost_with(first, last, getattr(exc.last_worker, "pid", None))
+                todo.extendleft((index, index) for index in reversed(again))
+            del task
+            if summary:
+                parts.write(dataset.batch_table(summary, rows, plan.columns, plan.schema))
+                shown.add(len(summary), sum(not ok for _, ok, _, _ in summary))
+        workers.check()
         submit()
+
+
+def _register(client, plan: Plan, plugin: str, loop: str, run_timeout: float | None):
+    """The FMU loaded on every worker, and a guard on every nanny; a time limit without
+    nannies, which end a run's process, refused."""
+    guarded = client.register_plugin(Guard(plugin, run_timeout), name=plugin)  # {nanny: answer}
+    if run_timeout is not None and not guarded:
+        raise ValueError(
+            f"run timeout {run_timeout:g} s: the cluster's workers have no nanny to end a run "
+            "that exceeds it (start them with `dask worker --nanny`)"
+        )
+    client.register_plugin(FmuPlugin(plan.data, loop, plugin), name=plugin)
+    _warn_of_fallbacks(client, plugin)
 
 
 def sweep(
@@ -191,6 +208,8 @@ def sweep(
     loop: str = "runner",
     resume: bool = False,
     overwrite: bool = False,
+    run_timeout: float | None = None,
+    no_workers_timeout: float = 60.0,
 ) -> SweepResults:
     """Run the FMU once per run (a dict of parameters and start values) on a Dask cluster,
     into the Parquet dataset (a folder) `out`; returns a handle on it (SweepResults).
@@ -211,27 +230,34 @@ def sweep(
     log says why.
     """
     plan = _plan(fmu, runs, out, stop_time, output_interval, outputs, loop, batch, resume, overwrite)
+    for name, seconds in [("run timeout", run_timeout), ("no-workers timeout", no_workers_timeout)]:
+        if seconds is not None and not (math.isfinite(seconds) and seconds > 0):
+            raise ValueError(f"{name} {seconds} s: must be a positive number of seconds")
     shown = Progress(len(plan.done), int(plan.done.sum()), progress)
     with connect(scheduler, n_workers, timeout) as client:
         parts = dataset.Parts(plan.out, plan.schema, dataset.begin(plan.out, plan.settings, plan.replace))
         plugin = f"conical-pendulum-sweep-{uuid.uuid4().hex}"
-        deaths = Deaths(client, plugin)
+        deaths = Deaths(client, plugin, local=scheduler is None)
         try:
-            client.register_plugin(FmuPlugin(plan.data, loop, plugin), name=plugin)
-            _warn_of_fallbacks(client, plugin)
-            _run(client, plan, parts, deaths, shown, batch)
+            _register(client, plan, plugin, loop, run_timeout)
+            _run(
+                client, plan, parts, deaths, shown, {"batch": batch, "no_workers_timeout": no_workers_timeout}
+            )
         except BaseException as exc:
             shown.stop()
             parts.close()  # what was written stays, to resume
             with contextlib.suppress(Exception):  # the cluster may be gone
-                stop_workers_noting(deaths, plugin)
+                deaths.stop()
             if isinstance(exc, (OSError, CancelledError, asyncio.CancelledError)):
+                why = (
+                    str(exc)
+                    if isinstance(exc, NoWorkers)
+                    else f"lost the cluster ({type(exc).__name__}: {' '.join(str(exc).split())})"
+                )
                 raise ConnectionError(
-                    f"lost the cluster ({type(exc).__name__}: {' '.join(str(exc).split())}); "
-                    f"the runs done are kept in {plan.out}: "
-                    "run again with --resume (resume=True) to finish"
+                    f"{why}; the runs done are kept in {plan.out}: run again with --resume (resume=True) to finish"
                 ) from None
             raise
         parts.close()
-        stop_workers_noting(deaths, plugin)
+        deaths.stop()
     return SweepResults(plan.out, ran=int((~plan.done).sum()))

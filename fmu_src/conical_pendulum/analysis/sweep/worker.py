@@ -22,7 +22,7 @@ from fmpy.fmi2 import FMU2Slave
 
 from .. import runner
 from ..fmpy_runs import logging_callbacks, run_fmu
-from .crashes import notes_folder
+from .crashes import extracted, notes_folder
 
 logger = logging.getLogger(__name__)
 
@@ -38,8 +38,12 @@ class LoadedFmu:
 
     loads = 0
 
-    def __init__(self, data: bytes, loop: str = "runner"):
-        self.directory = tempfile.mkdtemp(prefix="conical_pendulum_sweep_")
+    def __init__(self, data: bytes, loop: str = "runner", directory: Path | None = None):
+        if directory is None:
+            directory = tempfile.mkdtemp(prefix="conical_pendulum_sweep_")
+        else:
+            directory.mkdir()
+        self.directory = str(directory)
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
             archive.extractall(self.directory)
         self.md = read_model_description(self.directory)
@@ -135,13 +139,14 @@ class FmuPlugin(WorkerPlugin):
         self.data, self.loop, self.name = data, loop, name
 
     def setup(self, worker):
-        self.fmu = LoadedFmu(self.data, self.loop)
-        self.data = None  # extracted: the worker keeps no second copy
         notes_folder(self.name).mkdir(exist_ok=True)
         self.note = open(notes_folder(self.name) / str(os.getpid()), "w")  # noqa: SIM115 (closed in teardown)
         self.catches = not faulthandler.is_enabled()  # a process's one handler: leave another's alone
         if self.catches:
             faulthandler.enable(self.note, all_threads=False)
+        # beside the note: whatever ends this process, its nanny or the client removes it
+        self.fmu = LoadedFmu(self.data, self.loop, extracted(self.name, os.getpid()))
+        self.data = None  # extracted: the worker keeps no second copy
 
     def running(self, index: int | None):
         """Notes the run this worker is in (None: none)."""
@@ -152,13 +157,13 @@ class FmuPlugin(WorkerPlugin):
         self.note.flush()
 
     def teardown(self, worker):
+        self.fmu.close()
         if self.catches:
             faulthandler.disable()
         self.note.close()
         Path(self.note.name).unlink(missing_ok=True)
         with contextlib.suppress(OSError):  # other workers' notes may still be there
             notes_folder(self.name).rmdir()
-        self.fmu.close()
 
 
 def run_batch(
