@@ -56,6 +56,7 @@ class Death:
     exceeded: str = ""
 
     def cause(self) -> str:
+        """How the process ended, the signal first."""
         if self.fatal:
             return (
                 f"{FATAL_SIGNALS[self.fatal]}, {self.fatal.lower()}"
@@ -63,9 +64,10 @@ class Death:
                 else self.fatal
             )
         if self.exit_code is not None and self.exit_code < 0:
-            name = signal.Signals(-self.exit_code).name if -self.exit_code in signal.valid_signals() else ""
-            name = name or f"signal {-self.exit_code}"
-            return f"{name}, killed from outside, e.g. out of memory" if name == "SIGKILL" else name
+            number = -self.exit_code
+            name = signal.Signals(number).name if number in signal.valid_signals() else f"signal {number}"
+            outside = name == "SIGKILL" and not self.exceeded  # not the guard's own
+            return f"{name}, killed from outside, e.g. out of memory" if outside else name
         if self.exit_code is not None:
             return f"exit status {self.exit_code}"
         return "no fatal signal caught: killed from outside, e.g. SIGKILL or out of memory"
