@@ -20,9 +20,11 @@ runs, a killed sweep keeps what it wrote, and `resume` runs only what is missing
 The package by job: runs.py (the run tables), worker.py (the FMU loaded on a worker, a
 batch run there), crashes.py (which run killed a worker, and how), dataset.py (the Parquet
 parts, the settings, resuming), results.py (SweepResults, the reader), cluster.py (the
-cluster made or reached) and loop.py (sweep(): the client's loop and its progress bar).
+cluster made or reached, its workers watched), guard.py (on each nanny: a run's time
+limit, how its worker ended) and loop.py (sweep(): the client's loop and progress bar).
 """
 
+from .cluster import NoWorkers
 from .crashes import FATAL_SIGNALS, LOST_TIMES
 from .dataset import PART_BYTES, PART_SECONDS, SETTINGS_FILE
 from .loop import LOOPS, sweep
@@ -38,6 +40,7 @@ __all__ = [
     "PART_SECONDS",
     "SETTINGS_FILE",
     "LoadedFmu",
+    "NoWorkers",
     "Runs",
     "SweepResults",
     "grid",

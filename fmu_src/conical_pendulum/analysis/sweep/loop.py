@@ -227,7 +227,10 @@ def sweep(
     `overwrite`. `batch` runs go to a task (default: about four tasks per worker, at most
     25 runs). `loop`: "runner", the compiled runner (analysis.runner), or "fmpy", fmpy's
     own loop: the same rows; a worker that cannot compile the runner uses fmpy's, and the
-    log says why.
+    log says why. `run_timeout` (s, None: no limit): a run that takes longer has its worker
+    process ended by its nanny and is failed, "exceeded N s" (refused on workers without
+    nannies). The client never waits without bound: when no worker has been alive for
+    `no_workers_timeout` s, the sweep stops (NoWorkers, a ConnectionError), resumable.
     """
     plan = _plan(fmu, runs, out, stop_time, output_interval, outputs, loop, batch, resume, overwrite)
     for name, seconds in [("run timeout", run_timeout), ("no-workers timeout", no_workers_timeout)]:
