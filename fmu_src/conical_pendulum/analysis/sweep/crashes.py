@@ -98,11 +98,15 @@ def read_notes(plugin: str) -> dict[int, Death]:
             continue
         pid = int(name)
         if not dot:
-            text = entry.read_text(errors="replace")
-            if watched(plugin, pid).exists() and f"\n{EXIT}" not in text:
-                continue  # its nanny has yet to say how it ended
-            found[pid] = Death.of(text)
-            entry.unlink(missing_ok=True)
+            claimed = folder / f"{pid}.read-by-{os.getpid()}"
+            try:  # the host's workers and nannies may read at once: the one that renames it reads it
+                if watched(plugin, pid).exists() and f"\n{EXIT}" not in entry.read_text(errors="replace"):
+                    continue  # its nanny has yet to say how it ended
+                entry.rename(claimed)
+            except FileNotFoundError:
+                continue
+            found[pid] = Death.of(claimed.read_text(errors="replace"))
+            claimed.unlink()
         elif kind == "fmu" and not (folder / name).exists():
             shutil.rmtree(entry, ignore_errors=True)
     return found
@@ -158,6 +162,8 @@ class Deaths:
         while True:
             for found in self._found():
                 for dead, death in found.items():
+                    if dead in self.notes:  # read by two processes of its host at once
+                        continue
                     self.notes[dead] = death
                     if death.run is not None:
                         self.of_run.setdefault(death.run, []).append(death)
