@@ -8,7 +8,14 @@ from pathlib import Path
 
 from conical_pendulum.builder.native import fmi_headers
 
-MODES = {"never": 0, "discard and terminate": 1, "discard": 2, "error": 3, "segfault": 4}  # parameter mode
+MODES = {
+    "never": 0,
+    "discard and terminate": 1,
+    "discard": 2,
+    "error": 3,
+    "segfault": 4,
+    "stuck": 5,
+}  # parameter mode
 SHAPES_VARIABLES = [  # name, value reference, type, causality, start
     ("x", 0, "Real", "output", None),
     ("h", 1, "Real", "output", None),

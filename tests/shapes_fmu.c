@@ -7,11 +7,14 @@
  * past it fails as `mode` says), 4 nan_at (parameter: from there x is NaN).
  * Integers: 0 count (output: steps taken), 1 mode (parameter: 0 never fail, 1 discard and
  * terminate, 2 discard `repeats` times then go on, 3 fmi2Error, 4 write through a null
- * pointer: SIGSEGV, as a buggy FMU crashes its host), 2 repeats (parameter).
+ * pointer: SIGSEGV, as a buggy FMU crashes its host, 5 never return: a stuck FMU, waiting
+ * for a signal without using the CPU), 2 repeats (parameter).
  * Booleans: 0 above (output: x > 0.5). */
+#define _POSIX_C_SOURCE 200809L /* pause() */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "fmi2Functions.h"
 
@@ -113,7 +116,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noPri
     Shapes *s = c;
     int mode = s->integers[MODE];
     if (mode == 4 && t + h > s->reals[FAIL_AT]) *s->nowhere = t;
-    if (mode && t + h > s->reals[FAIL_AT] && s->failures < (mode == 2 ? s->integers[REPEATS] : 1)) {
+    if (mode == 5 && t + h > s->reals[FAIL_AT])
+        for (;;) pause();
+    if (mode && mode < 4 && t + h > s->reals[FAIL_AT] && s->failures < (mode == 2 ? s->integers[REPEATS] : 1)) {
         char message[96];
         snprintf(message, sizeof message, "step from t = %g s by %g s refused", t, h);
         s->failures++;

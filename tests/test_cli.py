@@ -8,6 +8,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import urllib.request
 import zipfile
 from pathlib import Path
@@ -139,7 +140,17 @@ def test_page_writes_the_pydy_page(seed_fmu, tmp_path):
     assert len(next(iter(data.values()))) == 61  # 1 s at 60 outputs/s, both ends
 
 
-def test_page_serves_until_interrupted(seed_fmu, tmp_path):
+def ignore_sigint():
+    """In the child: SIGINT ignored, as a background job (`cmd &`) inherits it."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@pytest.mark.parametrize(
+    "stop, started",
+    [(signal.SIGINT, None), (signal.SIGINT, ignore_sigint), (signal.SIGTERM, ignore_sigint)],
+    ids=["ctrl-c", "ctrl-c-in-background", "sigterm-in-background"],
+)
+def test_page_serves_until_interrupted(seed_fmu, tmp_path, stop, started):
     server = subprocess.Popen(
         [
             COMMAND,
@@ -153,10 +164,15 @@ def test_page_serves_until_interrupted(seed_fmu, tmp_path):
             "--port",
             "0",
         ],
+        stdin=subprocess.DEVNULL,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=started,
     )
+    bound = threading.Timer(240, server.kill)  # the reads below end, whatever the server does
+    bound.daemon = True
+    bound.start()
     try:
         lines = []
         while not lines or not lines[-1].startswith("Ctrl-C"):
@@ -170,8 +186,12 @@ def test_page_serves_until_interrupted(seed_fmu, tmp_path):
         with urllib.request.urlopen(root + "conical_pendulum_scene_desc.json", timeout=10) as desc:
             assert json.load(desc)["source"] == "PyDy"
     finally:
-        server.send_signal(signal.SIGINT)
-        out, err = server.communicate(timeout=30)
+        server.send_signal(stop)
+        try:
+            out, err = server.communicate(timeout=30)
+        finally:  # a server that did not stop fails the test, and is ended
+            bound.cancel()
+            server.kill()
     assert server.returncode == 0, err
     assert "stopped" in out and "Traceback" not in err
 
@@ -300,7 +320,8 @@ def test_a_missing_optional_package_is_one_line_saying_what_to_install(
     hide(monkeypatch, hidden)
     # a module an earlier test imported would not import its package again: drop them
     # (and from their packages: `from ..analysis import sweep` takes the package's attribute)
-    for module in ("conical_pendulum.analysis.sweep", "conical_pendulum.commands.sweep"):
+    dropped = ("conical_pendulum.analysis.sweep", "conical_pendulum.commands.sweep")
+    for module in [name for name in sys.modules if name.startswith(dropped)]:  # and the package's modules
         monkeypatch.delitem(sys.modules, module, raising=False)
         package, _, attribute = module.rpartition(".")
         if package in sys.modules:

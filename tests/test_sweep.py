@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -21,9 +22,19 @@ import pytest
 from distributed import Client, LocalCluster
 
 from conical_pendulum.analysis import runner
-from conical_pendulum.analysis import sweep as sweep_module
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.analysis.sweep import LoadedFmu, SweepResults, grid, random_samples, sweep
+from conical_pendulum.analysis.sweep import (
+    LoadedFmu,
+    SweepResults,
+    dataset,
+    grid,
+    random_samples,
+    sweep,
+    worker,
+)
+from conical_pendulum.analysis.sweep import cluster as clusters
+from conical_pendulum.analysis.sweep import loop as client_loop
+from conical_pendulum.analysis.sweep import runs as run_tables
 from shapes import MODES, build_shapes_fmus
 
 # a start that needs more than 25 internal steps in the communication step from 1.5 s to 2 s
@@ -156,7 +167,7 @@ def test_non_finite_outputs_fail_the_run(seed_fmu, monkeypatch):
     try:
         rows, ok, message = fmu.run({}, 1.0, 0.1, ["energy", "bob2_x"])
         assert ok and message == "" and rows["time"][-1] == 1.0
-        monkeypatch.setattr(sweep_module, "run_fmu", poisoned)
+        monkeypatch.setattr(worker, "run_fmu", poisoned)
         rows, ok, message = fmu.run({}, 1.0, 0.1, ["energy", "bob2_x"])
         assert not ok and message == "non-finite values in energy"
     finally:
@@ -164,7 +175,7 @@ def test_non_finite_outputs_fail_the_run(seed_fmu, monkeypatch):
 
 
 def test_the_dataset_round_trips(seed_fmu, cluster, tmp_path, monkeypatch):
-    monkeypatch.setattr(sweep_module, "PART_SECONDS", 0.0)  # a file per batch: a dataset of several
+    monkeypatch.setattr(dataset, "PART_SECONDS", 0.0)  # a file per batch: a dataset of several
     out = tmp_path / "sweep.parquet"
     runs = grid({"l0": [5.0, -1.0], "solver": [1, 2], "beta1": [0.0, 0.3]})
     handle = sweep(
@@ -227,7 +238,7 @@ def test_the_dataset_round_trips(seed_fmu, cluster, tmp_path, monkeypatch):
 def test_pyarrow_dask_and_duckdb_read_the_dataset(seed_fmu, cluster, tmp_path, monkeypatch):
     duckdb = pytest.importorskip("duckdb")
     dd = pytest.importorskip("dask.dataframe")
-    monkeypatch.setattr(sweep_module, "PART_SECONDS", 0.0)
+    monkeypatch.setattr(dataset, "PART_SECONDS", 0.0)
     out = tmp_path / "sweep.parquet"
     handle = sweep(
         seed_fmu,
@@ -307,24 +318,24 @@ def test_runs_are_held_as_columns(seed_fmu):
 
     md = read_model_description(str(seed_fmu))
     samples = random_samples({"l0": (5, 15), "alpha0": (0, 0.5)}, 10**6, seed=1)
-    table = sweep_module._run_table(md, samples)
+    table = run_tables.run_table(md, samples)
     assert table.memory_usage(index=False).sum() == 2 * 8 * 10**6
     assert sum(values.nbytes for values in samples.columns.values()) == 2 * 8 * 10**6
-    as_dicts = sweep_module._run_table(md, list(samples[:1000]) + [{"l0": 7.0}])
+    as_dicts = run_tables.run_table(md, list(samples[:1000]) + [{"l0": 7.0}])
     start = float(next(v.start for v in md.modelVariables if v.name == "alpha0"))
     assert as_dicts.iloc[:1000].equals(table.iloc[:1000])
     assert as_dicts.iloc[1000].to_dict() == {"l0": 7.0, "alpha0": start}  # left alone: its start
-    solvers = sweep_module._run_table(md, grid({"solver": [1, 2], "l0": [5.0]}))
+    solvers = run_tables.run_table(md, grid({"solver": [1, 2], "l0": [5.0]}))
     assert solvers["solver"].dtype == np.int64 and list(solvers["solver"]) == [1, 2]
     for runs, message in [
         ([{"l0": 5.0}, {"l0": "x"}], "run 1: l0 = 'x' is not a number"),
         ([{"l0": 5.0}, (("l0", 5.0),)], "run 1: .* is not a mapping"),
         (grid({"solver": [1.0, 1.5]}), "run 1: solver = 1.5: solver is an Enumeration variable"),
-        (sweep_module.Runs({"l0": np.array(["5"])}), "runs: l0 holds <U1 values, not numbers"),
+        (run_tables.Runs({"l0": np.array(["5"])}), "runs: l0 holds <U1 values, not numbers"),
         ([], "no runs to do"),
     ]:
         with pytest.raises(ValueError, match=message):
-            sweep_module._run_table(md, runs)
+            run_tables.run_table(md, runs)
 
 
 def test_dask_keeps_no_history_of_the_runs(seed_fmu, cluster, tmp_path, monkeypatch):
@@ -332,7 +343,7 @@ def test_dask_keeps_no_history_of_the_runs(seed_fmu, cluster, tmp_path, monkeypa
     batches' runs and rows, which grew the client up to 25,000 runs. The sweep's client and
     its local scheduler keep LOW_LEVEL_LOG, on a local cluster and on a running one."""
     kept = []
-    made = sweep_module._client
+    made = clusters.connect
 
     @contextlib.contextmanager
     def watched(*args, **kwargs):
@@ -346,7 +357,7 @@ def test_dask_keeps_no_history_of_the_runs(seed_fmu, cluster, tmp_path, monkeypa
                 logs += [scheduler.transition_log]
             kept.append([log.maxlen for log in logs])
 
-    monkeypatch.setattr(sweep_module, "_client", watched)
+    monkeypatch.setattr(client_loop, "connect", watched)
     runs = grid({"l0": [5.0, 6.0, 7.0]})
     sweep(seed_fmu, runs, out=tmp_path / "local.parquet", stop_time=0.1, progress=False)
     sweep(
@@ -358,7 +369,7 @@ def test_dask_keeps_no_history_of_the_runs(seed_fmu, cluster, tmp_path, monkeypa
         scheduler=cluster.scheduler_address,
     )
     assert len(kept[0]) > 2 and len(kept[1]) == 1
-    assert all(maxlen == sweep_module.LOW_LEVEL_LOG for logs in kept for maxlen in logs)
+    assert all(maxlen == clusters.LOW_LEVEL_LOG for logs in kept for maxlen in logs)
 
 
 def command(*args, cwd):
@@ -525,7 +536,7 @@ def test_the_command_reports_a_crashing_run_and_exits_1(crashing_fmu, tmp_path):
 
 def interrupted_after(batches: int, monkeypatch):
     """Ctrl-C, as the client's main thread gets it, once that many batches are written."""
-    add = sweep_module._Progress.add
+    add = client_loop.Progress.add
     calls = []
 
     def interrupting(self, runs, failed):
@@ -534,7 +545,7 @@ def interrupted_after(batches: int, monkeypatch):
         if len(calls) == batches:
             raise KeyboardInterrupt
 
-    monkeypatch.setattr(sweep_module._Progress, "add", interrupting)
+    monkeypatch.setattr(client_loop.Progress, "add", interrupting)
 
 
 def test_an_interrupted_sweep_resumes_to_the_same_dataset(seed_fmu, cluster, tmp_path, monkeypatch):
@@ -548,7 +559,7 @@ def test_an_interrupted_sweep_resumes_to_the_same_dataset(seed_fmu, cluster, tmp
     }
     whole = sweep(seed_fmu, runs, out=tmp_path / "whole", **settings).to_pandas()
     out = tmp_path / "resumed"
-    monkeypatch.setattr(sweep_module, "PART_SECONDS", 0.0)
+    monkeypatch.setattr(dataset, "PART_SECONDS", 0.0)
     with monkeypatch.context() as interrupt:
         interrupted_after(5, interrupt)
         with pytest.raises(KeyboardInterrupt):
@@ -570,7 +581,7 @@ def test_a_killed_command_resumes_to_the_same_dataset(seed_fmu, cluster, tmp_pat
     args += ["--interval", "0.1", "--outputs", "energy,bob2_x", "--batch", "1", "--workers", "1"]
     out = tmp_path / "s.parquet"
     script = (
-        "import sys; from conical_pendulum.analysis import sweep; sweep.PART_SECONDS = 0.0; "
+        "import sys; from conical_pendulum.analysis.sweep import dataset; dataset.PART_SECONDS = 0.0; "
         "from conical_pendulum.cli import main; sys.exit(main(sys.argv[1:]))"
     )
     client = subprocess.Popen(
@@ -658,3 +669,237 @@ def test_the_command_refuses_an_existing_sweep_and_says_how_to_go_on(seed_fmu, t
         run.returncode == 2 and "out: other is a folder that holds no sweep; give another name" in run.stderr
     )
     assert (tmp_path / "other" / "notes.txt").read_text() == "mine"
+
+
+# Sweeps that never hang (issue 39): before, a local cluster lost every worker when runs
+# crashed every few seconds (SpecCluster's lost-worker timer closed nannies that were
+# restarting them), and the client waited forever: 15 all-crashing runs on one worker hung
+# in 4 of 4 tries. Each case runs the command with a time limit, in a temporary directory
+# of its own (TMPDIR, the workers' too) that must be empty afterwards.
+CRASH_LIMIT = 600  # seconds: a hang fails the test, a loaded machine does not
+SEGFAULTED = "the worker process died running this run, twice (SIGSEGV, segmentation fault)"
+
+
+def isolated_command(fmu, *args, tmp_path, env=None):
+    """`conical-pendulum sweep FMU ARGS --out s.parquet` with TMPDIR a fresh folder."""
+    temporary = tmp_path / "tmp"
+    temporary.mkdir(exist_ok=True)
+    out = tmp_path / "s.parquet"
+    run = subprocess.run(
+        [str(Path(sys.executable).with_name("conical-pendulum")), "sweep", str(fmu), *map(str, args)]
+        + ["--out", str(out), "--no-progress", "--overwrite"],
+        cwd=tmp_path,
+        env={**os.environ, "TMPDIR": str(temporary), **(env or {})},
+        stdin=subprocess.DEVNULL,
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=CRASH_LIMIT,
+    )
+    return run, SweepResults(out) if (out / "_sweep.json").exists() else None, temporary
+
+
+def crashing_runs(samples: int, crash_below: float, seed: int = 2) -> list:
+    """The shapes FMU as the issue's Crash.fmu, a parameter above a threshold crashing it:
+    each run segfaults past t = fail_at, drawn from 0 to `crash_below`, and stops at 1 s:
+    below 1, every run crashes; with 10, about a tenth."""
+    return ["--random", "mode=4:4", "--random", f"fail_at=0:{crash_below}", "--random", "gain=0:1"] + [
+        "--samples",
+        samples,
+        "--seed",
+        seed,
+        "--stop-time",
+        "1",
+        "--interval",
+        "0.01",
+    ]
+
+
+def check_crashing_sweep(run, results, temporary, samples: int):
+    """Exit status 1, every run once, each crashing run failed naming SIGSEGV, nothing left."""
+    assert run.returncode == 1, run.stderr
+    assert f"{samples} runs (" in run.stdout and "Traceback" not in run.stderr
+    frame = results.to_pandas(["status", "message", "fail_at", "time"])
+    assert results.done() == samples and sorted(frame["run"].unique()) == list(range(samples))
+    first = frame.drop_duplicates("run").set_index("run")
+    crashing = first["fail_at"] < 1  # a step, the last ending at 1 s, reaches past fail_at
+    assert (first.loc[crashing, "message"] == SEGFAULTED).all()
+    assert (first.loc[~crashing, "status"] == "ok").all()
+    assert (frame[frame["run"].isin(first.index[crashing])].groupby("run").size() == 1).all()
+    assert (frame[frame["run"].isin(first.index[~crashing])].groupby("run").size() == 101).all()
+    assert sorted(path.name for path in temporary.iterdir()) == []  # no FMU, note nor scratch left
+    return int(crashing.sum())
+
+
+@pytest.mark.parametrize(
+    "samples, workers",
+    [
+        (15, 1),
+        (30, 2),
+        pytest.param(15, 2, marks=pytest.mark.slow),
+        pytest.param(30, 1, marks=pytest.mark.slow),
+    ],
+)
+def test_every_run_crashing_finishes(crashing_fmu, tmp_path, samples, workers):
+    """Each crashing run costs about two worker restarts (some 2 to 4 s here): 15 runs on
+    one worker about 2 minutes on the loaded machine; the other pairs are long checks."""
+    run, results, temporary = isolated_command(
+        crashing_fmu, *crashing_runs(samples, 0.9), "--workers", workers, tmp_path=tmp_path
+    )
+    assert check_crashing_sweep(run, results, temporary, samples) == samples
+    assert f"{samples} runs ({samples} failed)" in run.stdout
+
+
+def test_three_hundred_runs_a_tenth_crashing_finish(crashing_fmu, tmp_path):
+    run, results, temporary = isolated_command(crashing_fmu, *crashing_runs(300, 10.0), tmp_path=tmp_path)
+    crashed = check_crashing_sweep(run, results, temporary, 300)
+    assert 15 <= crashed <= 45  # about a tenth, seed 2
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [3, 4, 5])
+@pytest.mark.parametrize("samples, workers, crash_below", [(15, 1, 0.9), (30, 2, 0.9), (300, 2, 10.0)])
+def test_crashing_sweeps_finish_every_time(crashing_fmu, tmp_path, samples, workers, crash_below, seed):
+    """The race struck 4 of 4 tries: the cases again, with other runs."""
+    run, results, temporary = isolated_command(
+        crashing_fmu, *crashing_runs(samples, crash_below, seed), "--workers", workers, tmp_path=tmp_path
+    )
+    check_crashing_sweep(run, results, temporary, samples)
+
+
+@pytest.fixture
+def running_cluster(tmp_path):
+    """A cluster as a user starts one: `dask scheduler` and `dask worker --nanny` (two
+    workers of one thread) processes, with TMPDIR a fresh folder; stopped after."""
+    dask = str(Path(sys.executable).with_name("dask"))
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    address_file = tmp_path / "scheduler.json"
+    # the scheduler tells the client of a task whose worker died at once, as a local cluster does
+    env = {**os.environ, "TMPDIR": str(temporary), "DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "0"}
+    started = [
+        subprocess.Popen(
+            [dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard"]
+            + ["--scheduler-file", str(address_file)],
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    ]
+    try:
+        deadline = time.monotonic() + 120
+        while not address_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        started.append(
+            subprocess.Popen(
+                [dask, "worker", "--nanny", "--nworkers", "2", "--nthreads", "1", "--no-dashboard"]
+                + ["--scheduler-file", str(address_file)],
+                env=env,
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+        )
+        with Client(scheduler_file=str(address_file), timeout=120) as client:
+            client.wait_for_workers(2, timeout=120)
+            yield client.scheduler.address, temporary
+    finally:
+        for process in reversed(started):
+            process.terminate()
+            try:
+                process.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+
+
+def test_crashing_runs_on_a_running_cluster(crashing_fmu, running_cluster, tmp_path):
+    address, temporary = running_cluster
+    client = tmp_path / "client"
+    client.mkdir()
+    run, results, client_temporary = isolated_command(
+        crashing_fmu, *crashing_runs(20, 2.0), "--scheduler", address, tmp_path=client
+    )
+    check_crashing_sweep(run, results, client_temporary, 20)
+    # the workers' host: their notes and extracted FMUs removed; Dask's own scratch space stays
+    assert [path.name for path in temporary.iterdir() if path.name != "dask-scratch-space"] == []
+
+
+def test_a_stuck_run_is_ended_after_the_run_timeout(crashing_fmu, tmp_path):
+    """A doStep that never returns (mode 5): its worker process ended after --run-timeout,
+    the run failed saying so, at the cost of one timeout, and the other runs done."""
+    args = ["--grid", "mode=0,5,0,0,0,0", "--grid", "fail_at=0.5", "--stop-time", "1", "--interval", "0.25"]
+    start = time.monotonic()
+    run, results, temporary = isolated_command(
+        crashing_fmu, *args, "--run-timeout", "5", "--batch", "3", "--workers", "2", tmp_path=tmp_path
+    )
+    seconds = time.monotonic() - start
+    assert run.returncode == 1, run.stderr
+    failed = results.failed()
+    assert list(failed.index) == [1]
+    assert failed.loc[1, "message"] == "exceeded 5 s: its worker process was ended (SIGKILL)"
+    assert "6 runs (1 failed), 26 rows" in run.stdout  # five runs of 5 rows, one row for the stuck one
+    assert sorted(path.name for path in temporary.iterdir()) == []
+    print(f"6 runs, one stuck, --run-timeout 5, 2 workers: {seconds:.1f} s")
+
+
+def test_a_run_timeout_needs_nannies(crashing_fmu, tmp_path):
+    with (
+        LocalCluster(n_workers=1, processes=False, dashboard_address="127.0.0.1:0") as in_process,
+        pytest.raises(ValueError, match=r"run timeout 5 s: the cluster's workers have no nanny"),
+    ):
+        sweep(
+            crashing_fmu,
+            [{"gain": 1.0}],
+            scheduler=in_process.scheduler_address,
+            run_timeout=5,
+            progress=False,
+            out=tmp_path / "s",
+        )
+
+
+def test_a_cluster_without_workers_stops_the_sweep_resumably(crashing_fmu, tmp_path):
+    """The workers gone for good (scaled to none, while a run is stuck): the sweep stops once
+    no worker has been alive for no_workers_timeout s, saying how to finish it."""
+    runs = [{"gain": 1.0, "mode": 0}, {"gain": 2.0, "mode": MODES["stuck"], "fail_at": 0.5}]
+    with LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address="127.0.0.1:0") as doomed:
+        stopping = threading.Timer(10, doomed.scale, [0])  # long after the first run
+        stopping.start()
+        start = time.monotonic()
+        try:
+            with pytest.raises(ConnectionError) as stopped:
+                sweep(
+                    crashing_fmu,
+                    runs,
+                    stop_time=1.0,
+                    output_interval=0.5,
+                    batch=1,
+                    scheduler=doomed.scheduler_address,
+                    no_workers_timeout=3,
+                    progress=False,
+                    out=tmp_path / "s",
+                )
+        finally:
+            stopping.cancel()
+    assert str(stopped.value) == (
+        f"no worker alive for 3 s; the runs done are kept in {tmp_path / 's'}: "
+        "run again with --resume (resume=True) to finish"
+    )
+    assert time.monotonic() - start < 120
+    assert SweepResults(tmp_path / "s").done() == 1
+
+
+def test_a_local_cluster_replaces_a_nanny_that_closed():
+    """A nanny the cluster closed (as SpecCluster's lost-worker timer did) is started anew
+    while the client watches the workers."""
+    with clusters.connect(None, 1, 10) as client:
+        (nanny,) = client.cluster.workers.values()
+        client.cluster.sync(nanny.close)
+        assert not client.nthreads()
+        watch = clusters.Workers(client, patience=300)
+        deadline = time.monotonic() + 120
+        while not client.nthreads() and time.monotonic() < deadline:
+            watch.check(every=0)
+            time.sleep(0.5)
+        assert client.nthreads() and nanny not in client.cluster.workers.values()

@@ -6,7 +6,7 @@ subcommand is a module of its own in commands/ (build, check, linearize, show, p
 with `add_arguments(parser)` and `run(args) -> int`, its options defined once there.
 Only the chosen subcommand's module is imported, so `--help` is quick and `build` needs
 neither the sweep extra (Dask) nor the cosim one (ecospy). Being this package's code, a
-sweep's tasks pickle by reference to conical_pendulum.analysis.sweep, which the workers
+sweep's tasks pickle by reference to conical_pendulum.analysis.sweep's modules, which the workers
 import, and not as code of a `__main__` they do not have.
 
 A mistake the user can fix (a bad option or value, a missing or unreadable file, a missing

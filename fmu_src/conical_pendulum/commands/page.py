@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import functools
 import http.server
+import signal
 from pathlib import Path
 
 from fmpy import read_model_description
@@ -43,7 +44,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME=VALUE",
         help="a parameter or state start value, e.g. alpha0=0.5 or l0=8; repeat for more",
     )
-    parser.add_argument("--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C")
+    parser.add_argument(
+        "--serve", action="store_true", help="serve the page on 127.0.0.1 until Ctrl-C (or SIGTERM)"
+    )
     parser.add_argument(
         "--port", type=int, default=8000, help="with --serve: the port (8000; 0 picks a free one)"
     )
@@ -98,8 +101,14 @@ def run(args) -> int:
     return 0
 
 
+def _stop(signum, frame):
+    raise KeyboardInterrupt
+
+
 def serve(folder: Path, address: str, port: int) -> int:
-    """Serve `folder` on 127.0.0.1 until Ctrl-C; 0."""
+    """Serve `folder` on 127.0.0.1 until Ctrl-C or SIGTERM; 0. Both are caught here, since a
+    process started in the background inherits SIGINT ignored (and Python then installs
+    no KeyboardInterrupt for it), and SIGTERM would end it without a word."""
 
     class Handler(http.server.SimpleHTTPRequestHandler):
         def log_message(self, format, *args):  # format: http.server's name
@@ -118,8 +127,12 @@ def serve(folder: Path, address: str, port: int) -> int:
             f"Ctrl-C stops.",
             flush=True,
         )
+        previous = {number: signal.signal(number, _stop) for number in (signal.SIGINT, signal.SIGTERM)}
         try:
             server.serve_forever()
         except KeyboardInterrupt:
             print("stopped")
+        finally:
+            for number, handler in previous.items():
+                signal.signal(number, handler)
     return 0

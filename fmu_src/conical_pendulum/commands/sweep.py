@@ -1,9 +1,10 @@
 """`conical-pendulum sweep`: many runs of an FMU as Dask tasks, streamed into a Parquet
-dataset (analysis/sweep.py; the sweep extra)."""
+dataset (analysis/sweep/; the sweep extra)."""
 
 from __future__ import annotations
 
 import argparse
+import math
 import shlex
 import sys
 import time
@@ -50,12 +51,21 @@ def positive_int(text: str) -> int:
     return value
 
 
+def seconds(text: str) -> float:
+    value = _number(text)
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a positive number of seconds")
+    return value
+
+
 EPILOG = """Variables: the FMU's parameters (l0, m0, M0, Ixx0, g, rtol, solver, ...) and state
 start values (alpha0, beta0, omega0, delta0, ...). The output is a folder of Parquet
 files (pandas.read_parquet, dask, duckdb read it), one row per run and time: run, the
 inputs (a state's start value as <name>_start), status ('ok' or 'failed'), message,
-time, the outputs. An interrupted sweep (Ctrl-C, a killed command, a lost cluster)
-keeps what it wrote: the same command with --resume runs only what is missing.
+time, the outputs. A run that kills its worker process twice, or exceeds --run-timeout
+once, fails with the signal that ended it, and the sweep goes on. An interrupted sweep
+(Ctrl-C, a killed command, a lost cluster, no worker for --no-workers-timeout) keeps
+what it wrote: the same command with --resume runs only what is missing.
 Exit status: 0 when every run succeeded, 1 when some failed (they are in the output),
 2 for bad options or when the sweep could not run, 130 on Ctrl-C."""
 
@@ -101,6 +111,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=10.0,
         metavar="SECONDS",
         help="with --scheduler: how long to try to connect (10)",
+    )
+    parser.add_argument(
+        "--run-timeout",
+        type=seconds,
+        metavar="SECONDS",
+        help="end a run's worker process when the run takes longer, and fail the run (no limit)",
+    )
+    parser.add_argument(
+        "--no-workers-timeout",
+        type=seconds,
+        default=60.0,
+        metavar="SECONDS",
+        help="stop the sweep (resumable) when no worker has been alive this long (60)",
     )
     parser.add_argument("--batch", type=positive_int, help="runs per task (default: automatic)")
     parser.add_argument(
@@ -166,6 +189,8 @@ def run(args) -> int:
             loop=args.loop,
             resume=args.resume,
             overwrite=args.overwrite,
+            run_timeout=args.run_timeout,
+            no_workers_timeout=args.no_workers_timeout,
         )
     except (ValueError, ConnectionError) as exc:
         raise UserError(str(exc)) from None
