@@ -14,7 +14,7 @@ from conical_pendulum.builder.units import BASE_UNITS
 from conical_pendulum.demos import coupled, ecospy_run, libcosim_run, ssp, ssp_tools
 from conical_pendulum.demos.monolithic import cart_parameters
 from fmu_helpers import Instance
-from required_tools import require_tool
+from required_tools import require_omsimulator, require_tool
 
 STEP, STOP_TIME, CART_MASS = 0.01, 0.1, 5.0  # 10 steps: the fewest ecos' command line takes
 
@@ -200,17 +200,9 @@ def test_fmpy_runs_it_with_its_own_master(package, ecospy_runs, tmp_path):
         assert run.values["x"][0] != pytest.approx(ecospy_runs[scheme].values["x"][1], abs=1e-6)
 
 
-def require_omsimulator():
-    require_tool(
-        "OMSimulator",
-        ssp_tools.omsimulator,
-        "OpenModelica's OMSimulator on PATH or in ../shared/hosts/omsimulator (and Debian's libicu72)",
-    )
-
-
 @pytest.fixture(scope="module")
 def omsimulator_runs(package, tmp_path_factory):
-    """OMSimulator from ../shared/hosts/omsimulator (or PATH), each variant of the package as written."""
+    """OMSimulator ($OMSIMULATOR or PATH), each variant of the package as written."""
     require_omsimulator()
     work = tmp_path_factory.mktemp("omsimulator")
     return {scheme: ssp_tools.run("omsimulator", package, scheme, work) for scheme in ssp.VARIANTS}
@@ -285,11 +277,7 @@ def test_omsimulator_input_extrapolation_makes_the_apparent_mass_scheme_second_o
     """With --inputExtrapolation OMSimulator passes the pendulum's output derivatives (F_free,
     M_app) on to the cart as input derivatives (issue 29): halving the step quarters the
     cart's error (100 kg cart, 2 s, 0.04 and 0.02 s), where the held inputs only halve it."""
-    require_tool(
-        "OMSimulator",
-        ssp_tools.omsimulator,
-        "OpenModelica's OMSimulator on PATH or in ../shared/hosts/omsimulator (and Debian's libicu72)",
-    )
+    require_omsimulator()
     stop, steps, mass = 2.0, (0.04, 0.02), 100.0
     times = np.linspace(0.0, stop, round(stop / steps[-1]) + 1)
     truth = coupled.reference(times, coupled.SCENE, cart_parameters(m_cart=mass))
