@@ -26,6 +26,8 @@ from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.sweep import LoadedFmu, SweepResults, grid, random_samples, sweep
 from shapes import MODES, build_shapes_fmus
 
+pytestmark = pytest.mark.cluster  # Dask clusters, local ones or the command's own
+
 # a start that needs more than 25 internal steps in the communication step from 1.5 s to 2 s
 DISCARDED_AT_1_5 = {"alpha0": 1.2, "delta2": 3.0, "max_steps": 25}
 
