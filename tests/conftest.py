@@ -268,5 +268,5 @@ def pytest_terminal_summary(terminalreporter, config):
         where = store(config)
         terminalreporter.write_line(
             f"FMUs the tests ran: {len(records)} ({', '.join(f'{n} {k}' for k, n in sorted(kinds.items()))}); "
-            f"built by this run: {built}, the others kept by an earlier one; in {where}"
+            f"built by this run: {built}, kept from an earlier run: {len(records) - built}; in {where}"
         )
