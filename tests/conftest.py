@@ -115,7 +115,9 @@ def cached(folders: dict, key: dict, name: str, build):
             (entry / "key.json").write_text(json.dumps(key, indent=1, sort_keys=True))
         (entry / "used").touch()
     folders["record"].mkdir(parents=True, exist_ok=True)
-    (folders["record"] / digest).write_text(json.dumps({"kind": key["kind"], "built": made}))
+    record = folders["record"] / digest
+    if made or not record.exists():  # a later use does not hide that this run built it
+        record.write_text(json.dumps({"kind": key["kind"], "built": made}))
     return path
 
 
