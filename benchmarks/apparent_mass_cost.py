@@ -3,7 +3,7 @@
     python benchmarks/apparent_mass_cost.py
 
 With coupling, every output evaluation also evaluates the right-hand side, the apparent
-mass and the outputs at a_pivot = 0 (runtime/csrc/dynamics.c): one more right-hand side
+mass and the outputs at a_pivot = 0 (runtime/csrc/core/dynamics.c): one more right-hand side
 and outputs. Measured in one run, in the compiled core's C loop, for 3 links (expanded
 equations) and 20 (recursive): one right-hand side, the outputs of the coupled scene and
 of the same chain without coupling, and one 0.01 s communication step (RK45 at the FMU's

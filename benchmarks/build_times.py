@@ -4,7 +4,7 @@
 
 For each n, the compiled core of Scene.uniform(n) built in the expanded formulation (the
 equations derived and generated as C) and in the recursive one (loops over the links,
-runtime/csrc/chain.c; nothing to derive), each into a fresh cache directory; the cached
+runtime/csrc/core/chain.c; nothing to derive), each into a fresh cache directory; the cached
 figure is a second build_core of the same scene. "auto" (a scene's default) picks the
 expanded form below 6 links and the recursive one from 6 (scene.RECURSIVE_FROM). Prints
 each build as it ends, then the table docs/performance.md shows (markdown), and writes

@@ -5,7 +5,7 @@
 
 For every cart mass and communication step, the SSP package `conical-pendulum system`
 writes (native FMI 2.0 pendulum and cart, both declaring canInterpolateInputs and
-maxOutputDerivativeOrder = 2), run by OMSimulator (PATH or ../shared/hosts/omsimulator)
+maxOutputDerivativeOrder = 2), run by OMSimulator ($OMSIMULATOR or PATH)
 by both schemes, as written ("held": OMSimulator's default, inputs constant over a step) and
 with `--inputExtrapolation=true`; each run against the monolithic model at its communication
 points over 10 s (coupled.coupling_errors: the largest cart-position error). The observed

@@ -1,57 +1,162 @@
-"""Session fixtures: every FMU the tests run, built once per run of the suite.
+"""Session fixtures: every FMU the tests run, built once and kept across runs.
 
 built_fmu(scene, backend=..., fmi_version=..., settings=..., platforms=...) and
-built_cart(fmi_version) are the one place the tests ask the builder for an FMU; an FMU is
-cached under a hash of what it is built from, in a folder all of pytest-xdist's workers of
-one run share, and built once under a file lock, whichever worker asks first. Tests of the
-builder itself (what it refuses, rebuilding in place, the command line) call it directly.
+built_cart(fmi_version) are the one place the tests ask the builder for an FMU. An FMU is
+cached under a hash of everything it is built from (the test's key: scene, settings,
+backend, platforms, FMI version; and the build's inputs: every file of the installed
+package, the Python packages and compilers the build uses), in the project's cache root
+(builder.compiler.cache_root(), beside the compiled cores), and built under a file lock by
+whichever pytest process asks first; `pytest --fresh-fmus` builds them anew in the run's
+own temporary folder instead. Tests of the builder itself (what it refuses, rebuilding in
+place, the command line) call it directly.
 """
 
 import fcntl
+import functools
 import hashlib
 import json
 import os
+import platform
+import shlex
+import shutil
+import subprocess
+import sys
+import sysconfig
+import time
 from collections import Counter
+from importlib.metadata import version
+from pathlib import Path
 
 import pytest
 
+import conical_pendulum
 from conical_pendulum import Scene
 from conical_pendulum.builder.cart import build_cart
+from conical_pendulum.builder.compiler import cache_root
 from conical_pendulum.builder.fmu import build_fmu
+from conical_pendulum.builder.native import COMPILERS
 
 SEED = Scene.uniform(3)
 COUPLED = Scene.uniform(3, coupling=True)
-CACHE = "fmu-cache"  # under the run's base temporary folder, the workers' shared parent
+RUN_RECORD = "fmu-cache"  # under the run's base temporary folder, the workers' shared parent
+KEPT = "test-fmus"  # under the cache root: the FMUs kept across runs
+KEPT_DAYS = 14  # an FMU no run has used for this long is deleted at the start of a run
+# what goes into an FMU besides the package's own files: the Python packages the build runs
+BUILD_PACKAGES = ("pythonfmu", "fmpy", "cython", "numpy", "sympy", "setuptools")
 
 
-def cache_folder(tmp_path_factory):
+def pytest_addoption(parser):
+    parser.addoption(
+        "--fresh-fmus",
+        action="store_true",
+        help="build every FMU the tests run anew, in this run's temporary folder (not the kept cache)",
+    )
+
+
+def run_folder(config) -> Path:
     """The run's base temporary folder: under xdist each worker's is a subfolder of it."""
-    base = tmp_path_factory.getbasetemp()
-    return (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / CACHE
+    base = config._tmp_path_factory.getbasetemp()
+    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
 
 
-def cached(folder, key: dict, name: str, build):
-    """The file `name` that build(path) made for `key`, made once in all workers (flock)."""
+@functools.cache
+def package_digest() -> str:
+    """Every file of the installed package: generator, runtime, C, templates, export sources."""
+    root = Path(conical_pendulum.__file__).parent
+    digest = hashlib.sha256()
+    for path in sorted(root.rglob("*")):
+        if path.is_file() and "__pycache__" not in path.parts:
+            digest.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+@functools.cache
+def compiler_version(command: str) -> str:
+    """What `command --version` prints (the compiler's identity in a cache key), or "absent"."""
+    words = shlex.split(command)
+    if not words or shutil.which(words[0]) is None:
+        return "absent"
+    try:
+        run = subprocess.run([*words, "--version"], check=False, capture_output=True, text=True, timeout=60)
+    except (OSError, subprocess.TimeoutExpired):
+        return "absent"
+    return run.stdout.strip()
+
+
+def build_inputs(backend: str, platforms) -> dict:
+    """What an FMU is built from besides the test's key: the package's files, the Python and
+    packages that build it, and each compiler it runs (the core's, the native binaries' for
+    `platforms`, pythonfmu's export library's C++ compiler)."""
+    compilers = [os.environ.get("CC") or sysconfig.get_config_var("CC") or "cc"]  # the core
+    compilers += [" ".join(COMPILERS[p][0][:1]) for p in platforms if p in COMPILERS]
+    if backend == "pythonfmu":
+        compilers.append(os.environ.get("CXX") or sysconfig.get_config_var("CXX") or "c++")
+    return {
+        "package": package_digest(),
+        "python": sys.version,
+        "machine": platform.machine(),
+        "packages": {name: version(name) for name in BUILD_PACKAGES},
+        "compilers": {command: compiler_version(command) for command in compilers},
+    }
+
+
+def cached(folders: dict, key: dict, name: str, build):
+    """The file `name` that build(path) made for `key` (with its build_inputs), made once in
+    all processes that share the cache (flock); the run records which it built and reused."""
     digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]
-    entry = folder / digest
+    entry = folders["store"] / digest
     entry.mkdir(parents=True, exist_ok=True)
     path = entry / name
     with open(entry / "lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
-        if not path.exists():  # the builder moves an FMU into place only when it is complete
+        made = not path.exists()
+        if made:  # the builder moves an FMU into place only when it is complete
             build(path)
-            (entry / "kind").write_text(key["kind"])
+            (entry / "key.json").write_text(json.dumps(key, indent=1, sort_keys=True))
+        (entry / "used").touch()
+    folders["record"].mkdir(parents=True, exist_ok=True)
+    record = folders["record"] / digest
+    if made or not record.exists():  # a later use does not hide that this run built it
+        record.write_text(json.dumps({"kind": key["kind"], "built": made}))
     return path
 
 
-@pytest.fixture(scope="session")
-def fmu_cache(tmp_path_factory):
-    return cache_folder(tmp_path_factory)
+def store(config) -> Path:
+    """Where the FMUs are kept: the cache root's, or with --fresh-fmus the run's own folder."""
+    if config.getoption("--fresh-fmus"):
+        return run_folder(config) / RUN_RECORD
+    return cache_root() / KEPT
 
 
 @pytest.fixture(scope="session")
-def built_fmu(fmu_cache):
-    """A scene's FMU, built once per run: the pythonfmu FMU by default, or backend="native"
+def fmu_folders(pytestconfig):
+    """Where this run keeps its FMUs, and where it records which it used (fixed at its start,
+    before any test changes the cache root's environment variable)."""
+    return {"store": store(pytestconfig), "record": run_folder(pytestconfig) / RUN_RECORD / "used"}
+
+
+def prune_kept(now: float) -> None:
+    """Delete the kept FMUs no run has used for KEPT_DAYS (each source edit makes new keys)."""
+    for entry in (cache_root() / KEPT).glob("*"):
+        used = entry / "used"
+        if used.exists() and now - used.stat().st_mtime < KEPT_DAYS * 86400:
+            continue
+        with open(entry / "lock", "w") as lock:
+            try:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                continue  # another run is building or reading it
+            shutil.rmtree(entry, ignore_errors=True)
+
+
+def pytest_sessionstart(session):
+    if not os.environ.get("PYTEST_XDIST_WORKER") and not session.config.getoption("--fresh-fmus"):
+        prune_kept(time.time())
+
+
+@pytest.fixture(scope="session")
+def built_fmu(fmu_folders):
+    """A scene's FMU, built once and kept: the pythonfmu FMU by default, or backend="native"
     (fmi_version 2 or 3, platforms "linux64", "win64" and "aarch64"; FMI 3.0 with arrays or,
     arrays=False, scalars), with solver settings changed."""
 
@@ -65,10 +170,13 @@ def built_fmu(fmu_cache):
             "scene": scene.to_dict(),
             "settings": settings or {},
             "platforms": list(platforms),
-            **({} if arrays else {"arrays": False}),
+            "fmi_version": fmi_version,
+            "backend": backend,
+            "arrays": arrays,
+            "built_from": build_inputs(backend, platforms),
         }
         return cached(
-            fmu_cache,
+            fmu_folders,
             key,
             "ConicalPendulum.fmu",
             lambda path: build_fmu(
@@ -86,11 +194,11 @@ def built_fmu(fmu_cache):
 
 
 @pytest.fixture(scope="session")
-def built_cart(fmu_cache):
-    """The coupled demo's cart FMU (builder.cart), FMI 2.0 or 3.0, built once per run."""
+def built_cart(fmu_folders):
+    """The coupled demo's cart FMU (builder.cart), FMI 2.0 or 3.0, built once and kept."""
     return lambda fmi_version=2: cached(
-        fmu_cache,
-        {"kind": f"cart FMI {fmi_version}.0"},
+        fmu_folders,
+        {"kind": f"cart FMI {fmi_version}.0", "built_from": build_inputs("native", ("linux64",))},
         "Cart.fmu",
         lambda path: build_cart(path, fmi_version=fmi_version),
     )
@@ -152,11 +260,15 @@ def cart_fmu3(built_cart):
 
 
 def pytest_terminal_summary(terminalreporter, config):
-    """One line: the FMUs the run built for its tests, by kind (each once)."""
+    """One line: the FMUs the run's tests used, by kind, and how many of them it built."""
     if os.environ.get("PYTEST_XDIST_WORKER"):
         return
-    folder = config._tmp_path_factory.getbasetemp() / CACHE
-    kinds = Counter(kind.read_text() for kind in folder.glob("*/kind"))
-    if kinds:
-        built = ", ".join(f"{count} {kind}" for kind, count in sorted(kinds.items()))
-        terminalreporter.write_line(f"FMUs built for the tests, once each: {sum(kinds.values())} ({built})")
+    records = [json.loads(p.read_text()) for p in (run_folder(config) / RUN_RECORD / "used").glob("*")]
+    if records:
+        kinds = Counter(record["kind"] for record in records)
+        built = sum(record["built"] for record in records)
+        where = store(config)
+        terminalreporter.write_line(
+            f"FMUs the tests ran: {len(records)} ({', '.join(f'{n} {k}' for k, n in sorted(kinds.items()))}); "
+            f"built by this run: {built}, kept from an earlier run: {len(records) - built}; in {where}"
+        )

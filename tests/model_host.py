@@ -1,4 +1,4 @@
-"""The model contract (runtime/csrc/fmu_model.h) driven directly, with no FMI layer: a native
+"""The model contract (runtime/csrc/fmi/fmu_model.h) driven directly, with no FMI layer: a native
 FMU's own sources but its FMI glue compiled into a library, and its functions called through
 ctypes. What an FMI 3.0 layer builds on (the adjoint, the early-returning step) is tested here
 at the model level."""

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import pytest
 
+from conical_pendulum.demos import ssp_tools
+
 
 def require_tool(
     name: str, path_or_check: str | Path | Callable[[], object] | None = None, install_hint: str = ""
@@ -42,3 +44,13 @@ def require_tool(
     if os.environ.get("CI") == "true":
         pytest.fail(f"{reason} (CI=true: a missing tool is a failure, not a skip)", pytrace=False)
     pytest.skip(reason)
+
+
+def require_omsimulator() -> Path:
+    """OpenModelica's OMSimulator (ssp_tools.omsimulator: $OMSIMULATOR or PATH), or skip (fail under CI=true)."""
+    return require_tool(
+        "OMSimulator",
+        ssp_tools.omsimulator,
+        f"OpenModelica's OMSimulator, named by ${ssp_tools.OMSIMULATOR} or on PATH (.ci/run sets "
+        f"{ssp_tools.OMSIMULATOR} for ../shared/hosts/omsimulator; it needs Debian's libicu72)",
+    )

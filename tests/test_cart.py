@@ -81,7 +81,7 @@ def test_the_glue_is_the_pendulums_unchanged(built_cart, version):
     assert "pendulum_model.c" not in cart_sources and "cart_model.c" not in pendulum
 
 
-# The pythonfmu cart (runtime/cart_slave.py, removed) on the same run: M_x = 30 kg, F_x =
+# The pythonfmu cart (cart_slave.py, removed; in git history) on the same run: M_x = 30 kg, F_x =
 # 50 sin t + 20 t set before each of six 0.25 s steps; (x, v, a) after each step.
 PYTHONFMU = {
     0: [

@@ -1,4 +1,4 @@
-"""Long chains: the recursive formulation (articulated bodies, runtime/csrc/chain.c) against the
+"""Long chains: the recursive formulation (articulated bodies, runtime/csrc/core/chain.c) against the
 expanded equations (themselves checked against sympy's KanesMethod), and at 20 to 100 links."""
 
 import numpy as np

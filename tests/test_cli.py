@@ -621,13 +621,41 @@ def test_system_without_omsimulator_says_where_it_looks(monkeypatch, capsys, tmp
     """No registry offers OMSimulator: the message says where it was looked for, before any build."""
     from conical_pendulum.demos import ssp_tools
 
-    monkeypatch.setattr(ssp_tools, "omsimulator", lambda: None)
+    monkeypatch.delenv(ssp_tools.OMSIMULATOR, raising=False)
+    monkeypatch.setenv("PATH", str(tmp_path / "empty"))
     status, out, err = run_main(capsys, "system", "--out", tmp_path / "out", "--run", "omsimulator")
     assert status == 2 and one_line(err, "system") == (
-        "--run omsimulator: needs OMSimulator (OpenModelica's, not on PATH nor in "
-        "../shared/hosts/omsimulator; no package registry offers it)"
+        "--run omsimulator: needs OMSimulator (OpenModelica's; no package registry offers it): put it "
+        "on PATH or name its executable in the environment variable OMSIMULATOR"
     )
     assert not out and not list(tmp_path.iterdir())
+
+
+def test_system_names_an_omsimulator_that_is_not_an_executable(monkeypatch, capsys, tmp_path):
+    """$OMSIMULATOR naming no executable is refused by name and value, not replaced by PATH's."""
+    from conical_pendulum.demos import ssp_tools
+
+    named = tmp_path / "OMSimulator"
+    named.write_text("not a program")
+    monkeypatch.setenv(ssp_tools.OMSIMULATOR, str(named))
+    status, out, err = run_main(capsys, "system", "--out", tmp_path / "out", "--run", "omsimulator")
+    assert status == 2 and one_line(err, "system") == (
+        f"--run omsimulator: needs OMSimulator: OMSIMULATOR={named} is not an executable file"
+    )
+    assert not out and not (tmp_path / "out").exists()
+    named.chmod(0o755)
+    assert ssp_tools.omsimulator() == named
+
+
+def test_omsimulator_is_taken_from_path_without_the_variable(monkeypatch, tmp_path):
+    from conical_pendulum.demos import ssp_tools
+
+    on_path = tmp_path / "OMSimulator"
+    on_path.write_text("#!/bin/sh\n")
+    on_path.chmod(0o755)
+    monkeypatch.delenv(ssp_tools.OMSIMULATOR, raising=False)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    assert ssp_tools.omsimulator() == on_path
 
 
 def test_build_without_the_arm_cross_compiler_says_what_to_install(monkeypatch, capsys, tmp_path):

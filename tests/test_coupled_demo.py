@@ -37,6 +37,7 @@ def _demo(tmp_path, *argv) -> dict:
         return {(r["scheme"], float(r["cart_mass_kg"]), float(r["step_s"])): r for r in csv.DictReader(f)}
 
 
+@pytest.mark.tools
 def test_the_demo_command_converges_at_first_order_in_both_schemes(tmp_path):
     rows = _demo(tmp_path, "--steps", "0.1,0.05,0.025", "--stop-time", "4", "--cart-mass", "100")
     assert len(rows) == 6
@@ -76,6 +77,7 @@ def test_bad_demo_options_are_named(argv, message, capsys, tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.tools
 def test_a_light_cart_diverges_explicitly_and_not_with_its_apparent_mass(tmp_path, capsys):
     """The added-mass limit: 2 and 0.5 kg carts under the 45 kg chain. The explicit exchange
     runs away (stopped beyond 1000 m); the apparent-mass one follows the truth."""

@@ -13,6 +13,7 @@ from conical_pendulum.demos.ecospy_run import check_job, cosimulate
 RECORD = ("alpha0", "bob2_x", "energy")
 
 
+@pytest.mark.tools
 def test_seed_scenario_in_ecospy_matches_fmpy(seed_fmu):
     # demos/ecospy_run.py runs in its own process: ecospy needs libtbb loaded first, and
     # pythonfmu 0.7's exit-time destructor can abort an interpreter that still has the FMU

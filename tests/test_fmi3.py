@@ -1,4 +1,4 @@
-"""The native FMI 3.0 FMU (builder.fmi3, runtime/csrc/fmi3_glue.c): the FMI 2.0 native FMU's
+"""The native FMI 3.0 FMU (builder.fmi3, runtime/csrc/fmi/fmi3_glue.c): the FMI 2.0 native FMU's
 behaviour through FMI 3.0's API, run by fmpy against the FMI 2.0 native FMU of the same scene."""
 
 import re

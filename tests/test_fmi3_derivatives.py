@@ -1,5 +1,5 @@
 """fmi3GetAdjointDerivative and early return from fmi3DoStep (issue 20, items 3 and 4) through
-fmpy's FMI 3.0 low-level API, on the native FMI 3.0 FMU (runtime/csrc/fmi3_glue.c, on the model
+fmpy's FMI 3.0 low-level API, on the native FMI 3.0 FMU (runtime/csrc/fmi/fmi3_glue.c, on the model
 contract's model_adjoint_derivative and model_do_step_early; tests/test_adjoint_and_early_return.py
 tests those at the model level).
 

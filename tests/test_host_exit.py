@@ -71,6 +71,7 @@ def invalid_accesses(valgrind_log: str) -> list[str]:
     return [block.strip() for block in blocks if INVALID.search(block) and "is_dst" not in block]
 
 
+@pytest.mark.tools
 @pytest.mark.slow
 @pytest.mark.parametrize("kinds", [["nan", "state", "negative_length"], ["bad_setting", "inf", "nan"]])
 def test_under_valgrind_no_invalid_access_at_exit(seed_fmu, kinds):

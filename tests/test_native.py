@@ -270,6 +270,7 @@ def test_two_instances_side_by_side_keep_their_own_parameters(native, host, tmp_
         np.testing.assert_array_equal(rows[:, column], alone["alpha0"])
 
 
+@pytest.mark.tools
 def test_ecos_command_line_engine_runs_it_with_a_clean_environment(native, tmp_path):
     """ecos' own executable (from the ecospy wheel), 600 steps/s, nothing of Python around it."""
     import importlib.util
@@ -316,6 +317,7 @@ def test_ecos_command_line_engine_runs_it_with_a_clean_environment(native, tmp_p
         )
 
 
+@pytest.mark.tools
 @pytest.mark.parametrize("fmi_version", [2, 3])
 def test_a_thousand_cycles_under_valgrind(built_fmu, c_host, fmi_version, tmp_path):
     require_tool("valgrind", None, "Debian's valgrind (.ci/run installs it)")
@@ -466,6 +468,7 @@ def test_a_failed_step_is_discarded_with_the_diagnosis_and_reset_goes_on(built_f
     fmu.close()
 
 
+@pytest.mark.tools
 @pytest.mark.parametrize("fmi_version", [2, 3])
 def test_the_windows_binary_runs_under_wine(built_fmu, c_host, fmi_version, tmp_path):
     """The Windows binary cross-compiled with Debian's mingw-w64 (it needs only Windows' own
@@ -511,6 +514,7 @@ def test_the_windows_binary_runs_under_wine(built_fmu, c_host, fmi_version, tmp_
     np.testing.assert_allclose(rows[0], rows[1], rtol=1e-12, atol=1e-12)  # libm differs, not the C
 
 
+@pytest.mark.tools
 def test_the_aarch64_binary_runs_under_qemu_as_the_x86_64_one(built_fmu, c_host, tmp_path):
     """One FMI 3.0 FMU carrying every platform: its aarch64-linux binary, cross-compiled with
     Debian's gcc-aarch64-linux-gnu, run by the C host cross-compiled alike under qemu-user

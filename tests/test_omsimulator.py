@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 
 from conftest import SEED
-from conical_pendulum.demos import ssp_tools
-from required_tools import require_tool
+from required_tools import require_omsimulator
 
 STOP, STEP = "10", "0.01"
 COMPARED = ["alpha0", "beta2", "omega1", "bob2_x", "energy"]
@@ -19,11 +18,7 @@ COMPARED = ["alpha0", "beta2", "omega1", "bob2_x", "energy"]
 
 @pytest.fixture(scope="module")
 def omsimulator():
-    return require_tool(
-        "OMSimulator",
-        ssp_tools.omsimulator,
-        "OpenModelica's OMSimulator on PATH or in ../shared/hosts/omsimulator (and Debian's libicu72)",
-    )
+    return require_omsimulator()
 
 
 def simulate(omsimulator, fmu, folder):

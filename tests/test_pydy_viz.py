@@ -53,6 +53,7 @@ def test_uneven_times_are_refused(tmp_path):
         write_pydy_page(scene, results, tmp_path)
 
 
+@pytest.mark.tools
 def test_the_page_plays_in_headless_chromium(seed_fmu, tmp_path):
     """Served on localhost, loaded in Debian's chromium through chromedriver (.ci/run
     installs both): no JavaScript errors, and the first frame, as loaded, shows the whole

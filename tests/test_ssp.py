@@ -14,7 +14,7 @@ from conical_pendulum.builder.units import BASE_UNITS
 from conical_pendulum.demos import coupled, ecospy_run, libcosim_run, ssp, ssp_tools
 from conical_pendulum.demos.monolithic import cart_parameters
 from fmu_helpers import Instance
-from required_tools import require_tool
+from required_tools import require_omsimulator, require_tool
 
 STEP, STOP_TIME, CART_MASS = 0.01, 0.1, 5.0  # 10 steps: the fewest ecos' command line takes
 
@@ -117,6 +117,7 @@ def test_a_package_against_the_schema_is_named_line_by_line(package, tmp_path):
     assert f"SystemStructure.ssd: names {ssp.FMUS['cart']}, which the package lacks" in problems
 
 
+@pytest.mark.tools
 def test_ecospy_runs_the_package_as_todays_demo(fmus, ecospy_runs):
     """ecos from the package is the demo's own master wiring the same FMUs in Python: the same numbers."""
     for scheme, run in ecospy_runs.items():
@@ -127,6 +128,7 @@ def test_ecospy_runs_the_package_as_todays_demo(fmus, ecospy_runs):
             np.testing.assert_array_equal(values, demo[name], err_msg=f"{scheme}: {name}")
 
 
+@pytest.mark.tools
 def test_ecos_command_line_runs_it_with_a_clean_environment(package, ecospy_runs, tmp_path):
     """Only LD_LIBRARY_PATH, to a folder with ecos' libtbb: no Python. Its CSV has six decimals."""
     require_tool("ecos", lambda: ssp_tools.missing("ecos") is None, 'pip install -e ".[cosim]"')
@@ -142,12 +144,14 @@ def test_ecos_command_line_runs_it_with_a_clean_environment(package, ecospy_runs
             )
 
 
+@pytest.mark.tools
 def test_ecos_command_line_refuses_fewer_than_ten_steps(fmus, tmp_path):
     short = ssp.write_package(tmp_path / "short.ssp", *fmus, step=0.01, stop_time=0.05)
     run = ssp_tools.run("ecos", short, "explicit", tmp_path / "work")
     assert run.values == {} and "fewer than 10 steps" in run.refused and "SIGFPE" in run.refused
 
 
+@pytest.mark.tools
 def test_libcosim_takes_the_step_from_the_annotation_and_follows_ecos(package, ecospy_runs, tmp_path):
     """The same Jacobi step as ecos: without an algebraic loop (apparent-mass) the same numbers."""
     require_tool("libcosim", lambda: ssp_tools.missing("libcosim") is None, 'pip install -e ".[cosim]"')
@@ -160,6 +164,7 @@ def test_libcosim_takes_the_step_from_the_annotation_and_follows_ecos(package, e
         np.testing.assert_allclose(runs["apparent-mass"].values[name], ecos[name][1:], rtol=0, atol=1e-14)
 
 
+@pytest.mark.tools
 def test_the_explicit_loop_is_initialised_by_two_jacobi_sweeps_in_ecos_and_three_in_libcosim(
     fmus, package, tmp_path
 ):
@@ -185,6 +190,7 @@ def test_the_explicit_loop_is_initialised_by_two_jacobi_sweeps_in_ecos_and_three
     assert abs(sweeps[1] - consistent) > 1.0 and abs(sweeps[2] - consistent) > 0.1
 
 
+@pytest.mark.tools
 def test_fmpy_runs_it_with_its_own_master(package, ecospy_runs, tmp_path):
     """simulate_ssp starts every connector at 0: its first step has F_x = M_x = 0 at the cart,
     which then moves as alone with its parameters applied (5 kg); then the same Jacobi step."""
@@ -200,22 +206,15 @@ def test_fmpy_runs_it_with_its_own_master(package, ecospy_runs, tmp_path):
         assert run.values["x"][0] != pytest.approx(ecospy_runs[scheme].values["x"][1], abs=1e-6)
 
 
-def require_omsimulator():
-    require_tool(
-        "OMSimulator",
-        ssp_tools.omsimulator,
-        "OpenModelica's OMSimulator on PATH or in ../shared/hosts/omsimulator (and Debian's libicu72)",
-    )
-
-
 @pytest.fixture(scope="module")
 def omsimulator_runs(package, tmp_path_factory):
-    """OMSimulator from ../shared/hosts/omsimulator (or PATH), each variant of the package as written."""
+    """OMSimulator ($OMSIMULATOR or PATH), each variant of the package as written."""
     require_omsimulator()
     work = tmp_path_factory.mktemp("omsimulator")
     return {scheme: ssp_tools.run("omsimulator", package, scheme, work) for scheme in ssp.VARIANTS}
 
 
+@pytest.mark.tools
 def test_omsimulator_reads_its_master_and_step_from_the_package(package, omsimulator_runs):
     """Its model is named after the SSD (an identifier), its step is its own annotation's;
     both variants run to the stop time."""
@@ -234,6 +233,7 @@ def test_omsimulator_reads_its_master_and_step_from_the_package(package, omsimul
         np.testing.assert_allclose(run.values["time"], STEP * np.arange(11), rtol=0, atol=1e-12)
 
 
+@pytest.mark.tools
 def test_omsimulator_prints_no_error(omsimulator_runs):
     """It exits 0 even when a run fails, so the runner reads its `error:` lines: none wanted.
     While initializing it asks for the InitialUnknowns' derivatives with their parameters (l0,
@@ -242,6 +242,7 @@ def test_omsimulator_prints_no_error(omsimulator_runs):
         assert run.warnings == [], run.warnings
 
 
+@pytest.mark.tools
 @pytest.mark.parametrize("cart_mass", [2.0, 0.5])
 def test_omsimulator_starts_the_light_carts_in_the_explicit_scheme(fmus, cart_mass, tmp_path):
     """With the 2 and 0.5 kg carts KINSOL converges at the start only on the exact derivatives
@@ -256,6 +257,7 @@ def test_omsimulator_starts_the_light_carts_in_the_explicit_scheme(fmus, cart_ma
     np.testing.assert_allclose(run.values["time"], STEP * np.arange(11), rtol=0, atol=1e-12)
 
 
+@pytest.mark.tools
 def test_omsimulator_solves_the_explicit_loop_at_every_step(fmus, omsimulator_runs, ecospy_runs):
     """cart.a and p.F_pivot_x answer each other at once: OMSimulator solves that loop (KINSOL,
     the FMUs' directional derivatives) at the start and after every step, so each recorded
@@ -281,15 +283,12 @@ def test_omsimulator_solves_the_explicit_loop_at_every_step(fmus, omsimulator_ru
     )
 
 
+@pytest.mark.tools
 def test_omsimulator_input_extrapolation_makes_the_apparent_mass_scheme_second_order(fmus, tmp_path):
     """With --inputExtrapolation OMSimulator passes the pendulum's output derivatives (F_free,
     M_app) on to the cart as input derivatives (issue 29): halving the step quarters the
     cart's error (100 kg cart, 2 s, 0.04 and 0.02 s), where the held inputs only halve it."""
-    require_tool(
-        "OMSimulator",
-        ssp_tools.omsimulator,
-        "OpenModelica's OMSimulator on PATH or in ../shared/hosts/omsimulator (and Debian's libicu72)",
-    )
+    require_omsimulator()
     stop, steps, mass = 2.0, (0.04, 0.02), 100.0
     times = np.linspace(0.0, stop, round(stop / steps[-1]) + 1)
     truth = coupled.reference(times, coupled.SCENE, cart_parameters(m_cart=mass))

@@ -37,6 +37,8 @@ from conical_pendulum.analysis.sweep import loop as client_loop
 from conical_pendulum.analysis.sweep import runs as run_tables
 from shapes import MODES, build_shapes_fmus
 
+pytestmark = pytest.mark.cluster  # Dask clusters, local ones or the command's own
+
 # a start that needs more than 25 internal steps in the communication step from 1.5 s to 2 s
 DISCARDED_AT_1_5 = {"alpha0": 1.2, "delta2": 3.0, "max_steps": 25}
 

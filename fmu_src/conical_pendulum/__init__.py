@@ -1,4 +1,4 @@
-"""An n-link conical pendulum as an FMI 2.0 co-simulation FMU, from a sympy model to compiled C."""
+"""An n-link conical pendulum as FMI 2.0 and 3.0 FMUs (a pythonfmu slave, native C), from a sympy model to compiled C."""
 
 from .scene import Link, Scene, SceneError
 

@@ -181,8 +181,8 @@ def _parser(prog: str, chosen: str | None) -> Parser:
     parser = Parser(
         prog=prog,
         formatter_class=_CommandsFormatter,
-        description="An n-link conical pendulum as an FMI 2.0 co-simulation FMU: build it, check it\n"
-        "against the native reference, look at its runs, sweep it, co-simulate it.",
+        description="An n-link conical pendulum as FMI 2.0 and 3.0 FMUs: build one, check it against\n"
+        "the native reference, look at its runs, sweep it, co-simulate it.",
         epilog="Start with 'conical-pendulum build': it writes dist/ConicalPendulum.fmu (the seed scene),\n"
         "checks it and draws its run in dist/ConicalPendulum.png and dist/ConicalPendulum.gif.\n"
         f"'{prog} COMMAND --help' explains a command's options.\n"

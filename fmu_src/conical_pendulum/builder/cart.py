@@ -6,7 +6,7 @@ force F_x and the apparent mass M_x of what it carries, and it moves by
 (m_cart + M_x) a = F_x - k_cart x - c_cart v; its output `a` is the pendulum's a_pivot_x.
 Over a communication step the force is held (F_x_order = 0) or extrapolated linearly
 through the last two communication points (1), and the step is solved exactly with the
-matrix exponential (runtime/csrc/cart_model.c): all the error of the coupled demo is the
+matrix exponential (runtime/csrc/models/cart_model.c): all the error of the coupled demo is the
 coupling's. Its FMU, FMI 2.0 or 3.0, is written by builder.native's code paths, as the
 pendulum's is, and links with the same FMI layers.
 """

@@ -5,7 +5,7 @@ common-subexpression elimination. States and parameters are read from the arrays
 x and p in the order of Scene.state_names() and Scene.core_parameter_names(); outputs
 that need the accelerations u' (the pivot force) read them from dx = x'.
 
-Every quantity is a `cp_real` (runtime/csrc/real.h): double in the core and the FMU, double
+Every quantity is a `cp_real` (runtime/csrc/core/real.h): double in the core and the FMU, double
 complex where directional.c compiles the same model.c for complex-step derivatives. So the
 generated code calls only analytic functions (checked by `_analytic`), which <tgmath.h>
 maps to their complex versions there.
@@ -158,7 +158,7 @@ def _index(names: list[str], name: str) -> int:
 
 def generate_recursive(scene: Scene) -> dict[str, str]:
     """C sources of the recursive formulation: the link table, and one joint's kinematics
-    from sympy (the loops over the links are runtime/csrc/chain.c)."""
+    from sympy (the loops over the links are runtime/csrc/core/chain.c)."""
     scalars = scene.core_parameter_scalars()
     names = [scalar.name for scalar in scalars]
     where = {(scalar.quantity, scalar.link): k for k, scalar in enumerate(scalars)}

@@ -1,5 +1,5 @@
-"""The subcommands of `conical-pendulum`, one module each (build, check, linearize,
-show, page, sweep, demo, system), each with `add_arguments(parser)` and `run(args) -> int`: options parsed into calls
+"""The subcommands of `conical-pendulum`, one module each (build, check, linearize, show, page,
+sweep, demo, system; common.py what build, check, linearize and page share), each with `add_arguments(parser)` and `run(args) -> int`: options parsed into calls
 of the library (builder/, analysis/, viz/, demos/), results printed.
 
 Only cli.py imports them, and only the chosen one; they raise errors.UserError for what

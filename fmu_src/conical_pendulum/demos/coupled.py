@@ -51,7 +51,7 @@ EXCHANGED = ["cart::x", "cart::v", "cart::a", "p::F_pivot_x"] + [f"p::{name}" fo
 
 
 def build_cart_fmu(output: Path | str, fmi_version: int = 2) -> Path:
-    """Cart.fmu: the cart as a native FMU (builder/cart.py, runtime/csrc/cart_model.c), FMI 2.0
+    """Cart.fmu: the cart as a native FMU (builder/cart.py, runtime/csrc/models/cart_model.c), FMI 2.0
     (what the demo's ecospy runs) or 3.0."""
     return build_cart(Path(output), fmi_version=fmi_version)
 

@@ -42,15 +42,9 @@ from .coupled import DIVERGED, EXCHANGED
 
 TOOLS = ("ecospy", "ecos", "libcosim", "fmpy", "omsimulator")
 OUTSIDE_PIP = ("omsimulator",)  # tools no pip extra installs
-# OMSimulator as the workplace's shared/hosts/omsimulator holds it (no registry offers it),
-# when it is not on PATH: beside this source checkout (../shared), beside a folder above it,
-# or in /work/shared, where the developers' checkout has it (a clone made elsewhere for CI)
-OMSIMULATOR_HOSTS = tuple(
-    dict.fromkeys(
-        folder / "shared" / "hosts" / "omsimulator" / "bin" / "OMSimulator"
-        for folder in (*Path(__file__).resolve().parents[4:], Path("/work"))
-    )
-)
+# OMSimulator comes from no package registry: the environment variable that names its executable
+# (.ci/run sets it for the workplace's build), else OMSimulator on PATH
+OMSIMULATOR = "OMSIMULATOR"
 ECOS_MIN_STEPS = 10  # ecos 0.7.2's command line reports progress every (steps // 10) steps
 
 
@@ -76,9 +70,12 @@ def missing(tool: str) -> str | None:
     if tool == "libcosim":
         return libcosim_run.missing()
     if tool == "omsimulator" and omsimulator() is None:
+        named = os.environ.get(OMSIMULATOR)
+        if named:
+            return f"OMSimulator: {OMSIMULATOR}={named} is not an executable file"
         return (
-            "OMSimulator (OpenModelica's, not on PATH nor in ../shared/hosts/omsimulator; "
-            "no package registry offers it)"
+            f"OMSimulator (OpenModelica's; no package registry offers it): put it on PATH "
+            f"or name its executable in the environment variable {OMSIMULATOR}"
         )
     return None
 
@@ -221,11 +218,13 @@ def run_fmpy(package: Path, scheme: str, work: Path) -> ToolRun:
 
 
 def omsimulator() -> Path | None:
-    """OMSimulator's executable: on PATH, or in the shared hosts (OMSIMULATOR_HOSTS)."""
+    """OMSimulator's executable: the one $OMSIMULATOR names, else OMSimulator on PATH; None if neither."""
+    named = os.environ.get(OMSIMULATOR)
+    if named:
+        path = Path(named)
+        return path if path.is_file() and os.access(path, os.X_OK) else None
     found = shutil.which("OMSimulator")
-    if found:
-        return Path(found)
-    return next((host for host in OMSIMULATOR_HOSTS if os.access(host, os.X_OK)), None)
+    return Path(found) if found else None
 
 
 def _oms_messages(text: str, level: str) -> list[str]:

@@ -385,7 +385,7 @@ static void product(double c[N_EXP][N_EXP], double a[N_EXP][N_EXP], double b[N_E
         }
 }
 
-/* e = exp(a) by scaling and squaring with a Taylor series (runtime/cart_slave.py's expm,
+/* e = exp(a) by scaling and squaring with a Taylor series (the pythonfmu cart's expm,
  * step for step): the norm scaled to 0.25 or below, 0.25^16 / 16! < 1e-22. */
 static void expm(double e[N_EXP][N_EXP], double a[N_EXP][N_EXP])
 {
