@@ -28,7 +28,7 @@ from fmpy import read_model_description
 
 from conical_pendulum import Scene
 from conical_pendulum.builder.fmu import build_fmu
-from conical_pendulum.builder.native import LAYER_SOURCES
+from conical_pendulum.builder.packaging.native import LAYER_SOURCES
 from results_csv import write_rows
 
 HERE = Path(__file__).parent

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from fmpy import read_model_description
 
-from conical_pendulum.builder.native import fmi_headers
+from conical_pendulum.builder.packaging.native import fmi_headers
 
 HOSTS = Path(__file__).parent / "hosts"
 SOURCES = {2: HOSTS / "fmi_host.c", 3: HOSTS / "fmi3_host.c"}

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from fmpy import read_model_description
 
-from conical_pendulum.builder.native import LAYER_SOURCES
+from conical_pendulum.builder.packaging.native import LAYER_SOURCES
 
 MODEL_OK, MODEL_DISCARD, MODEL_REFUSED, MODEL_NO_VARIABLE = range(4)
 GLUES = {name for layer in LAYER_SOURCES.values() for name in layer}  # both FMI layers and their body

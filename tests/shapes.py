@@ -6,7 +6,7 @@ import subprocess
 import zipfile
 from pathlib import Path
 
-from conical_pendulum.builder.native import fmi_headers
+from conical_pendulum.builder.packaging.native import fmi_headers
 
 MODES = {
     "never": 0,

@@ -14,9 +14,10 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 from scipy.linalg import expm
 
-from conical_pendulum.builder import cart, native
-from conical_pendulum.builder.compiler import CSRC_FILES
-from conical_pendulum.builder.pendulum import PENDULUM
+from conical_pendulum.builder.core.compiler import CSRC_FILES
+from conical_pendulum.builder.models import cart
+from conical_pendulum.builder.models.pendulum import PENDULUM
+from conical_pendulum.builder.packaging import native
 from conical_pendulum.cli import main
 from conical_pendulum.demos.monolithic import cart_parameters
 from differences import richardson
@@ -55,7 +56,7 @@ def test_the_cart_fmu_is_valid_and_says_what_depends_on_what(cart_fmu):
 @pytest.mark.parametrize("version", [2, 3])
 def test_the_glue_is_the_pendulums_unchanged(built_cart, version):
     """One more model file, not a copy of the glue: the cart ships runtime/csrc's FMI layer
-    byte for byte, the files the pendulum's native FMU ships; FMI 3.0 adds only what builder.fmi3
+    byte for byte, the files the pendulum's native FMU ships; FMI 3.0 adds only what builder.fmi.fmi3
     generates for any model (fmi3_arrays.h, buildDescription.xml)."""
     path = built_cart(version)
     with zipfile.ZipFile(path) as archive:

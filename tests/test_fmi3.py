@@ -1,4 +1,4 @@
-"""The native FMI 3.0 FMU (builder.fmi3, runtime/csrc/fmi/fmi3_glue.c): the FMI 2.0 native FMU's
+"""The native FMI 3.0 FMU (builder.fmi.fmi3, runtime/csrc/fmi/fmi3_glue.c): the FMI 2.0 native FMU's
 behaviour through FMI 3.0's API, run by fmpy against the FMI 2.0 native FMU of the same scene."""
 
 import re
@@ -18,8 +18,8 @@ from fmpy.validation import validate_fmu
 
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.builder.native import fmi_headers
-from conical_pendulum.builder.native_model import LOG_CATEGORIES
+from conical_pendulum.builder.fmi.contract import LOG_CATEGORIES
+from conical_pendulum.builder.packaging.native import fmi_headers
 from fmu_helpers import Instance3, fmi3_names, fmi3_start_values
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -93,7 +93,7 @@ def test_same_variables_and_value_references_as_the_fmi2_fmu_per_link_ones_as_ar
             v.min,
             v.max,
             v.nominal,
-        )  # builder.units: the same declarations in both versions
+        )  # builder.fmi.units: the same declarations in both versions
         if k is None:
             assert (mine.valueReference, mine.start, mine.dimensions) == (v.valueReference, v.start, [])
             continue

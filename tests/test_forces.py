@@ -18,9 +18,9 @@ from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.analysis.compare import compare
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.builder.codegen import generate, generate_recursive
-from conical_pendulum.builder.compiler import load_core
-from conical_pendulum.builder.model import derive, joint_damping
+from conical_pendulum.builder.core.codegen import generate, generate_recursive
+from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.core.equations import derive, joint_damping
 from conical_pendulum.runtime.rules import BadValue, check_value
 from conical_pendulum.scene import load_scene
 from fmu_helpers import INSTANCES
@@ -89,7 +89,7 @@ def test_a_scene_without_options_generates_todays_c_bit_for_bit(name):
     scene, digest = TODAYS_C[name]
     files = generated(scene)
     assert hashlib.sha256("".join(files[k] for k in sorted(files)).encode()).hexdigest() == digest
-    assert "damping" not in scene.structure() and "W_damping" not in scene.state_names()
+    assert "damping" not in scene.cache_fields() and "W_damping" not in scene.state_names()
 
 
 def test_a_negative_damping_is_refused_naming_it(tmp_path):

@@ -4,7 +4,7 @@ pythonfmu 0.7.0's prebuilt export library released its interpreter state twice i
 process that exits with the library still loaded (fmpy keeps it loaded after a failed
 call; a C host's dlclose could not unload it), and an instance's objects twice after
 fmi2Fatal: hosts died at exit with a corrupted heap. The FMU now carries that library
-built from pythonfmu's sources with both fixed (builder/pythonfmu_export.py,
+built from pythonfmu's sources with both fixed (builder/packaging/pythonfmu_export.py,
 docs/pythonfmu.md). These tests run hosts as they failed: many processes refusing values
 of every kind, a few of them under valgrind, and a C host with libpython preloaded.
 """

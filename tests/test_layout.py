@@ -124,7 +124,7 @@ def test_the_graph_sees_the_package():
     graph = import_graph()
     assert f"{PACKAGE}.cli" in graph and f"{PACKAGE}.builder.fmu" in graph
     assert f"{PACKAGE}.scene" in graph[f"{PACKAGE}.builder.fmu"]
-    assert f"{PACKAGE}.errors" in graph[f"{PACKAGE}.builder.native"]
+    assert f"{PACKAGE}.errors" in graph[f"{PACKAGE}.builder.packaging.native"]
 
 
 def test_no_import_cycles():

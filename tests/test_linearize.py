@@ -142,12 +142,12 @@ def test_a_chain_of_rods_approaches_the_continuous_chain(built_fmu):
 @pytest.mark.slow  # sympy's linearization of the seed: 1 to 4 minutes
 def test_the_seeds_a_is_sympys_kanesmethod_linearize(built_fmu):
     """The seed scene's A at the hanging equilibrium against sympy's own KanesMethod.linearize
-    of the same construction (builder.kane.chain), M [q' u'] = A [q u] at q = u = q' = u' = 0
+    of the same construction (builder.core.kane.chain), M [q' u'] = A [q u] at q = u = q' = u' = 0
     with the parameters as symbols, to 1e-10 of A's largest entry (measured: 5e-15)."""
     import sympy as sm
     import sympy.physics.mechanics as me
 
-    from conical_pendulum.builder.kane import chain
+    from conical_pendulum.builder.core.kane import chain
 
     scene = Scene.uniform(3)
     p = {name: sm.Symbol(name) for name in scene.core_parameter_names()}

@@ -6,9 +6,9 @@ import sympy as sm
 
 from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.builder.compiler import load_core
-from conical_pendulum.builder.kane import kanes_method
-from conical_pendulum.builder.model import derive
+from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.core.equations import derive
+from conical_pendulum.builder.core.kane import kanes_method
 from conical_pendulum.runtime.rules import BadValue
 
 SEED_TIMES = np.linspace(0.0, 10.0, 601)  # the seed's 10 s at 60 samples per second

@@ -1,4 +1,4 @@
-"""The variables' records carry their structure (builder.variables): quantity, link, unit,
+"""The variables' records carry their structure (builder.fmi.variables): quantity, link, unit,
 FMI 3.0 array and rule are fields made once, and what is written from them (names,
 descriptions, arrays, units, C literals) agrees with them. No FMU is built here."""
 
@@ -9,9 +9,9 @@ import pytest
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.builder import c_literals as c
-from conical_pendulum.builder import cart
+from conical_pendulum.builder.fmi.variables import Variable, describe, model_structure, records, variables
 from conical_pendulum.builder.fmu import checked_settings
-from conical_pendulum.builder.variables import Variable, describe, model_structure, records, variables
+from conical_pendulum.builder.models import cart
 from conical_pendulum.runtime.rules import BadValue, check_rule, rule_of
 
 SETTINGS = checked_settings(None)

@@ -21,7 +21,7 @@ def variables(path):
 def test_the_example_file_is_the_seed_scene():
     scene = load_scene(ROOT / "scenes" / "seed.toml")
     seed = Scene.uniform(3)
-    assert scene.structure() == seed.structure()
+    assert scene.cache_fields() == seed.cache_fields()
     assert scene.parameter_defaults() == seed.parameter_defaults()
 
 

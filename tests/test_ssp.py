@@ -10,7 +10,7 @@ from fmpy import read_model_description
 from fmpy.ssp.ssd import read_ssd, read_ssv
 from lxml import etree
 
-from conical_pendulum.builder.units import BASE_UNITS
+from conical_pendulum.builder.fmi.units import BASE_UNITS
 from conical_pendulum.demos import coupled, ecospy_run, libcosim_run, ssp, ssp_tools
 from conical_pendulum.demos.monolithic import cart_parameters
 from fmu_helpers import Instance

@@ -33,7 +33,7 @@ from fmpy.fmi2 import (
 )
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.native_model import LOG_CATEGORIES
+from conical_pendulum.builder.fmi.contract import LOG_CATEGORIES
 
 OK, DISCARD, ERROR = 0, 2, 3
 CO_SIMULATION, MODEL_EXCHANGE = 1, 0  # fmi2Type

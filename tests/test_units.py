@@ -1,4 +1,4 @@
-"""What every model description says of its values (builder.units, the records' rules): units
+"""What every model description says of its values (builder.fmi.units, the records' rules): units
 with their SI exponents, angles shown in degrees, ranges from the value rules (values beyond
 them still refused with the same messages), the solver an enumeration, the states' nominals."""
 
@@ -11,7 +11,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.units import UNITS
+from conical_pendulum.builder.fmi.units import UNITS
 from conical_pendulum.runtime.rules import RULES, SOLVERS
 from fmu_helpers import INSTANCES
 

@@ -1,4 +1,4 @@
-"""One description of the FMU's variables (builder/variables.py): both FMUs' model
+"""One description of the FMU's variables (builder/fmi/variables.py): both FMUs' model
 descriptions, model.json and fmu_config.h say what it says, and a new group of variables
 is one entry in its list."""
 
@@ -16,13 +16,13 @@ from fmpy.fmi1 import FMICallException
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.builder import fmi2
-from conical_pendulum.builder import variables as described
-from conical_pendulum.builder.compiler import build_core, load_core
+from conical_pendulum.builder.core.compiler import build_core, load_core
+from conical_pendulum.builder.fmi import fmi2
+from conical_pendulum.builder.fmi import variables as described
+from conical_pendulum.builder.fmi.contract import Description
+from conical_pendulum.builder.fmi.fmu_config import config_header
 from conical_pendulum.builder.fmu import build_fmu, checked_settings, model_data
-from conical_pendulum.builder.fmu_config import config_header
-from conical_pendulum.builder.native_model import Description
-from conical_pendulum.builder.pendulum import PENDULUM
+from conical_pendulum.builder.models.pendulum import PENDULUM
 from conical_pendulum.runtime.rules import STATISTICS
 from conical_pendulum.scene import Scalar
 from fmu_helpers import Instance
@@ -164,7 +164,7 @@ def test_docs_show_the_order_the_description_gives():
     assert listed == sorted(listed), list(zip(first_names, listed))
 
 
-# --- adding a group of variables: one entry in builder.variables.GROUPS --------------
+# --- adding a group of variables: one entry in builder.fmi.variables.GROUPS --------------
 
 EXTRA = described.Group(
     "extra",

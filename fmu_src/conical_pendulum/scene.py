@@ -258,7 +258,7 @@ class Scene:
             return "expanded"
         return "recursive"
 
-    def structure(self) -> dict:
+    def cache_fields(self) -> dict:
         """What the generated code depends on, and nothing else (an option left out is not
         named, so a scene without options keeps today's key)."""
         options = {name: True for name in ("joint_damping", "air_drag") if getattr(self, name)}
@@ -274,7 +274,7 @@ class Scene:
         }
 
     def key(self, salt: str = "") -> str:
-        text = json.dumps(self.structure(), sort_keys=True) + salt
+        text = json.dumps(self.cache_fields(), sort_keys=True) + salt
         return hashlib.sha256(text.encode()).hexdigest()
 
     # --- names: the FMU's contract, in the order of the compiled core's arrays ---

@@ -1,7 +1,7 @@
 """An FMI 3.0 FMU of this package read from the host with the FMI 2.0 FMU's scalar names:
 its arrays (alpha, l, bob_x, ...) set whole from per-link start values, and split into
 per-link columns in results. The arrays are its records' (model.json: each variable's
-`array` and `index`, builder.variables), never parsed from names."""
+`array` and `index`, builder.fmi.variables), never parsed from names."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-from ..builder.variables import Variable, records
+from ..builder.fmi.variables import Variable, records
 from ..runtime.files import MODEL_FILE
 
 

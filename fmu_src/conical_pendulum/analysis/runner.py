@@ -36,8 +36,8 @@ from fmpy.simulation import (
     settable_in_instantiated,
 )
 
-from ..builder.compiler import cache_root
-from ..builder.native import COMPILERS, fmi_headers
+from ..builder.core.compiler import cache_root
+from ..builder.packaging.native import COMPILERS, fmi_headers
 from ..errors import UserError
 
 SOURCE = Path(__file__).parent / "csrc" / "runner.c"

@@ -26,12 +26,12 @@ from pathlib import Path
 from ..runtime.files import MODEL_FILE, MODEL_NAME
 from ..runtime.rules import SETTINGS, check_setting
 from ..scene import Scene
-from . import pendulum
-from .compiler import CoreBuild, build_core
-from .model_description import complete, model_description_text
-from .pendulum import DEFAULT_SETTINGS
-from .pythonfmu_export import export_library
-from .variables import Variable, records, variables
+from .core.compiler import CoreBuild, build_core
+from .fmi.variables import Variable, records, variables
+from .models import pendulum
+from .models.pendulum import DEFAULT_SETTINGS
+from .packaging.pythonfmu_description import complete, model_description_text
+from .packaging.pythonfmu_export import export_library
 
 RUNTIME = Path(__file__).parents[1] / "runtime"
 
@@ -48,7 +48,7 @@ def model_data(
     scene: Scene, core: CoreBuild, settings: dict, backend: str = "pythonfmu", arrays: bool = True
 ) -> dict:
     """What the slave reads from MODEL_FILE: the FMU's variables in value-reference order
-    (builder.variables, as dicts), the core's file, the settings' start values, and the
+    (builder.fmi.variables, as dicts), the core's file, the settings' start values, and the
     scene itself (see fmu_scene). arrays=False: no variable in an FMI 3.0 array, each
     element a scalar of its own (alpha0, alpha1, ...), as in FMI 2.0."""
     found = variables(scene, settings, backend)
@@ -78,10 +78,10 @@ def build_fmu(
     arrays: bool = True,
 ) -> FmuBuild:
     """The scene's FMU at `output`: the pythonfmu slave (the default), or with
-    backend="native" the same C with FMI glue in C (builder.native), with a binary for each
+    backend="native" the same C with FMI glue in C (builder.packaging.native), with a binary for each
     of `platforms` ("linux64", and cross-compiled "win64" and, FMI 3.0 only, "aarch64-linux";
     the pythonfmu FMU is linux64 only).
-    fmi_version=3 (native only): an FMI 3.0 FMU (builder.fmi3) instead of FMI 2.0; with
+    fmi_version=3 (native only): an FMI 3.0 FMU (builder.fmi.fmi3) instead of FMI 2.0; with
     arrays=False its per-link quantities are scalars with FMI 2.0's names, for tools that read
     no FMI 3.0 arrays (OMSimulator reads each array as its first element)."""
     if fmi_version not in (2, 3):
@@ -180,7 +180,7 @@ def package(
     The FMU's resources hold the runtime's modules the slave runs with (runtime_modules)
     as the package cp_runtime_<digest>, the entry module pythonfmu loads (runtime/entry.py
     as <slave_module>_<digest>.py) and `data_files`; its model description is completed
-    from `described`, the variables as builder.variables describes them
+    from `described`, the variables as builder.fmi.variables describes them
     (model_description.complete). Returns the entry module's name.
     """
     digest = runtime_digest()

@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from ..builder import fmu as builder
-from ..builder.cart import build_cart
-from ..builder.compiler import load_core
+from ..builder.core.compiler import load_core
+from ..builder.models.cart import build_cart
 from ..scene import Scene
 from . import ecospy_run
 from .monolithic import cart_parameters, monolithic
@@ -51,7 +51,7 @@ EXCHANGED = ["cart::x", "cart::v", "cart::a", "p::F_pivot_x"] + [f"p::{name}" fo
 
 
 def build_cart_fmu(output: Path | str, fmi_version: int = 2) -> Path:
-    """Cart.fmu: the cart as a native FMU (builder/cart.py, runtime/csrc/models/cart_model.c), FMI 2.0
+    """Cart.fmu: the cart as a native FMU (builder/models/cart.py, runtime/csrc/models/cart_model.c), FMI 2.0
     (what the demo's ecospy runs) or 3.0."""
     return build_cart(Path(output), fmi_version=fmi_version)
 

@@ -10,9 +10,9 @@ import numpy as np
 import sympy as sm
 import sympy.physics.mechanics as me
 
-from ..builder.cart import PARAMETERS as CART_DEFAULTS
-from ..builder.cart import START as CART_START
-from ..builder.kane import chain
+from ..builder.core.kane import chain
+from ..builder.models.cart import PARAMETERS as CART_DEFAULTS
+from ..builder.models.cart import START as CART_START
 from ..scene import Scene
 
 CART_PARAMETERS = tuple(CART_DEFAULTS)

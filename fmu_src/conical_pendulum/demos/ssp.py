@@ -20,7 +20,7 @@ stepSize), from which OMSimulator takes its master algorithm and step; ecos take
 step from its caller, FMPy from its arguments. Each SSD's name is an identifier
 (`PendulumOnCart_explicit`): OMSimulator names its model after it and refuses any other.
 The connectors' units are those the FMUs declare (their modelDescription.xml's units and
-UnitDefinitions: builder.units), written as SSP 1.0's ssc:Units.
+UnitDefinitions: builder.fmi.units), written as SSP 1.0's ssc:Units.
 
 The XML uses the prefixes ssd:, ssc:, ssv:, osp: and oms: throughout: ecos (pugixml),
 libcosim (boost property_tree) and OMSimulator (pugixml) match element names with their
@@ -37,7 +37,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from ..builder.units import BASE_UNITS
+from ..builder.fmi.units import BASE_UNITS
 from ..errors import UserError
 from .coupled import EXCHANGED, SCHEMES, STOP_TIME
 from .monolithic import cart_parameters

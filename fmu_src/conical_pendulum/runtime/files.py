@@ -1,6 +1,6 @@
 """Names the build and the slaves share: the FMU's model name and its scene's resource file.
 
-No imports, so that the build (builder/fmu.py, builder/native.py) reads them without
+No imports, so that the build (builder/fmu.py, builder/packaging/native.py) reads them without
 loading a slave, which needs pythonfmu and numpy.
 """
 

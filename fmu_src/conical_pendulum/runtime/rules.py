@@ -102,7 +102,7 @@ RULES = {
     ),
 }
 
-# The rule of a variable by its quantity (builder.variables' records carry both; a variable
+# The rule of a variable by its quantity (builder.fmi.variables' records carry both; a variable
 # of no link is its own quantity): (rule, what it is).
 QUANTITIES = {
     "l": ("positive", "a length"),

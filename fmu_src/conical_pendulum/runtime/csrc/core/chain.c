@@ -107,7 +107,7 @@ static void apply_at_bob(Link *k, const cp_real F[3])
 
 #ifdef CP_DRAG
 /* The air's drag on link i's bob, -1/2 rho C_d A |v_air| v_air, v_air the bob's velocity
- * relative to the pivot, plus the pivot's (with coupling), less the wind (builder.model's
+ * relative to the pivot, plus the pivot's (with coupling), less the wind (builder.core.equations's
  * _drag): into k->drag, and applied at the bob. */
 static void bob_drag(Link *k, const cp_real *p, int i)
 {
@@ -235,7 +235,7 @@ static int articulate(cp_model *model, const cp_real *x, Link *links)
         }
 #ifdef CP_DAMPING_INDEX
         /* the joint's damping torque -c w_rel: generalized forces -c (omega, delta), as the
-           joint's axes are orthonormal (builder.model.joint_damping) */
+           joint's axes are orthonormal (builder.core.equations.joint_damping) */
         for (int r = 0; r < 2; r++) k->uu[r] -= p[CP_DAMPING_INDEX + i] * x[(2 + r) * n + i];
 #endif
         /* LDL^T pivots of this joint's 2x2 articulated inertia: a cheap condition estimate,

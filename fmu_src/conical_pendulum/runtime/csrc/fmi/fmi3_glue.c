@@ -159,7 +159,7 @@ static void emit(FmiInstance *fmi, FmiStatus status, const char *category, const
 }
 
 /* FMI 3.0's independent variable, time: its value reference follows every variable's
- * (fmi3_arrays.h, builder/fmi3.py). */
+ * (fmi3_arrays.h, builder/fmi/fmi3.py). */
 #define VR_TIME ((fmi3ValueReference)CP_VR_TIME)
 #define MAX_ELEMENTS 4096  /* of one call's expanded value references (directional derivatives) */
 

@@ -40,12 +40,12 @@
  *
  * A second model, the coupled demo's cart (cart_model.c): its struct ModelData (its held
  * Reals by value reference, F_x_order, the force in effect and the extrapolation's last
- * point) and these functions over it, with its own generated fmu_config.h (builder/cart.py:
+ * point) and these functions over it, with its own generated fmu_config.h (builder/models/cart.py:
  * GUID, names, value rules, the same log categories); model_sizes says 2 states. It links
  * with fmi2_glue.c and fmi3_glue.c unchanged: one more model file, not a copy of the glue.
  * What FMI 3.0 says of a model beyond this contract, its arrays and the structural parameter
  * of their dimension, fmi3_glue.c reads from the model's generated fmi3_arrays.h
- * (builder/fmi3.py): the pendulum's per-link arrays and n_links; the cart has neither.
+ * (builder/fmi/fmi3.py): the pendulum's per-link arrays and n_links; the cart has neither.
  *
  * Not in the contract: Boolean and String variables, event indicators and events (neither
  * model has any; the FMI layer refuses them). */

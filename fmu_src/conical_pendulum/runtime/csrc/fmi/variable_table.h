@@ -1,5 +1,5 @@
 /* A model's variables by value reference, read from the tables its generated fmu_config.h
- * holds (cp_names, cp_settable, cp_role: data only, written by builder/fmu_config.py): the
+ * holds (cp_names, cp_settable, cp_role: data only, written by builder/fmi/fmu_config.py): the
  * name of a variable, and whether it may be set now, or taken as a known or an unknown of a
  * directional derivative. Every model behind fmu_model.h compiles variable_table.c. */
 #ifndef CP_VARIABLE_TABLE_H

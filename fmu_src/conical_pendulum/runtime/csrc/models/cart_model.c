@@ -5,7 +5,7 @@
  * solved exactly by the matrix exponential of (x, v, F, F'), by scaling and squaring with the
  * Taylor series the pythonfmu cart used, so the numbers are its own to rounding. Model
  * Exchange: x' = v, v' = a with F = F_x (F_x_order does not apply). Its variables, starts
- * and value rules are builder/cart.py's (fmu_config.h). */
+ * and value rules are builder/models/cart.py's (fmu_config.h). */
 #include "fmu_model.h"
 
 #include <math.h>

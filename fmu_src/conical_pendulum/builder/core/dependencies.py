@@ -2,14 +2,14 @@
 
 ModelStructure names, for every output and state derivative, the knowns it depends on; FMI
 2.0 reads a missing list as "depends on every known", OMSimulator as "on nothing", so every
-list is written out (builder.variables puts these sets into the records' depends_on).
+list is written out (builder.fmi.variables puts these sets into the records' depends_on).
 
-The expanded equations (builder.model.derive) give them exactly: an expression's free
+The expanded equations (builder.core.equations.derive) give them exactly: an expression's free
 symbols, followed through the named intermediate definitions; u' = M^-1 F depends on every
 entry of M and F in its block of M (structurally, M^-1 is full within a block). The
 recursive formulation (runtime/csrc/core/chain.c) has no expressions: its loops go down the
 chain, so a link's kinematics depend on its own and its ancestors' joints and lengths, and the
-dynamics on everything; tests/test_structure.py holds the two to each other where both exist
+dynamics on everything; tests/test_dependencies.py holds the two to each other where both exist
 and both to the FMUs' directional derivatives.
 """
 
@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import functools
 
-from ..scene import APPARENT_MASS, FREE_FORCE, PIVOT_INPUTS, PIVOT_OUTPUTS, PIVOT_VELOCITY, WIND, Scene
+from ...scene import APPARENT_MASS, FREE_FORCE, PIVOT_INPUTS, PIVOT_OUTPUTS, PIVOT_VELOCITY, WIND, Scene
 
 Dependencies = dict[str, frozenset[str]]  # computed variable -> the knowns it depends on
 
@@ -28,7 +28,7 @@ def dependencies(scene: Scene) -> Dependencies:
     states, parameters and inputs, by name."""
     if scene.resolved_formulation() == "recursive":
         return _chain(scene)
-    from .model import derive  # sympy: build time only
+    from .equations import derive  # sympy: build time only
 
     return _symbolic(scene, derive(scene))
 

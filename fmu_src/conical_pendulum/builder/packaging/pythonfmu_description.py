@@ -6,23 +6,23 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-from ..scene import Scene
-from .fmi2 import experiment_tolerance, type_definitions, typed, write_structure
-from .units import unit_definitions
-from .variables import Variable, model_structure
+from ...scene import Scene
+from ..fmi.fmi2 import experiment_tolerance, type_definitions, typed, write_structure
+from ..fmi.units import unit_definitions
+from ..fmi.variables import Variable, model_structure
 
 
 def complete(fmu: Path, described: list[Variable], library: Path) -> None:
     """Complete ModelStructure as FMI 2.0 requires; exact start values; the units, ranges and
-    the solver's enumeration builder.fmi2 writes (pythonfmu 0.7 has no Enumeration variable:
+    the solver's enumeration builder.fmi.fmi2 writes (pythonfmu 0.7 has no Enumeration variable:
     its slave registers solver an Integer, which a host sets with fmi2SetInteger as it sets
     an enumeration, so only the description changes); this platform only,
-    its binary `library` (pythonfmu's export library as built here, builder.pythonfmu_export);
+    its binary `library` (pythonfmu's export library as built here, builder.packaging.pythonfmu_export);
     text compressed, binaries stored (fmpy extracts the FMU at every simulate_fmu).
 
-    `described`: the FMU's variables' records (builder.variables, in value-reference order);
+    `described`: the FMU's variables' records (builder.fmi.variables, in value-reference order);
     pythonfmu's variables must be exactly those (name, value reference, type, causality,
-    variability, initial), and the starts and the ModelStructure (builder.variables.
+    variability, initial), and the starts and the ModelStructure (builder.fmi.variables.
     model_structure; each output's dependencies on the inputs, its direct feedthrough, so a
     master knows where an algebraic loop can be) are theirs.
 
@@ -46,7 +46,7 @@ def complete(fmu: Path, described: list[Variable], library: Path) -> None:
     root = ET.fromstring(entries["modelDescription.xml"])
     variables = root.find("ModelVariables").findall("ScalarVariable")
     _check_described(variables, described)
-    for var, v in zip(variables, described):  # builder.fmi2's type element, pythonfmu's start exact
+    for var, v in zip(variables, described):  # builder.fmi.fmi2's type element, pythonfmu's start exact
         (written,) = list(var)
         value = {"start": v.start_text()} if written.get("start") is not None else {}
         var.remove(written)

@@ -1,12 +1,12 @@
 """The native FMU's FMI 3.0 writer: the native FMU's C with fmi3_glue.c instead of fmi2_glue.c.
 
 One FMU with Co-Simulation and Model Exchange, the same model contract (fmu_model.h), the
-same variables and value references as the FMI 2.0 native FMU (builder.variables, backend
+same variables and value references as the FMI 2.0 native FMU (builder.fmi.variables, backend
 "native"), Float64 for Real and Int32 for Integer, and each per-link quantity one array (its
 records' `array` and `index`). What FMI 3.0 words differently is here: the model description
 (instantiationToken, <Float64>/<Int32>, arrays sized by the model's structural parameter, a
 ModelStructure by value reference), fmi3_arrays.h, the binaries' folders (x86_64-linux,
-x86_64-windows) and sources/buildDescription.xml instead of a SourceFiles list. builder.native
+x86_64-windows) and sources/buildDescription.xml instead of a SourceFiles list. builder.packaging.native
 packs it (FMI3, a Standard); a model without arrays (the cart) has no structural parameter.
 Reading such an FMU's results back is analysis.fmi3_arrays's.
 """
@@ -17,10 +17,10 @@ import time
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
-from ..runtime.rules import RULES
-from . import c_literals as c
+from ...runtime.rules import RULES
+from .. import c_literals as c
+from .contract import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
 from .fmi2 import default_experiment
-from .native_model import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
 from .units import TIME, attributes, declared, enumerations, unit_definitions
 from .variables import Variable, describe, model_structure
 
@@ -44,7 +44,7 @@ class Fmi3Variable:
 
 def layout(records: list[Variable]) -> list[Fmi3Variable]:
     """The FMI 3.0 FMU's variables, in the order of the records' value references (an array
-    where its first member is): each record of an array (builder.variables) in its array,
+    where its first member is): each record of an array (builder.fmi.variables) in its array,
     the rest scalars."""
     arrays: dict[str, list[Variable]] = {}
     for v in records:
@@ -127,7 +127,7 @@ def model_description(described: Description) -> bytes:
             "instantiationToken": described.guid,
             "description": described.data["description"],
             "author": "conical-pendulum-fmu",
-            "generationTool": "conical_pendulum.builder.fmi3",
+            "generationTool": "conical_pendulum.builder.fmi.fmi3",
             "generationDateAndTime": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "variableNamingConvention": "structured",
         },
@@ -230,7 +230,7 @@ def _model_variables(
 
 def _values(variable: Fmi3Variable) -> tuple[str, dict[str, str]]:
     """The variable's type (Float64, Int32, or Enumeration of its declared type) and what
-    builder.units says of its values; an array's elements must say the same (FMI 3.0 has one
+    builder.fmi.units says of its values; an array's elements must say the same (FMI 3.0 has one
     unit, range and nominal per array)."""
     v = variable.members[0]
     rule = RULES[v.rule]
@@ -245,7 +245,7 @@ def _values(variable: Fmi3Variable) -> tuple[str, dict[str, str]]:
 def _model_structure(
     element: ET.Element, records: list[Variable], variables_: list[Fmi3Variable], vr
 ) -> None:
-    """ModelStructure by value reference: builder.variables.model_structure's unknowns."""
+    """ModelStructure by value reference: builder.fmi.variables.model_structure's unknowns."""
     structure = model_structure(records)
     # FMI 3.0's order: Output, ContinuousStateDerivative, InitialUnknown, each by value
     # reference; an array is an unknown where its first element is, and depends on what any
@@ -284,7 +284,7 @@ def build_description(sources: list[str], model_identifier: str) -> bytes:
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-# FMI 3.0's platform tuples for builder.native's platforms (section 2.5.1.1).
+# FMI 3.0's platform tuples for builder.packaging.native's platforms (section 2.5.1.1).
 PLATFORM_FOLDERS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux"}
 
 FMI3 = Standard(

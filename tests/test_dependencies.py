@@ -1,4 +1,4 @@
-"""Every ModelStructure list names its dependencies, read from the model (builder.structure),
+"""Every ModelStructure list names its dependencies, read from the model (builder.core.dependencies),
 and they are the model's: a pair not listed has a zero derivative (the native FMU's exact
 directional derivatives; differences of what initialization computes for the parameters),
 and a listed pair is not zero at some random point."""
@@ -9,8 +9,8 @@ from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
 from conical_pendulum import Link, Scene
-from conical_pendulum.builder import structure
-from conical_pendulum.builder.model import derive
+from conical_pendulum.builder.core import dependencies
+from conical_pendulum.builder.core.equations import derive
 from fmu_helpers import INSTANCES, fmi3_names
 from test_directional import Model, random_point
 
@@ -51,7 +51,7 @@ def test_the_chains_rule_is_what_the_expressions_say(name):
     """The recursive formulation's dependencies (no expressions to read) equal the expanded
     equations' free symbols wherever both formulations exist."""
     scene = SCENES[name]
-    assert structure._chain(scene) == structure._symbolic(scene, derive(scene))
+    assert dependencies._chain(scene) == dependencies._symbolic(scene, derive(scene))
 
 
 @pytest.mark.parametrize("name", ["seed", "mixed", "recursive", "forced", "forced_recursive"])

@@ -7,7 +7,7 @@ force F_x and the apparent mass M_x of what it carries, and it moves by
 Over a communication step the force is held (F_x_order = 0) or extrapolated linearly
 through the last two communication points (1), and the step is solved exactly with the
 matrix exponential (runtime/csrc/models/cart_model.c): all the error of the coupled demo is the
-coupling's. Its FMU, FMI 2.0 or 3.0, is written by builder.native's code paths, as the
+coupling's. Its FMU, FMI 2.0 or 3.0, is written by builder.packaging.native's code paths, as the
 pendulum's is, and links with the same FMI layers.
 """
 
@@ -16,13 +16,13 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..runtime.rules import rule_of
-from ..scene import Scalar
-from . import c_literals as c
-from .fmu_config import RULE_INDEX
-from .native import write_model_fmu
-from .native_model import NativeModel
-from .variables import Group, Member, Variable, per_second, variables_of
+from ...runtime.rules import rule_of
+from ...scene import Scalar
+from .. import c_literals as c
+from ..fmi.contract import NativeModel
+from ..fmi.fmu_config import RULE_INDEX
+from ..fmi.variables import Group, Member, Variable, per_second, variables_of
+from ..packaging.native import write_model_fmu
 
 NAME = "Cart"
 DESCRIPTION = (
@@ -70,7 +70,7 @@ F_X_ORDER = (
 )
 # What a (and so der(v)) depends on: (m_cart + M_x) a = F_x - k_cart x - c_cart v; the cart's
 # C is written by hand, so this is declared with it and held to its directional derivatives
-# and to differences (tests/test_structure.py).
+# and to differences (tests/test_dependencies.py).
 KNOWNS = (*PARAMETERS, *STATES, *INPUTS)
 
 

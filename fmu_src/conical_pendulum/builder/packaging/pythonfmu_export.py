@@ -23,11 +23,11 @@ import sysconfig
 import tempfile
 from pathlib import Path
 
-from ..errors import UserError
-from .compiler import LIMITED_API, cache_root
+from ...errors import UserError
+from ..core.compiler import LIMITED_API, cache_root
 from .native import fmi_headers
 
-SOURCES = Path(__file__).parents[1] / "runtime" / "pythonfmu_export"
+SOURCES = Path(__file__).parents[2] / "runtime" / "pythonfmu_export"
 EXPORTS = "{ global: fmi2*; finalizePythonInterpreter; local: *; };\n"
 
 

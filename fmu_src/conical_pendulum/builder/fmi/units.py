@@ -1,9 +1,9 @@
 """The units the FMUs declare, each once: its SI base-unit exponents, the physical quantity of
 the variables that carry it, and the unit a tool shows it in (build time: the model
-description writers, builder.fmi2, builder.fmi3 and builder.model_description, and the SSP
+description writers, builder.fmi.fmi2, builder.fmi.fmi3 and builder.packaging.pythonfmu_description, and the SSP
 package's connectors read them from the FMUs they describe).
 
-A variable's record (builder.variables.Variable) names its unit; everything else written about
+A variable's record (builder.fmi.variables.Variable) names its unit; everything else written about
 the unit comes from here. The names are Modelica's unit syntax ("kg.m2", "N.s/m"), which the
 Modelica tools that import FMUs parse; FMI itself reads only the exponents.
 
@@ -18,7 +18,7 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 
-from ..runtime.rules import RULES
+from ...runtime.rules import RULES
 
 BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")  # FMI's BaseUnit attributes
 DEGREES = 180.0 / math.pi  # value_deg = DEGREES * value_rad
@@ -74,7 +74,7 @@ def declared(name: str) -> Unit:
     try:
         return UNITS[name]
     except KeyError:
-        raise ValueError(f"unit {name!r} is not declared in builder.units: {', '.join(UNITS)}") from None
+        raise ValueError(f"unit {name!r} is not declared in builder.fmi.units: {', '.join(UNITS)}") from None
 
 
 def used(records, also: tuple[str, ...] = ()) -> list[Unit]:
@@ -104,7 +104,7 @@ def unit_definitions(parent: ET.Element, records, also: tuple[str, ...] = ()) ->
 
 
 def attributes(v) -> dict[str, str]:
-    """What a model description says of a variable's values (a record's, builder.variables):
+    """What a model description says of a variable's values (a record's, builder.fmi.variables):
     its quantity, unit and display unit (a Real's), min and max (its rule's: Variable.bounds),
     nominal (a state's); an enumeration's are its type's."""
     found = {}

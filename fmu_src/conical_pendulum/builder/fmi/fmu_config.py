@@ -1,4 +1,4 @@
-"""fmu_config.h: a native FMU's variable table as C data, from its records (builder.variables).
+"""fmu_config.h: a native FMU's variable table as C data, from its records (builder.fmi.variables).
 
 Value references, start values, names, value rules, when each variable may be set and its
 part in directional derivatives, the log categories; then the defines only its model reads
@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import re
 
-from ..runtime.rules import CALCULATED, FIXED, RULES
-from . import c_literals as c
-from .native_model import LOG_CATEGORIES, NativeModel
+from ...runtime.rules import CALCULATED, FIXED, RULES
+from .. import c_literals as c
+from .contract import LOG_CATEGORIES, NativeModel
 from .variables import Variable, first_references
 
 RULE_INDEX = {name: k for k, name in enumerate(RULES)}  # cp_rules' rows
@@ -19,7 +19,7 @@ RULE_INDEX = {name: k for k, name in enumerate(RULES)}  # cp_rules' rows
 
 def real_variables(records: list[Variable]) -> list[Variable]:
     """The Real variables the glue holds in one array by value reference (CP_NREAL): every
-    variable before the first Integer (builder.variables.GROUPS's order)."""
+    variable before the first Integer (builder.fmi.variables.GROUPS's order)."""
     return records[: next((k for k, v in enumerate(records) if v.type != "Real"), len(records))]
 
 

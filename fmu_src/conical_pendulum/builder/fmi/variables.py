@@ -6,7 +6,7 @@ of one FMU, in value-reference order (a variable's value reference is its place 
 list). model.json carries these records to the pythonfmu slave, which registers its
 variables from them; the pythonfmu FMU's model description is checked against them and
 completed from them (model_description.complete); the native FMU's model descriptions
-(builder.fmi2, builder.fmi3) and fmu_config.h (builder.fmu_config) are written from them.
+(builder.fmi.fmi2, builder.fmi.fmi3) and fmu_config.h (builder.fmi.fmu_config) are written from them.
 Adding a group of variables is one entry in GROUPS (and the code that computes its values).
 
 A record carries what its variable is as fields (its quantity and link, from the scene's
@@ -23,9 +23,9 @@ import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields, replace
 
-from ..runtime.rules import NATIVE_SOLVERS, RULES, SETTINGS, STATISTICS, rule_of, solver_description
-from ..scene import WORKS, Scalar, Scene
-from .structure import dependencies
+from ...runtime.rules import NATIVE_SOLVERS, RULES, SETTINGS, STATISTICS, rule_of, solver_description
+from ...scene import WORKS, Scalar, Scene
+from ..core.dependencies import dependencies
 
 BACKENDS = ("pythonfmu", "native")
 
@@ -50,7 +50,7 @@ class Variable:
     derivative_of: str | None = None  # der(x): the state x
     quantity: str = ""  # what it is whatever its link (l for l0, bob_x for bob2_x): its rule's key
     link: int | None = None  # the link it belongs to, if any
-    unit: str | None = None  # SI, as the description writes it (m, rad/s, kg.m2): builder.units's
+    unit: str | None = None  # SI, as the description writes it (m, rad/s, kg.m2): builder.fmi.units's
     nominal: float | None = None  # a continuous state's scale (FMI's nominal), if it is one
     array: str | None = None  # the FMI 3.0 FMU's array holding it (one element per link), if any
     index: int | None = None  # its 0-based place in that array
@@ -94,7 +94,7 @@ class Variable:
 
 
 def records(data: dict) -> list[Variable]:
-    """The variables of model.json's data (builder.fmu.model_data, builder.cart.cart_data)."""
+    """The variables of model.json's data (builder.fmu.model_data, builder.models.cart.cart_data)."""
     return [Variable.from_dict(v) for v in data["variables"]]
 
 
@@ -338,7 +338,7 @@ def _in_order(scene: Scene, names) -> tuple[str, ...]:
     return tuple(sorted(names, key=order.index))
 
 
-def _outputs(scene, settings):  # what each depends on, read from the model (builder.structure)
+def _outputs(scene, settings):  # what each depends on, read from the model (builder.core.dependencies)
     found = dependencies(scene)
     return _described(scene.output_scalars(), None, lambda s: _in_order(scene, found[s.name]))
 
@@ -358,7 +358,7 @@ def _settings(integer):
     return members
 
 
-def _derivatives(scene, settings):  # what each depends on, read from the model (builder.structure)
+def _derivatives(scene, settings):  # what each depends on, read from the model (builder.core.dependencies)
     found = dependencies(scene)
     return [
         Member(
@@ -428,7 +428,7 @@ def variables(scene: Scene, settings: dict, backend: str = "pythonfmu") -> list[
 
 def variables_of(in_order, scene: Scene | None = None, settings: dict | None = None) -> list[Variable]:
     """The variables of groups in_order, in value-reference order (a variable's value
-    reference is its place): the pendulum's (variables), or another model's (builder.cart).
+    reference is its place): the pendulum's (variables), or another model's (builder.models.cart).
     The Reals of one quantity in a group with one per link of the scene (each link present)
     are an FMI 3.0 array, element k the link k's."""
     result = []
@@ -478,7 +478,7 @@ def _arrays(members: list[Member], scene: Scene | None) -> set[str]:
 def first_references(records: list[Variable], in_order) -> dict[str, int]:
     """Each group's first value reference (where it would start when empty), by group name;
     records: the variables of the groups in_order (groups(backend), or another model's:
-    builder.cart)."""
+    builder.models.cart)."""
     first, seen = {}, 0
     for group in in_order:
         first[group.name] = seen
@@ -497,8 +497,8 @@ class Unknown:
 
 @dataclass(frozen=True)
 class Structure:
-    """A model description's ModelStructure, written once for every writer (builder.fmi2,
-    builder.fmi3, model_description.complete), each list in value-reference order and every
+    """A model description's ModelStructure, written once for every writer (builder.fmi.fmi2,
+    builder.fmi.fmi3, model_description.complete), each list in value-reference order and every
     entry with its dependencies written out (FMI reads none as "every known", OMSimulator as
     "nothing"): of the records' depends_on, those that are knowns of that list."""
 

@@ -2,8 +2,8 @@
 
 The core holds the scene's numerics and, behind the model contract (fmu_model.h), the
 pendulum's model with its variable table (pendulum_model.c and the fmu_config.h of
-builder.pendulum.core_config), which the pythonfmu slave runs on. The cache key covers the
-scene's structure, what the variable table is made of (builder.pendulum.core_config_key: the
+builder.models.pendulum.core_config), which the pythonfmu slave runs on. The cache key covers the
+scene's structure, what the variable table is made of (builder.models.pendulum.core_config_key: the
 solver settings, its starts, and the variable groups) and the generator's own sources, so a
 rebuild of the same scene only loads the cached extension.
 """
@@ -24,10 +24,10 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import UserError
-from ..scene import Scene
-from .native_model import CSRC, CSRC_FILES
-from .pendulum import DEFAULT_SETTINGS, core_config, core_config_key
+from ...errors import UserError
+from ...scene import Scene
+from ..fmi.contract import CSRC, CSRC_FILES
+from ..models.pendulum import DEFAULT_SETTINGS, core_config, core_config_key
 
 HERE = Path(__file__).parent
 CORE_CSRC = CSRC / "core"  # the model's numerics: the compiled core's C, and the native FMU's
@@ -41,12 +41,12 @@ MODEL_FILES = ("fmu_model.h", "variable_table.h", "variable_table.c", "pendulum_
 # the seed; the native FMU compiles its own at -O2).
 UNOPTIMIZED_SOURCES = ("directional.c", "second_directional.c")
 GENERATOR_SOURCES = [
-    *(HERE / name for name in ("kane.py", "model.py", "codegen.py", "compiler.py")),
-    # the variable table's fmu_config.h (builder.pendulum.core_config)
+    *(HERE / name for name in ("kane.py", "equations.py", "codegen.py", "compiler.py")),
+    # the variable table's fmu_config.h (builder.models.pendulum.core_config)
     *(HERE / name for name in ("pendulum.py", "fmu_config.py", "variables.py", "c_literals.py")),
     *sorted((HERE / "templates").glob("*.in")),
     HERE.parent / "scene.py",  # the variables' names
-    HERE.parent / "runtime" / "rules.py",  # the statistics' slots (model.h), the value rules
+    HERE.parents[1] / "runtime" / "rules.py",  # the statistics' slots (model.h), the value rules
     *sorted(CORE_CSRC.glob("*.[chp]*")),
     *(CSRC_FILES[name] for name in MODEL_FILES),
 ]
@@ -111,7 +111,7 @@ def build_core(scene: Scene, cache: Path | None = None, settings: dict | None = 
     with tempfile.TemporaryDirectory(dir=directory.parent, prefix=f".{name}.") as tmp:
         work = Path(tmp)
         from .codegen import generate, generate_recursive  # sympy: build time only
-        from .model import derive
+        from .equations import derive
 
         start = time.perf_counter()
         if scene.resolved_formulation() == "recursive":  # nothing to derive: loops over links

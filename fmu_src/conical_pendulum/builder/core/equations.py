@@ -17,7 +17,7 @@ the whole chain, sum m (g - a), so it needs u' (the symbols `rates`).
 
 The published model (kinematics="pydy-example") cannot be formed this way: its
 equations are whatever sympy derives from contradictory kinematics, so they come from
-running the seed's own KanesMethod derivation (see builder.kane).
+running the seed's own KanesMethod derivation (see builder.core.kane).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import sympy as sm
 import sympy.physics.mechanics as me
 
-from ..scene import PIVOT_INPUTS, PIVOT_VELOCITY, WIND, Scene
+from ...scene import PIVOT_INPUTS, PIVOT_VELOCITY, WIND, Scene
 from .kane import kanes_method
 
 Vec = sm.Matrix

@@ -1,14 +1,14 @@
 """The native FMU's FMI 2.0 writer: its model description (Co-Simulation and Model Exchange,
 a SourceFiles list, a complete ModelStructure by index), from the variables' records
-(builder.variables); builder.native packs it with fmi2_glue.c."""
+(builder.fmi.variables); builder.packaging.native packs it with fmi2_glue.c."""
 
 from __future__ import annotations
 
 import time
 import xml.etree.ElementTree as ET
 
-from ..runtime.rules import RULES
-from .native_model import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
+from ...runtime.rules import RULES
+from .contract import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
 from .units import attributes, enumerations, unit_definitions
 from .variables import Structure, Variable, model_structure
 
@@ -24,7 +24,7 @@ def model_description(described: Description) -> bytes:
             "guid": described.guid,
             "description": described.data["description"],
             "author": "conical-pendulum-fmu",
-            "generationTool": "conical_pendulum.builder.native",
+            "generationTool": "conical_pendulum.builder.packaging.native",
             "generationDateAndTime": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "variableNamingConvention": "structured",
             "numberOfEventIndicators": "0",
@@ -108,7 +108,7 @@ def _model_variables(variables: ET.Element, records: list[Variable], index: dict
 
 def typed(v: Variable, value: dict[str, str]) -> tuple[str, dict[str, str]]:
     """A variable's type element (Real, Integer, or Enumeration of its declared type) and its
-    attributes: builder.units's (quantity, unit, range, nominal), then `value`'s (start,
+    attributes: builder.fmi.units's (quantity, unit, range, nominal), then `value`'s (start,
     derivative)."""
     rule = RULES[v.rule]
     if rule.items:
@@ -117,7 +117,7 @@ def typed(v: Variable, value: dict[str, str]) -> tuple[str, dict[str, str]]:
 
 
 def type_definitions(root: ET.Element, records: list[Variable]) -> None:
-    """<TypeDefinitions>: the enumerations the records use (builder.units.enumerations)."""
+    """<TypeDefinitions>: the enumerations the records use (builder.fmi.units.enumerations)."""
     found = enumerations(records)
     if not found:
         return
@@ -129,14 +129,14 @@ def type_definitions(root: ET.Element, records: list[Variable]) -> None:
 
 
 def _model_structure(element: ET.Element, records: list[Variable], index: dict[str, str]) -> None:
-    """ModelStructure by index: builder.variables.model_structure's unknowns, each list in the
+    """ModelStructure by index: builder.fmi.variables.model_structure's unknowns, each list in the
     order of ModelVariables and each entry with its dependencies, as FMI 2.0 asks."""
     write_structure(element, model_structure(records), index)
 
 
 def write_structure(element: ET.Element, structure: Structure, index: dict[str, str]) -> None:
     """The lists of an FMI 2.0 ModelStructure (Derivatives only where there are some), every
-    Unknown with its dependencies by index (builder.model_description writes the pythonfmu
+    Unknown with its dependencies by index (builder.packaging.pythonfmu_description writes the pythonfmu
     FMU's with this too)."""
     for tag, unknowns in (
         ("Outputs", structure.outputs),

@@ -1,6 +1,6 @@
 """What a native FMU is made of besides the FMI glue: a model behind the model contract
-(fmu_model.h, a NativeModel: the pendulum's in builder.pendulum, the cart's in builder.cart)
-and an FMI standard's writer (a Standard: builder.fmi2, builder.fmi3), which builder.native
+(fmu_model.h, a NativeModel: the pendulum's in builder.models.pendulum, the cart's in builder.models.cart)
+and an FMI standard's writer (a Standard: builder.fmi.fmi2, builder.fmi.fmi3), which builder.packaging.native
 compiles and packs together. Data types only, so that the models and the standards import
 this and not each other."""
 
@@ -30,7 +30,7 @@ class Dimension:
 
 @dataclass(frozen=True)
 class NativeModel:
-    """What builder.native needs of a model behind the model contract (fmu_model.h) besides
+    """What builder.packaging.native needs of a model behind the model contract (fmu_model.h) besides
     its variables: the FMU's name, the model's C files, and what its fmu_config.h holds
     beyond what every model's does."""
 
@@ -70,10 +70,10 @@ class Description:
 
 @dataclass(frozen=True)
 class Standard:
-    """One FMI version's writer, behind one interface: builder.native packs whatever it says."""
+    """One FMI version's writer, behind one interface: builder.packaging.native packs whatever it says."""
 
     version: int
     model_description: Callable[[Description], bytes]
-    platform_folders: dict[str, str]  # builder.native's platforms -> the binaries' folders
+    platform_folders: dict[str, str]  # builder.packaging.native's platforms -> the binaries' folders
     headers: Callable[[Description], dict[str, str]]  # generated headers the glue compiles with
     files: Callable[[Description], dict[str, bytes]]  # other files of sources/ (not compiled)

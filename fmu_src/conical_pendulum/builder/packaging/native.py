@@ -4,9 +4,9 @@ compiled for each platform, no Python at run time.
 One FMU with both interfaces: Co-Simulation (the model's own step) and Model Exchange (the
 host integrates the derivatives). The binary links only libc and libm; the C sources ship in
 `sources/`, so a host can compile it for its platform. The FMI version is a value: its
-Standard (builder.fmi2.FMI2, builder.fmi3.FMI3) writes the model description and whatever
+Standard (builder.fmi.fmi2.FMI2, builder.fmi.fmi3.FMI3) writes the model description and whatever
 else that version's FMU holds, and this module compiles and packs what it says. The models:
-the pendulum's (builder.pendulum), the coupled demo's cart (builder.cart).
+the pendulum's (builder.models.pendulum), the coupled demo's cart (builder.models.cart).
 """
 
 from __future__ import annotations
@@ -21,13 +21,13 @@ import uuid
 import zipfile
 from pathlib import Path
 
-from ..errors import UserError
-from ..runtime.files import MODEL_FILE
-from .fmi2 import FMI2
-from .fmi3 import FMI3
-from .fmu_config import config_header
-from .native_model import CSRC_FILES, Description, NativeModel
-from .variables import records
+from ...errors import UserError
+from ...runtime.files import MODEL_FILE
+from ..fmi.contract import CSRC_FILES, Description, NativeModel
+from ..fmi.fmi2 import FMI2
+from ..fmi.fmi3 import FMI3
+from ..fmi.fmu_config import config_header
+from ..fmi.variables import records
 
 # The C files of the FMI layers, which serve every model behind fmu_model.h.
 LAYER_SOURCES = {2: ("fmi_layer.c", "fmi2_glue.c"), 3: ("fmi_layer.c", "fmi3_glue.c")}
@@ -106,15 +106,15 @@ def compile_binary(
 # What writes a native FMU, besides its standard's module: a change here is a new GUID.
 WRITERS = (
     Path(__file__),
-    *(Path(__file__).parent / name for name in ("fmu_config.py", "c_literals.py", "native_model.py")),
-    *sorted((Path(__file__).parent / "templates").glob("*.in")),
+    *(Path(__file__).parents[1] / name for name in ("fmi/fmu_config.py", "c_literals.py", "fmi/contract.py")),
+    *sorted((Path(__file__).parents[1] / "templates").glob("*.in")),
 )
 
 
 def guid_of(model: NativeModel, data: dict, fmi_version: int = 2) -> str:
     """A GUID that changes with anything the model description or binary says: the
-    variables and start values, for the pendulum the core's build (scene structure and
-    generator) and the settings, every C file it ships from runtime/csrc, and the code
+    variables and start values, for the pendulum the core's build (the scene's cache fields
+    and generator) and the settings, every C file it ships from runtime/csrc, and the code
     that writes it (WRITERS, its standard's module and its model's)."""
     files = glue_sources(model, fmi_version) + glue_headers(model)
     shipped = [CSRC_FILES[name] for name in files if name in CSRC_FILES]

@@ -1,6 +1,6 @@
 """The pendulum as a native model: its C files behind the model contract (fmu_model.h), its
 own lines of fmu_config.h, its FMI 3.0 arrays' dimension, and its native FMU (FMI 2.0 or
-3.0: builder.native packs it, as it packs the cart of builder.cart); and the fmu_config.h
+3.0: builder.packaging.native packs it, as it packs the cart of builder.models.cart); and the fmu_config.h
 of the same model compiled into the core for the pythonfmu slave (core_config)."""
 
 from __future__ import annotations
@@ -8,14 +8,14 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ..runtime.files import MODEL_NAME
-from ..runtime.rules import RULES, SETTINGS, rule_of
-from ..scene import Scene
-from . import c_literals as c
-from .fmu_config import RULE_INDEX, config_header
-from .native import write_model_fmu
-from .native_model import Dimension, NativeModel
-from .variables import Variable, groups, variables_of
+from ...runtime.files import MODEL_NAME
+from ...runtime.rules import RULES, SETTINGS, rule_of
+from ...scene import Scene
+from .. import c_literals as c
+from ..fmi.contract import Dimension, NativeModel
+from ..fmi.fmu_config import RULE_INDEX, config_header
+from ..fmi.variables import Variable, groups, variables_of
+from ..packaging.native import write_model_fmu
 
 DEFAULT_SETTINGS = {name: setting.default for name, setting in SETTINGS.items()}
 
@@ -82,7 +82,7 @@ def check_settings(settings: dict) -> None:
 
 def core_config(scene: Scene, settings: dict) -> str:
     """fmu_config.h of the model the pythonfmu slave holds through the compiled core
-    (builder.compiler): the native FMU's variable table (its value references, the state
+    (builder.core.compiler): the native FMU's variable table (its value references, the state
     derivatives' too), but every solver allowed, Radau among them, which the slave runs
     itself; no GUID, which only the FMI glue checks."""
     found = variables_of(groups("native"), scene, settings)
@@ -92,7 +92,7 @@ def core_config(scene: Scene, settings: dict) -> str:
 def core_config_key(settings: dict) -> str:
     """What core_config's fmu_config.h is made of beyond the scene and the generator's
     sources, for the compiled core's cache key: the settings (the starts) and the variable
-    groups in order (builder.variables.GROUPS, which a caller may extend)."""
+    groups in order (builder.fmi.variables.GROUPS, which a caller may extend)."""
     layout = [
         [g.name, g.type, g.causality, g.variability, g.initial, g.c_name, g.named]
         + [g.members.__module__, g.members.__qualname__]

@@ -13,7 +13,7 @@ demo's monolithic model builds on `chain`.
 import sympy as sm
 import sympy.physics.mechanics as me
 
-from ..scene import PIVOT_VELOCITY, WIND
+from ...scene import PIVOT_VELOCITY, WIND
 
 
 def chain(scene, I, O, p):
