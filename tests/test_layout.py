@@ -8,8 +8,9 @@ for the package's own modules to dodge a cycle.
 
 The layers, from the bottom: runtime/ (shipped inside the FMUs) imports nothing of the
 build or the host side; builder/ nothing of analysis/, viz/, demos/ or the command
-line; library code nothing of the command line (commands/ and cli.py), which alone
-turns errors into a line and an exit status.
+line, and inside it each role (core/, fmi/, packaging/, models/, then fmu.py) only the
+roles below it; library code nothing of the command line (commands/ and cli.py), which
+alone turns errors into a line and an exit status.
 """
 
 from __future__ import annotations
@@ -142,6 +143,41 @@ def test_layers_point_one_way(layer):
         if part(module) == layer
         for target in targets
         if part(target) in FORBIDDEN[layer]
+    )
+    assert not wrong, "\n".join(wrong)
+
+
+# builder/ by role, from the bottom: what each role may import of the others (c_literals, the C
+# text written one way, serves them all; builder.fmu, the entry, drives them all)
+BUILDER_ROLES = {
+    "core": set(),  # scene -> equations, dependencies, generated C, the compiled core: no FMI
+    "fmi": {"core"},  # what an FMU declares, per FMI version (the records list core's dependencies)
+    "packaging": {"core", "fmi"},  # the native FMU compiled and packed; pythonfmu's binary and description
+    "models": {"core", "fmi", "packaging"},  # the models behind fmu_model.h: pendulum, cart
+    "fmu": {"core", "fmi", "packaging", "models"},
+}
+BUILDER_SHARED = {"c_literals"}
+
+
+def builder_role(module: str) -> str | None:
+    """core, fmi, packaging, models, fmu or c_literals for a module of builder/, else None."""
+    parts = module.split(".")
+    return parts[2] if len(parts) > 2 and parts[1] == "builder" else None
+
+
+def test_builder_holds_its_roles_and_nothing_flat():
+    found = {builder_role(module) for module in import_graph()} - {None}
+    assert found == set(BUILDER_ROLES) | BUILDER_SHARED
+
+
+@pytest.mark.parametrize("role", sorted(BUILDER_ROLES))
+def test_builder_roles_import_only_the_roles_below(role):
+    wrong = sorted(
+        f"{module} imports {target}"
+        for module, targets in import_graph().items()
+        if builder_role(module) == role
+        for target in targets
+        if builder_role(target) not in {None, role, *BUILDER_SHARED, *BUILDER_ROLES[role]}
     )
     assert not wrong, "\n".join(wrong)
 
