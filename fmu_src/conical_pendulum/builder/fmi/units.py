@@ -1,7 +1,8 @@
 """The units the FMUs declare, each once: its SI base-unit exponents, the physical quantity of
 the variables that carry it, and the unit a tool shows it in (build time: the model
-description writers, builder.fmi.fmi2, builder.fmi.fmi3 and builder.packaging.pythonfmu_description, and the SSP
-package's connectors read them from the FMUs they describe).
+description writers, builder.fmi.fmi2, builder.fmi.fmi3 and
+builder.packaging.pythonfmu_description, and the SSP package's connectors read them from the
+FMUs they describe).
 
 A variable's record (builder.fmi.variables.Variable) names its unit; everything else written about
 the unit comes from here. The names are Modelica's unit syntax ("kg.m2", "N.s/m"), which the
