@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.runtime.rules import SETTINGS
 from results_csv import write_rows
 

@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.core.compiler import build_core
+from conical_pendulum.builder.compiler import build_core
 from results_csv import RESULTS, write_rows
 
 FORMULATIONS = ("expanded", "recursive")

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.core.compiler import build_core
+from conical_pendulum.builder.compiler import build_core
 from results_csv import RESULTS, write_rows
 
 LINKS = (1, 2, 3, 5, 10, 20, 50, 100)

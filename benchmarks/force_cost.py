@@ -16,7 +16,7 @@ and writes benchmarks/results/force_cost.csv.
 import numpy as np
 
 from conical_pendulum import Link, Scene
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from results_csv import write_rows
 
 CHAINS = {"3 links, expanded": (3, "expanded"), "10 links, recursive": (10, "recursive")}

@@ -33,7 +33,7 @@ import fmpy
 import numpy as np
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.builder.packaging.native import fmi_headers
 from results_csv import write_rows

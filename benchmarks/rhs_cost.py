@@ -19,7 +19,7 @@ import numpy as np
 
 from conical_pendulum import Scene
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from results_csv import write_rows
 
 sys.path.insert(

@@ -40,7 +40,7 @@ from distributed import LocalCluster
 
 from conical_pendulum import Scene
 from conical_pendulum.analysis.sweep import LoadedFmu, random_samples, sweep
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.runtime.rules import SETTINGS
 from results_csv import write_rows

@@ -17,7 +17,7 @@ import fmpy
 import numpy as np
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.core.compiler import build_core
+from conical_pendulum.builder.compiler import build_core
 from conical_pendulum.builder.fmu import build_fmu
 from results_csv import write_rows
 

@@ -42,7 +42,7 @@ import numpy as np
 from scipy.integrate import odeint, solve_ivp
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.fmu import DEFAULT_SETTINGS
 from results_csv import RESULTS, write_rows
 

@@ -5,7 +5,7 @@ built_cart(fmi_version) are the one place the tests ask the builder for an FMU. 
 cached under a hash of everything it is built from (the test's key: scene, settings,
 backend, platforms, FMI version; and the build's inputs: every file of the installed
 package, the Python packages and compilers the build uses), in the project's cache root
-(builder.core.compiler.cache_root(), beside the compiled cores), and built under a file lock by
+(builder.compiler.cache_root(), beside the compiled cores), and built under a file lock by
 whichever pytest process asks first; `pytest --fresh-fmus` builds them anew in the run's
 own temporary folder instead. Tests of the builder itself (what it refuses, rebuilding in
 place, the command line) call it directly.
@@ -31,7 +31,7 @@ import pytest
 
 import conical_pendulum
 from conical_pendulum import Scene
-from conical_pendulum.builder.core.compiler import cache_root
+from conical_pendulum.builder.core.cache import cache_root
 from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.builder.models.cart import build_cart
 from conical_pendulum.builder.packaging.native import COMPILERS

@@ -6,7 +6,7 @@ import pytest
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.core.equations import joint_kinematics
 from conical_pendulum.scene import APPARENT_MASS, FREE_FORCE, PIVOT_OUTPUTS
 from fmu_helpers import Instance

@@ -14,7 +14,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 from scipy.linalg import expm
 
-from conical_pendulum.builder.core.compiler import CSRC_FILES
+from conical_pendulum.builder.compiler import CSRC_FILES
 from conical_pendulum.builder.models import cart
 from conical_pendulum.builder.models.pendulum import PENDULUM
 from conical_pendulum.builder.packaging import native

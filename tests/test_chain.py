@@ -7,7 +7,7 @@ import pytest
 from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.analysis.compare import compare
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.scene import MAX_LINKS, RECURSIVE_FROM
 
 VARIANTS = {

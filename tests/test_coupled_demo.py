@@ -5,7 +5,7 @@ import csv
 import numpy as np
 import pytest
 
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.cli import main as cli
 from conical_pendulum.demos.coupled import SCENE, SCHEMES
 from conical_pendulum.demos.monolithic import cart_parameters, monolithic

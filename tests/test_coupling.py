@@ -12,7 +12,7 @@ from fmpy.validation import validate_fmu
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from fmu_helpers import Instance
 
 COUPLED = Scene.uniform(3, coupling=True)

@@ -21,7 +21,7 @@ from fmpy.fmi1 import FMICallException
 from scipy.integrate import solve_ivp
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from fmu_helpers import Instance, Instance3
 
 SEED = Scene.uniform(3)

@@ -11,7 +11,7 @@ from fmpy.fmi2 import FMU2Model
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from differences import richardson, ridders
 from fmu_helpers import Instance
 

@@ -18,8 +18,8 @@ from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.analysis.compare import compare
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.core.codegen import generate, generate_recursive
-from conical_pendulum.builder.core.compiler import load_core
 from conical_pendulum.builder.core.equations import derive, joint_damping
 from conical_pendulum.runtime.rules import BadValue, check_value
 from conical_pendulum.scene import load_scene

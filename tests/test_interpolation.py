@@ -17,7 +17,7 @@ from fmpy.fmi1 import FMICallException
 from scipy.integrate import solve_ivp
 
 from conical_pendulum import Link, Scene
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from fmu_helpers import INSTANCES
 
 COUPLED = Scene.uniform(3, coupling=True)  # expanded, a_pivot inputs

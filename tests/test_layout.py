@@ -150,17 +150,19 @@ def test_layers_point_one_way(layer):
 # builder/ by role, from the bottom: what each role may import of the others (c_literals, the C
 # text written one way, serves them all; builder.fmu, the entry, drives them all)
 BUILDER_ROLES = {
-    "core": set(),  # scene -> equations, dependencies, generated C, the compiled core: no FMI
+    "core": set(),  # scene -> equations, dependencies, generated C, the cache's place: no FMI
     "fmi": {"core"},  # what an FMU declares, per FMI version (the records list core's dependencies)
     "packaging": {"core", "fmi"},  # the native FMU compiled and packed; pythonfmu's binary and description
     "models": {"core", "fmi", "packaging"},  # the models behind fmu_model.h: pendulum, cart
-    "fmu": {"core", "fmi", "packaging", "models"},
+    # the compiled core: the scene's numerics with the pendulum's model and its variable table
+    "compiler": {"core", "fmi", "packaging", "models"},
+    "fmu": {"core", "fmi", "packaging", "models", "compiler"},
 }
 BUILDER_SHARED = {"c_literals"}
 
 
 def builder_role(module: str) -> str | None:
-    """core, fmi, packaging, models, fmu or c_literals for a module of builder/, else None."""
+    """core, fmi, packaging, models, compiler, fmu or c_literals for a module of builder/, else None."""
     parts = module.split(".")
     return parts[2] if len(parts) > 2 and parts[1] == "builder" else None
 

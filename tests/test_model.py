@@ -6,7 +6,7 @@ import sympy as sm
 
 from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.core.equations import derive
 from conical_pendulum.builder.core.kane import kanes_method
 from conical_pendulum.runtime.rules import BadValue

@@ -3,7 +3,7 @@
 import numpy as np
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from references.seed_pipeline import seed_right_hand_side
 
 

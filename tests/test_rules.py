@@ -13,7 +13,7 @@ import pytest
 from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.runtime.rules import SETTINGS, SOLVERS, STATISTICS, BadValue
 from conical_pendulum.runtime.slave import ConicalPendulum, Refused, read_model
 

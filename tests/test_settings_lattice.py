@@ -21,7 +21,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2Discard
 
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.runtime.rules import NATIVE_SOLVERS, SOLVERS
 
 SEED = Scene.uniform(3)

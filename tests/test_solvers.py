@@ -5,7 +5,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from conical_pendulum import Scene
-from conical_pendulum.builder.core.compiler import load_core
+from conical_pendulum.builder.compiler import load_core
 
 SCENE = Scene.uniform(3)
 

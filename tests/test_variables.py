@@ -16,7 +16,7 @@ from fmpy.fmi1 import FMICallException
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.builder.core.compiler import build_core, load_core
+from conical_pendulum.builder.compiler import build_core, load_core
 from conical_pendulum.builder.fmi import fmi2
 from conical_pendulum.builder.fmi import variables as described
 from conical_pendulum.builder.fmi.contract import Description

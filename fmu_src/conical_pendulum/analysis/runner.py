@@ -36,7 +36,7 @@ from fmpy.simulation import (
     settable_in_instantiated,
 )
 
-from ..builder.core.compiler import cache_root
+from ..builder.core.cache import cache_root
 from ..builder.packaging.native import COMPILERS, fmi_headers
 from ..errors import UserError
 

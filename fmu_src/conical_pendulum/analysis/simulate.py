@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import odeint, solve_ivp
 
-from ..builder.core.compiler import load_core
+from ..builder.compiler import load_core
 from ..runtime.rules import check_value
 from ..scene import Scene
 

@@ -26,7 +26,7 @@ from pathlib import Path
 from ..runtime.files import MODEL_FILE, MODEL_NAME
 from ..runtime.rules import SETTINGS, check_setting
 from ..scene import Scene
-from .core.compiler import CoreBuild, build_core
+from .compiler import CoreBuild, build_core
 from .fmi.variables import Variable, records, variables
 from .models import pendulum
 from .models.pendulum import DEFAULT_SETTINGS

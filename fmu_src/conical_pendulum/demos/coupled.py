@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..builder import fmu as builder
-from ..builder.core.compiler import load_core
+from ..builder.compiler import load_core
 from ..builder.models.cart import build_cart
 from ..scene import Scene
 from . import ecospy_run

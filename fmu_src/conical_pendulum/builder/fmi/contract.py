@@ -12,7 +12,7 @@ from pathlib import Path
 
 from .variables import Group, Variable
 
-CSRC = Path(__file__).parents[1] / "runtime" / "csrc"
+CSRC = Path(__file__).parents[2] / "runtime" / "csrc"
 # Every C file of runtime/csrc by name, whichever role's folder holds it (core/, fmi/: the FMI
 # layers, models/: the models behind fmu_model.h); names are unique, so an FMU's sources/
 # folder, or the compiled core's build folder, holds them side by side.

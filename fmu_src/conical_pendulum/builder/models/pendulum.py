@@ -82,7 +82,7 @@ def check_settings(settings: dict) -> None:
 
 def core_config(scene: Scene, settings: dict) -> str:
     """fmu_config.h of the model the pythonfmu slave holds through the compiled core
-    (builder.core.compiler): the native FMU's variable table (its value references, the state
+    (builder.compiler): the native FMU's variable table (its value references, the state
     derivatives' too), but every solver allowed, Radau among them, which the slave runs
     itself; no GUID, which only the FMI glue checks."""
     found = variables_of(groups("native"), scene, settings)

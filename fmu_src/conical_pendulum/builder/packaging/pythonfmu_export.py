@@ -24,7 +24,7 @@ import tempfile
 from pathlib import Path
 
 from ...errors import UserError
-from ..core.compiler import LIMITED_API, cache_root
+from ..core.cache import LIMITED_API, cache_root
 from .native import fmi_headers
 
 SOURCES = Path(__file__).parents[2] / "runtime" / "pythonfmu_export"

@@ -24,12 +24,13 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ...errors import UserError
-from ...scene import Scene
-from ..fmi.contract import CSRC, CSRC_FILES
-from ..models.pendulum import DEFAULT_SETTINGS, core_config, core_config_key
+from ..errors import UserError
+from ..scene import Scene
+from .core.cache import LIMITED_API, cache_root
+from .fmi.contract import CSRC, CSRC_FILES
+from .models.pendulum import DEFAULT_SETTINGS, core_config, core_config_key
 
-HERE = Path(__file__).parent
+HERE = Path(__file__).parent  # builder/
 CORE_CSRC = CSRC / "core"  # the model's numerics: the compiled core's C, and the native FMU's
 # The C compiled into the core: its numerics, then the model behind fmu_model.h.
 CORE_SOURCES = ("model.c", "dynamics.c", "solvers.c", "diagnosis.c", "cosim.c", "chain.c")
@@ -41,23 +42,18 @@ MODEL_FILES = ("fmu_model.h", "variable_table.h", "variable_table.c", "pendulum_
 # the seed; the native FMU compiles its own at -O2).
 UNOPTIMIZED_SOURCES = ("directional.c", "second_directional.c")
 GENERATOR_SOURCES = [
-    *(HERE / name for name in ("kane.py", "equations.py", "codegen.py", "compiler.py")),
+    *(HERE / "core" / name for name in ("kane.py", "equations.py", "codegen.py", "cache.py")),
+    HERE / "compiler.py",
     # the variable table's fmu_config.h (builder.models.pendulum.core_config)
-    *(HERE / name for name in ("pendulum.py", "fmu_config.py", "variables.py", "c_literals.py")),
+    HERE / "models" / "pendulum.py",
+    *(HERE / "fmi" / name for name in ("fmu_config.py", "variables.py")),
+    HERE / "c_literals.py",
     *sorted((HERE / "templates").glob("*.in")),
     HERE.parent / "scene.py",  # the variables' names
-    HERE.parents[1] / "runtime" / "rules.py",  # the statistics' slots (model.h), the value rules
+    HERE.parent / "runtime" / "rules.py",  # the statistics' slots (model.h), the value rules
     *sorted(CORE_CSRC.glob("*.[chp]*")),
     *(CSRC_FILES[name] for name in MODEL_FILES),
 ]
-LIMITED_API = "0x030B0000"  # CPython 3.11: one compiled file serves 3.11 and newer
-
-
-def cache_root() -> Path:
-    root = os.environ.get("CONICAL_PENDULUM_CACHE")
-    if root:
-        return Path(root)
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "conical_pendulum"
 
 
 def generator_version() -> str:
@@ -110,8 +106,8 @@ def build_core(scene: Scene, cache: Path | None = None, settings: dict | None = 
     seconds = {}
     with tempfile.TemporaryDirectory(dir=directory.parent, prefix=f".{name}.") as tmp:
         work = Path(tmp)
-        from .codegen import generate, generate_recursive  # sympy: build time only
-        from .equations import derive
+        from .core.codegen import generate, generate_recursive  # sympy: build time only
+        from .core.equations import derive
 
         start = time.perf_counter()
         if scene.resolved_formulation() == "recursive":  # nothing to derive: loops over links
