@@ -4,8 +4,10 @@ The slave is an ordinary module: these tests instantiate it in this process on t
 resources of a built FMU, as pythonfmu would, and call its FMI methods directly.
 """
 
+import json
 import math
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,8 +16,9 @@ from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
 from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.runtime.files import MODEL_FILE
 from conical_pendulum.runtime.rules import SETTINGS, SOLVERS, STATISTICS, BadValue
-from conical_pendulum.runtime.slave import ConicalPendulum, Refused, read_model
+from conical_pendulum.runtime.slave import ConicalPendulum, Refused
 
 SCENE = Scene.uniform(3, coupling=True)
 VALUES = [-1.0, 0.0, 1e-3, 5.0, math.nan, math.inf]
@@ -104,7 +107,7 @@ def test_the_slave_refuses_settings_by_their_rules(resources, name, bad, good):
 
 def test_the_core_the_slave_and_the_scene_name_the_same_things(resources):
     core = load_core(SCENE)
-    model = read_model(resources)
+    model = json.loads((Path(resources) / MODEL_FILE).read_text(encoding="utf-8"))
 
     def group(*names):
         return tuple(v["name"] for v in model["variables"] if v["group"] in names)

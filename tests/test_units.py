@@ -12,7 +12,7 @@ from fmpy.validation import validate_fmu
 
 from conical_pendulum import Scene
 from conical_pendulum.builder.fmi.units import UNITS
-from conical_pendulum.runtime.rules import RULES, SOLVERS
+from conical_pendulum.runtime.rules import RULES, SETTINGS, SOLVERS
 from fmu_helpers import INSTANCES
 
 COUPLED = Scene.uniform(3, coupling=True)
@@ -114,7 +114,8 @@ def test_the_solver_is_an_enumeration_of_the_same_numbers(fmus):
     for name in ("pythonfmu FMI 2.0", "native FMI 2.0", "native FMI 3.0"):
         md = read_model_description(str(fmus[name]))
         (solver,) = [v for v in md.modelVariables if v.name == "solver"]
-        assert (solver.type, solver.declaredType.name, solver.start) == ("Enumeration", "Solver", "1")
+        default = str(SETTINGS["solver"].default)
+        assert (solver.type, solver.declaredType.name, solver.start) == ("Enumeration", "Solver", default)
         items[name] = [(item.name, int(item.value)) for item in solver.declaredType.items]
     assert items["pythonfmu FMI 2.0"] == [(name, k) for k, name in enumerate(SOLVERS)]  # Radau in scipy
     assert items["native FMI 2.0"] == items["native FMI 3.0"] == items["pythonfmu FMI 2.0"][:3]

@@ -97,7 +97,7 @@ def build_core(scene: Scene, cache: Path | None = None, settings: dict | None = 
     """The scene's compiled core, built or found in the cache; settings: the solver settings'
     start values of the model it holds (builder.fmu.checked_settings; None: the defaults)."""
     settings = DEFAULT_SETTINGS if settings is None else settings
-    key = scene.key(generator_version() + core_config_key(settings))
+    key = scene.key(generator_version() + core_config_key(scene, settings))
     name = f"cp_core_{key[:16]}"
     directory = (cache or cache_root()) / name
     if (directory / "build.json").exists():

@@ -89,16 +89,19 @@ def core_config(scene: Scene, settings: dict) -> str:
     return config_header(PENDULUM, {"settings": settings}, found, guid="")
 
 
-def core_config_key(settings: dict) -> str:
-    """What core_config's fmu_config.h is made of beyond the scene and the generator's
-    sources, for the compiled core's cache key: the settings (the starts) and the variable
-    groups in order (builder.fmi.variables.GROUPS, which a caller may extend)."""
+def core_config_key(scene: Scene, settings: dict) -> str:
+    """What core_config's fmu_config.h is made of beyond the scene's cache fields and the
+    generator's sources, for the compiled core's cache key: the scene's parameter and state
+    starts (two scenes of one structure differ in them, and the table's starts are what the
+    pythonfmu FMU runs and resets to), the settings and the variable groups in order
+    (builder.fmi.variables.GROUPS, which a caller may extend)."""
     layout = [
         [g.name, g.type, g.causality, g.variability, g.initial, g.c_name, g.named]
         + [g.members.__module__, g.members.__qualname__]
         for g in groups("native")
     ]
-    return json.dumps([settings, layout], sort_keys=True)
+    starts = [list(scene.parameters()), list(scene.initial_state())]
+    return json.dumps([starts, settings, layout], sort_keys=True)
 
 
 def write_native_fmu(
