@@ -116,7 +116,11 @@ class Workers:
 
 def _replace_closed(cluster: SpecCluster):
     """On the cluster's event loop: nannies that closed (or that the cluster dropped) started
-    anew from the cluster's specification."""
+    anew from the cluster's specification; none while the cluster closes, whose nannies close
+    too (replacing them then started workers against a closing scheduler, which printed
+    tracebacks and could keep the command from ending)."""
+    if cluster.status in (Status.closing, Status.closed, Status.failed):
+        return
     for name, nanny in list(cluster.workers.items()):
         if nanny.status in (Status.closed, Status.failed):
             del cluster.workers[name]
