@@ -134,7 +134,7 @@ def test_the_slave_steps_in_process_as_it_does_in_fmpy(coupled_fmu, resources):
     slave = ConicalPendulum(instance_name="direct", resources=resources)
     vr = {v.name: v.value_reference for v in slave.vars.values()}
     slave.set_real([vr["l0"], vr["alpha0"]], [7.0, 0.4])
-    slave.setup_experiment(0.0)
+    slave.setup_experiment(0.0, 0.5)  # fmpy sets the stop time, where the solver's last step ends
     slave.enter_initialization_mode()
     slave.exit_initialization_mode()
     time = 0.0
