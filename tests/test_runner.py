@@ -26,7 +26,13 @@ def shapes_fmu(tmp_path_factory):
 def loaded():
     """FMUs loaded once per path and loop, as a sweep's worker has them."""
     fmus = {}
-    yield lambda path, loop: fmus.setdefault((path, loop), LoadedFmu(Path(path).read_bytes(), loop))
+
+    def load(path, loop):
+        if (path, loop) not in fmus:  # setdefault would extract a copy at every call, never removed
+            fmus[path, loop] = LoadedFmu(Path(path).read_bytes(), loop)
+        return fmus[path, loop]
+
+    yield load
     for fmu in fmus.values():
         fmu.close()
 
