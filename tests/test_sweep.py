@@ -588,8 +588,12 @@ def test_a_killed_command_resumes_to_the_same_dataset(seed_fmu, cluster, tmp_pat
         "import sys; from conical_pendulum.analysis.sweep import dataset; dataset.PART_SECONDS = 0.0; "
         "from conical_pendulum.cli import main; sys.exit(main(sys.argv[1:]))"
     )
+    killed_scratch = tmp_path / "tmp"  # what a client killed outright cannot remove: not in /tmp
+    killed_scratch.mkdir()
     client = subprocess.Popen(
-        [sys.executable, "-c", script, "sweep", seed_fmu, *args, "--out", out, "--no-progress"], cwd=tmp_path
+        [sys.executable, "-c", script, "sweep", seed_fmu, *args, "--out", out, "--no-progress"],
+        cwd=tmp_path,
+        env={**os.environ, "TMPDIR": str(killed_scratch)},
     )
     deadline = time.monotonic() + 240
     while len(list(out.glob("part-*.parquet"))) < 3 and client.poll() is None and time.monotonic() < deadline:
