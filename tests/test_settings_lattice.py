@@ -27,7 +27,6 @@ from conical_pendulum.runtime.rules import NATIVE_SOLVERS, SOLVERS
 SEED = Scene.uniform(3)
 STEPS = (1e-9, 1e-6, 0.01, 1.0, 100.0)  # communication steps [s]
 MAX_STEPS = (1, 10, 10**6)
-CASE_SECONDS = 60.0  # a hang detector: the slowest case (Radau, 1e5 steps) takes about 20 s
 DIAGNOSES = (
     "too many steps",
     "step size underflow",
@@ -145,9 +144,9 @@ def check_completed(core, solver, max_step, h, t, state, rtol=1e-8, atol=1e-8):
     assert error.max() <= 10 * (1 + t), f"{error.max():.3g} tolerances from the reference at {t} s"
 
 
-def check_case(case, outcome, message, attempts, max_steps, seconds):
-    """What every case must show, whatever its settings."""
-    assert seconds < CASE_SECONDS, case
+def check_case(case, outcome, message, attempts, max_steps):
+    """What every case must show, whatever its settings: the work is bounded by max_steps (the
+    time it takes depends on the machine's load: printed, not checked)."""
     assert max(attempts) <= max_steps, (case, attempts)
     if outcome == "discarded":
         assert "failed" in message and any(d in message for d in DIAGNOSES), (case, message)
@@ -165,7 +164,7 @@ def test_every_setting_is_honoured_or_the_step_discarded(request, core, backend)
         outcome, state, t, message, attempts = lattice.run(solver, max_step, max_steps, h)
         seconds = time.perf_counter() - started
         slowest = max(slowest, (seconds, case))
-        check_case(case, outcome, message, attempts, max_steps, seconds)
+        check_case(case, outcome, message, attempts, max_steps)
         fewest = math.ceil(h / max_step) if max_step > 0 and h > max_step else 1
         if fewest > max_steps:  # more steps than allowed: discarded before any work
             assert outcome == "discarded" and attempts == [0], case
@@ -200,11 +199,10 @@ def test_every_tolerance_is_met_or_the_step_discarded(request, core, backend):
                 for h in (1e-9, 0.01, 1.0):
                     for max_steps in (10, 10**6):
                         case = (SOLVERS[solver], rtol, atol, h, max_steps)
-                        started = time.perf_counter()
                         outcome, state, t, message, attempts = lattice.run(
                             solver, 0.0, max_steps, h, rtol, atol
                         )
-                        check_case(case, outcome, message, attempts, max_steps, time.perf_counter() - started)
+                        check_case(case, outcome, message, attempts, max_steps)
                         if outcome == "completed":
                             check_completed(core, solver, 0.0, h, t, state, rtol, atol)
                         counts[outcome] += 1
