@@ -283,9 +283,10 @@ def test_a_state_saved_inside_a_step_continues_bit_for_bit_in_another_process(
     np.testing.assert_array_equal(replayed, straight[1:])
 
 
-@pytest.mark.parametrize("kind", [("native", 2)], ids=["native-fmi2"])
-def test_a_stop_time_before_the_start_is_refused(built_fmu, kind):
-    path = built_fmu(SEED, backend="native")
+@pytest.mark.parametrize("backend", ["native", "pythonfmu"])
+def test_a_stop_time_before_the_start_is_refused(built_fmu, backend):
+    """Both FMUs by the one rule (fmu_model.h's experiment_times_refusal)."""
+    path = built_fmu(SEED, backend=backend)
     fmu = Instance(path, initialize=False)
     with pytest.raises(FMICallException):
         fmu.fmu.setupExperiment(startTime=1.0, stopTime=0.5)

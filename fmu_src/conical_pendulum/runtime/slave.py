@@ -102,8 +102,7 @@ class ConicalPendulum(Fmi2Slave):
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         if tolerance is not None:
             self._refusing(self._model.set_tolerance, tolerance)
-        if stop_time is not None and math.isfinite(stop_time) and stop_time >= start_time:
-            self._model.set_stop_time(stop_time)  # one a native FMU would refuse is no bound here
+        self._refusing(self._model.set_experiment_times, start_time, stop_time)
 
     @_fmi_call
     def enter_initialization_mode(self):

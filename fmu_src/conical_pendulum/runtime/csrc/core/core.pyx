@@ -79,6 +79,8 @@ cdef extern from "fmu_model.h":
     const char *model_tolerance_refusal(double tolerance, const char *name, char *message,
                                         size_t size)
     void model_set_tolerance(ModelData *m, double tolerance)
+    const char *experiment_times_refusal(double start_time, int stop_time_defined,
+                                         double stop_time, char *message, size_t size)
     void model_set_stop_time(ModelData *m, double stop_time)
     void model_initialize(ModelData *m)
     ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time,
@@ -430,9 +432,14 @@ cdef class Model:
             raise Refusal(self.message.decode())
         model_set_tolerance(self.m, tolerance)
 
-    def set_stop_time(self, double stop_time):
-        """The experiment's stop time (INFINITY: none), beyond which no solver step goes."""
-        model_set_stop_time(self.m, stop_time)
+    def set_experiment_times(self, double start_time, stop_time):
+        """The experiment's stop time (None: none), beyond which no solver step goes; Refusal
+        as the FMI layers refuse the times (experiment_times_refusal)."""
+        defined = stop_time is not None
+        if experiment_times_refusal(start_time, defined, stop_time if defined else 0.0,
+                                    self.message, sizeof(self.message)):
+            raise Refusal(self.message.decode())
+        model_set_stop_time(self.m, stop_time if defined else INFINITY)
 
     def initialize(self):
         model_initialize(self.m)

@@ -150,11 +150,8 @@ FmiStatus fmi_setup_experiment(FmiInstance *inst, int tolerance_defined, double 
     if (tolerance_defined
         && model_tolerance_refusal(tolerance, standard->tolerance, message, sizeof message))
         return fmi_error(inst, "%s%s", standard->experiment, message);
-    if (!isfinite(start_time))
-        return fmi_error(inst, "%sstartTime = %g: must be finite", standard->experiment, start_time);
-    if (stop_time_defined && !(isfinite(stop_time) && stop_time >= start_time))
-        return fmi_error(inst, "%sstopTime = %g: must be finite and not before startTime = %g",
-                         standard->experiment, stop_time, start_time);
+    if (experiment_times_refusal(start_time, stop_time_defined, stop_time, message, sizeof message))
+        return fmi_error(inst, "%s%s", standard->experiment, message);
     model_set_tolerance(inst->model, tolerance_defined ? tolerance : 0.0);
     model_set_stop_time(inst->model, stop_time_defined ? stop_time : INFINITY);
     inst->machine.time = inst->machine.last_successful_time = start_time;

@@ -52,7 +52,9 @@
 #ifndef CP_FMU_MODEL_H
 #define CP_FMU_MODEL_H
 
+#include <math.h>
 #include <stddef.h>
+#include <stdio.h>
 
 typedef struct ModelData ModelData;  /* defined by the model only */
 
@@ -93,8 +95,24 @@ const char *model_tolerance_refusal(double tolerance, const char *name, char *me
  * to rtol, unless a value of rtol was set). */
 void model_set_tolerance(ModelData *m, double tolerance);
 
-/* Takes the experiment's stop time (INFINITY: none; else finite, the FMI layer checks it): a
- * model whose solver steps across communication points takes no step beyond it. */
+/* NULL if the experiment's times may be taken (startTime finite; a stop time, where defined,
+ * finite and not before it), or the message refusing them. Not the model's rule but every
+ * caller's (both FMI layers and the pythonfmu slave), so written here once. */
+static inline const char *experiment_times_refusal(double start_time, int stop_time_defined,
+                                                   double stop_time, char *message, size_t size)
+{
+    if (!isfinite(start_time))
+        snprintf(message, size, "startTime = %g: must be finite", start_time);
+    else if (stop_time_defined && !(isfinite(stop_time) && stop_time >= start_time))
+        snprintf(message, size, "stopTime = %g: must be finite and not before startTime = %g",
+                 stop_time, start_time);
+    else
+        return NULL;
+    return message;
+}
+
+/* Takes the experiment's stop time (INFINITY: none; else as experiment_times_refusal takes
+ * it): a model whose solver steps across communication points takes no step beyond it. */
 void model_set_stop_time(ModelData *m, double stop_time);
 
 /* Leaving initialization: the experiment's tolerance applied to the model's settings, what
