@@ -16,6 +16,7 @@ from distributed import Client, LocalCluster, SpecCluster, WorkerPlugin
 from distributed.core import Status
 
 LOW_LEVEL_LOG = 10  # messages of each Dask stream kept for debugging (Dask's default: 1000)
+SETTLE_SECONDS = 60.0  # the longest a finished sweep waits for its workers' restarts to end
 
 
 class LeaveCtrlCToTheClient(WorkerPlugin):
@@ -38,6 +39,7 @@ def connect(scheduler: str | None, n_workers: int, timeout: float):
             with _local_cluster(n_workers) as cluster, Client(cluster) as client:
                 client.register_plugin(LeaveCtrlCToTheClient(), name="conical-pendulum-sweep-ctrl-c")
                 yield client
+                _settle(client, cluster, SETTLE_SECONDS)
             return
         try:
             client = Client(scheduler, timeout=timeout)
@@ -85,6 +87,21 @@ def _local_cluster(n_workers: int):
             yield cluster
     finally:
         shutil.rmtree(settings["temporary-directory"], ignore_errors=True)
+
+
+def _settle(client, cluster: SpecCluster, seconds: float):
+    """Waits, at most `seconds`, until every nanny's worker process is up and known to the
+    scheduler. After the last run killed its worker, the nanny starts another; a cluster
+    closed while that one starts closed it half-started, and its process printed Dask's
+    "ConnectionPool is closed" traceback (or kept the command from ending)."""
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        processes = [getattr(nanny, "process", None) for nanny in list(cluster.workers.values())]
+        if len(client.nthreads()) == len(cluster.worker_spec) == len(processes) and all(
+            process is not None and process.status == Status.running for process in processes
+        ):
+            return
+        time.sleep(0.05)
 
 
 class NoWorkers(ConnectionError):
