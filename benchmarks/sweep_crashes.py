@@ -8,7 +8,9 @@ FMU with a bad corner: every run segfaults past t = fail_at, drawn at random fro
 run crashes, with 10 about a tenth. Each cell runs `conical-pendulum sweep` as a user
 does, with a time limit (a run over it counts as hung), in a temporary directory of its
 own (TMPDIR), and records whether it finished, its time, its exit status, the runs that
-crashed and were failed naming SIGSEGV, and what was left in the temporary directory.
+crashed and were failed naming SIGSEGV, whether it printed a traceback (a worker's, as
+when the cluster closed while a worker restarted), and what was left in the temporary
+directory.
 Writes benchmarks/results/sweep_crashes.csv (rewritten after every sweep).
 """
 
@@ -60,12 +62,13 @@ def one_sweep(fmu: Path, runs: int, crash_below: float, workers: int, seed: int,
                 timeout=limit,
                 check=False,
             )
-            status, finished = done.returncode, True
+            status, finished, traceback = done.returncode, True, "Traceback" in done.stderr
         except subprocess.TimeoutExpired:
-            status, finished = None, False
+            status, finished, traceback = None, False, None
         seconds = time.monotonic() - start
         row = {"runs": runs, "crash_below": crash_below, "workers": workers, "seed": seed}
         row |= {"finished": finished, "seconds": round(seconds, 1), "exit_status": status}
+        row["traceback"] = traceback
         if finished and (out / "_sweep.json").exists():
             frame = pd.read_parquet(out, columns=["run", "fail_at", "status", "message"]).drop_duplicates(
                 "run"
