@@ -66,13 +66,12 @@ def _symbolic(scene: Scene, eqs) -> Dependencies:
         return frozenset(name for item in found for name in (rate_of[item] if item in rates else {item}))
 
     names = scene.state_names()
-    result = {
-        name: resolved(expr)
-        for name, expr in zip(scene.output_names(), eqs.outputs)  # the pivot force comes last
-    }
+    computed = [name for name in scene.output_names() if name not in FREE_FORCE + APPARENT_MASS]
+    result = {name: resolved(expr) for name, expr in zip(computed, eqs.outputs)}  # F_free, M_app below
     result |= {f"der({names[k]})": frozenset({names[k + dim]}) for k in range(dim)}  # q' = u
     result |= {f"der({names[dim + k]})": rate_of[eqs.rates[k]] for k in range(dim)}
     result |= {f"der({name})": resolved(rate) for name, rate in zip(scene.work_names(), eqs.work_rates)}
+    result |= {f"der(l{i})": resolved(rate) for i, rate in zip(scene.ropes(), eqs.rope_rates)}  # v_hoist
     if scene.coupling:
         everything = frozenset().union(*rate_of.values())
         momentum = frozenset().union(*(of(entry) for entry in eqs.momentum), of(eqs.total_mass))
