@@ -22,6 +22,7 @@ from ...runtime.rules import STATISTICS
 from ...scene import APPARENT_MASS, FREE_FORCE, WORKS, Scene
 from .. import c_literals as c
 from .equations import Equations, joint_kinematics
+from .equations import needed as _needed
 
 # Functions whose complex version (by <tgmath.h>) continues the real one analytically
 # wherever the real one is defined: complex-step differentiation of the generated code is
@@ -54,19 +55,6 @@ def _analytic(source: str) -> str:
             "complex-step derivatives of the native FMU would be wrong"
         )
     return source
-
-
-def _needed(definitions, exprs):
-    """The definitions the expressions depend on, in evaluation order."""
-    defined = dict(definitions)
-    wanted = set()
-    stack = [s for e in exprs for s in e.free_symbols if s in defined]
-    while stack:
-        s = stack.pop()
-        if s not in wanted:
-            wanted.add(s)
-            stack.extend(t for t in defined[s].free_symbols if t in defined)
-    return [(s, e) for s, e in definitions if s in wanted]
 
 
 def _function(signature, eqs: Equations, targets, prologue=(), epilogue=()):

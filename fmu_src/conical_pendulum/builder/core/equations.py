@@ -67,13 +67,26 @@ class Equations:
     def lambdify(self):
         """Numpy functions (x, p) -> M, F and (x, p, u') -> outputs of these very
         expressions (for checks)."""
-        cse = lambda exprs: (self.definitions, exprs)  # noqa: E731 - lambdify's hook
+        cse = lambda exprs: (needed(self.definitions, exprs), exprs)  # noqa: E731 - lambdify's hook
         args = [self.states, self.params]
         return (
             sm.lambdify(args, self.mass_matrix, cse=cse),
             sm.lambdify(args, self.forcing, cse=cse),
             sm.lambdify(args + [self.rates], self.outputs, cse=cse),
         )
+
+
+def needed(definitions, exprs):
+    """The definitions the expressions depend on, in evaluation order."""
+    defined = dict(definitions)
+    wanted = set()
+    stack = [s for e in exprs for s in sm.sympify(e).free_symbols if s in defined]
+    while stack:
+        s = stack.pop()
+        if s not in wanted:
+            wanted.add(s)
+            stack.extend(t for t in defined[s].free_symbols if t in defined)
+    return [(s, e) for s, e in definitions if s in wanted]
 
 
 def joint_kinematics():

@@ -53,6 +53,8 @@ cdef extern from "diagnosis.h":
         double rtol, atol, max_step
         long long max_steps
         double kept
+        int rope
+        double at, value, low, high
     int cp_diagnose(char *buf, size_t size, int status, const cp_failure *failure)
 
 cdef extern from "cosim.h":
@@ -151,6 +153,7 @@ def diagnose(int status, double t, double dt, int bad_dof, double pivot_ratio, d
     failure.t, failure.dt, failure.bad_dof, failure.pivot_ratio = t, dt, bad_dof, pivot_ratio
     failure.rtol, failure.atol, failure.max_step, failure.max_steps = rtol, atol, max_step, max_steps
     failure.kept = t
+    failure.rope, failure.at, failure.value, failure.low, failure.high = -1, t, 0.0, 0.0, 0.0
     return _diagnosis(status, &failure)
 
 

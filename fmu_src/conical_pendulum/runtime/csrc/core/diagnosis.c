@@ -30,6 +30,16 @@ int cp_diagnose(char *buf, size_t size, int status, const cp_failure *f)
         snprintf(hint, sizeof hint, "the acceleration of %s is not finite; check parameters and "
                  "state", speed);
         break;
+    case CP_ROPE_RANGE:
+        snprintf(hint, sizeof hint, "at t = %.9g s rope l%d's length is %.9g m, outside its range "
+                 "[%g, %g] m (the scene's rope min and max): its winch (v_hoist%d) must stop or "
+                 "turn before", f->at, f->rope, f->value, f->low, f->high, f->rope);
+        break;
+    case CP_ROPE_SLACK:
+        snprintf(hint, sizeof hint, "at t = %.9g s rope l%d's tension T_rope%d is %.9g N: a rope "
+                 "cannot push, and this model keeps its ropes taut, so it cannot go on", f->at,
+                 f->rope, f->rope, f->value);
+        break;
     case CP_MAX_STEP_UNRESOLVED:
         snprintf(hint, sizeof hint, "max_step = %g s is shorter than what time t = %.9g s can "
                  "resolve (%g s): raise max_step, or set it to 0 (no limit)", f->max_step,

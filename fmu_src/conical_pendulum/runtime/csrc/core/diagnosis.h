@@ -16,6 +16,9 @@ typedef struct {
     double rtol, atol, max_step;  /* the settings the step ran with */
     long long max_steps;
     double kept;          /* the time the state is kept at: t, or where an early return stopped */
+    int rope;             /* CP_ROPE_RANGE, CP_ROPE_SLACK: the rope's link */
+    double at, value;     /* ... the time it was found at and its length [m] or tension [N] */
+    double low, high;     /* ... its length's range [m] */
 } cp_failure;
 
 /* Writes "do_step from t = ... failed: <status>. <diagnosis>. The state is kept ..." into
