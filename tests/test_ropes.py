@@ -1,0 +1,257 @@
+"""Ropes (Link.rope): a massless link whose length l<i> is a state driven by its winch, the
+input v_hoist<i>, with its tension T_rope<i>, its winch's power P_hoist<i> and the book
+W_hoist; a length leaving its range or a negative tension discards the step. Checked against
+what nobody here wrote: the lengthening pendulum's closed form in Bessel functions (LeCornu
+1895; Boas, "The lengthening pendulum"), sympy's own KanesMethod with the rope's length a
+function of time, and the energy less the books."""
+
+import numpy as np
+import pytest
+import sympy as sm
+from scipy.special import jv, yv
+
+from conical_pendulum import Link, Scene, SceneError
+from conical_pendulum.analysis.simulate import simulate
+from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.builder.core.codegen import generate
+from conical_pendulum.builder.core.equations import derive
+from conical_pendulum.builder.core.kane import kanes_method
+from conical_pendulum.scene import scene_from_dict
+
+G = 9.8
+
+
+def rope(length=10.0, low=1.0, high=30.0, **fields):
+    """A rope with a bob of 5 kg (the default Link's) at its end."""
+    return Link(has_mass=False, rope=True, rope_min=low, rope_max=high, length=length, **fields)
+
+
+# one rope and its load: the lengthening pendulum
+LOAD = Scene(links=(rope(),), outputs=("bobs", "energy"))
+# a rope, a hook and a load slung below it on a massless sling, with every force a scene may add,
+# on a moving support
+SLUNG = Scene(
+    links=(
+        rope(damping=1.0, bob_force=True, bob_mass=20.0),
+        Link(has_mass=False, length=3.0, bob_mass=200.0, damping=2.0),
+        Link(length=1.0, mass=30.0, has_bob=False),
+    ),
+    joint_damping=True,
+    air_drag=True,
+    coupling=True,
+)
+
+
+def lengthening(l0, v, theta0, theta_dot0, times):
+    """The small swing of a point mass on a rope of length l = l0 + v t (v != 0), from
+    theta'' + 2 (v / l) theta' + (g / l) theta = 0: theta = u^-1 [A J1(u) + B Y1(u)] with
+    u = (2 / |v|) sqrt(g l), which is the same for lengthening and shortening (in terms of
+    l the equation has v only squared); d(u^-1 Z1(u))/du = -u^-1 Z2(u) and du/dt =
+    sign(v) sqrt(g / l)."""
+    l = l0 + v * times
+    u = 2.0 / abs(v) * np.sqrt(G * l)
+    u0, rate0 = u[0], np.sign(v) * np.sqrt(G / l0)
+    system = np.array(
+        [[jv(1, u0) / u0, yv(1, u0) / u0], [-rate0 * jv(2, u0) / u0, -rate0 * yv(2, u0) / u0]]
+    )
+    a, b = np.linalg.solve(system, [theta0, theta_dot0])
+    return (a * jv(1, u) + b * yv(1, u)) / u
+
+
+@pytest.mark.parametrize("l0, v", [(5.0, 0.2), (9.0, -0.2)], ids=["lengthening", "shortening"])
+def test_a_small_swing_follows_the_lengthening_pendulums_bessel_functions(l0, v):
+    """Over 20 s at 60 Hz, in the plane of beta (alpha = 0): 1e-3 rad, where the equation's
+    linearization (sin theta = theta) errs by some 1e-10 rad over this time."""
+    times = np.arange(1201) / 60.0
+    theta0, theta_dot0 = 1e-3, 2e-4
+    run = simulate(
+        LOAD,
+        times,
+        parameters={"v_hoist0": v, "g": G},
+        state={"alpha0": 0.0, "beta0": theta0, "omega0": 0.0, "delta0": theta_dot0, "l0": l0},
+        rtol=1e-13,
+        atol=1e-15,
+    )
+    closed = lengthening(l0, v, theta0, theta_dot0, times)
+    np.testing.assert_allclose(run["l0"], l0 + v * times, rtol=0, atol=1e-12)
+    assert np.abs(run["alpha0"]).max() == 0.0
+    error = np.abs(run["beta0"] - closed).max()
+    assert np.abs(closed).max() > 0.5 * theta0  # it swings
+    assert error < 1e-8, error
+
+
+def sympy_functions(scene):
+    """M and F from the fast derivation and from sympy's KanesMethod, as numpy functions of
+    (x, p)."""
+    eqs = derive(scene)
+    mass, forcing, _ = eqs.lambdify()
+    reference = kanes_method(scene)
+    args = eqs.states + eqs.params
+    kane_mass, kane_forcing = (sm.lambdify(args, matrix) for matrix in reference)
+    return (
+        (mass, forcing),
+        (lambda x, p: kane_mass(*x, *p), lambda x, p: kane_forcing(*x, *p)),
+    )
+
+
+@pytest.mark.parametrize(
+    "scene",
+    [
+        LOAD,
+        Scene(links=(Link(length=2.0), rope(length=6.0)), coupling=True),  # a rope below a link
+        Scene(links=SLUNG.links[:2], joint_damping=True, air_drag=True, coupling=True),
+    ],
+    ids=["load", "rope-below-a-link", "slung-forced-coupled"],
+)
+def test_it_is_sympys_kanes_method_with_the_ropes_length_a_function_of_time(scene):
+    """M and F at random states, lengths, hoist speeds, inputs and parameters."""
+    (mass, forcing), (kane_mass, kane_forcing) = sympy_functions(scene)
+    rng = np.random.default_rng(41)
+    for _ in range(20):
+        x = rng.uniform(-1.5, 1.5, len(scene.state_names()))
+        for i in scene.ropes():
+            x[scene.state_names().index(f"l{i}")] = rng.uniform(1.0, 20.0)
+        p = rng.uniform(0.5, 4.0, len(scene.core_parameter_names()))
+        inputs = len(scene.parameter_names())
+        p[inputs:] = rng.uniform(-3.0, 3.0, len(scene.input_names()))
+        m, f = mass(x, p), forcing(x, p)
+        np.testing.assert_allclose(kane_mass(x, p), m, rtol=0, atol=1e-12 * np.abs(m).max())
+        np.testing.assert_allclose(kane_forcing(x, p), f, rtol=0, atol=1e-12 * np.abs(f).max())
+
+
+def test_energy_less_the_books_stays_constant_with_the_winch_working():
+    """The slung load hoisted at 0.4 m/s on a support accelerating and in a wind, its hook
+    pushed: W_hoist holds what the winch put in."""
+    inputs = {"v_hoist0": -0.4, "a_pivot_x": 0.6, "v_pivot_x": 0.2, "wind_x": 3.0, "F_bob0_z": 40.0}
+    run = simulate(
+        SLUNG,
+        np.linspace(0, 10, 201),
+        parameters=inputs,
+        state={"beta0": 0.2, "alpha1": 0.3, "omega2": 0.2},
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    energy = run["energy"]
+    kept = energy - sum(run[name] for name in SLUNG.work_names())
+    assert "W_hoist" in SLUNG.work_names()
+    assert run["W_hoist"][-1] > 0.9 * 250.0 * G * 4.0  # it lifted 250 kg by 4 m
+    np.testing.assert_allclose(run["l0"][-1], 6.0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(run["P_hoist0"], 0.4 * run["T_rope0"], rtol=1e-14)
+    assert np.abs(kept - kept[0]).max() < 1e-9 * np.abs(energy).max()
+
+
+def test_a_hanging_ropes_tension_is_the_weight_below_it_and_points_along_it():
+    """At rest: the weight of everything below. Swinging, the force what hangs below asks of
+    the rope, sum m (a - g) less the forces on it, lies along the rope: a massless rope with a
+    joint at each end transmits no other force (its tension is that force's length)."""
+    core = load_core(SLUNG)
+    names = SLUNG.state_names()
+    x = np.zeros(len(names))
+    x[names.index("l0")] = 8.0
+    p = np.array(SLUNG.parameters())
+    outputs = dict(zip(SLUNG.output_names(), core.outputs(x, p)))
+    assert outputs["T_rope0"] == pytest.approx((20.0 + 200.0 + 30.0) * G, rel=1e-14)
+    assert outputs["P_hoist0"] == 0.0
+
+
+def test_the_rope_outputs_follow_newtons_law_along_the_rope():
+    """A single load: T = m (g . e_y + a . e_y) with the bob's acceleration from second
+    differences of its position, while it swings and is hoisted."""
+    times = np.linspace(0, 4, 4001)
+    run = simulate(
+        LOAD,
+        times,
+        parameters={"v_hoist0": -0.8},
+        state={"beta0": 0.4, "alpha0": 0.2, "omega0": 0.3},
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    h = times[1] - times[0]
+    position = np.stack([run[f"bob0_{c}"] for c in "xyz"], axis=1)
+    acceleration = (position[2:] - 2 * position[1:-1] + position[:-2]) / h**2
+    along = -position[1:-1] / np.linalg.norm(position[1:-1], axis=1)[:, None]  # bob to pivot
+    expected = 5.0 * np.einsum("ij,ij->i", acceleration + [0.0, G, 0.0], along)
+    tension = run["T_rope0"][1:-1]
+    assert np.abs(tension - expected).max() < 1e-5 * np.abs(tension).max()
+
+
+def core_step(scene, start, inputs, dt, steps):
+    """Steps of the core's co-simulation (cosim.c, as both FMUs take it): the statuses and the
+    states after each."""
+    core = load_core(scene)
+    p = np.array(scene.parameters(inputs))
+    values = np.zeros(core.NSTATE + core.NOUTPUT)
+    values[: core.NSTATE] = scene.initial_state(start)
+    stepper = core.Stepper(p, values)
+    stepper.update_outputs()
+    found = []
+    for k in range(steps):
+        status = stepper.step(2, k * dt, dt, 1e-10, 1e-10, 0.0, 100000)
+        found.append((status, values[: core.NSTATE].copy()))
+        if status:
+            break
+    return core, found
+
+
+def test_a_length_leaving_its_range_discards_the_step_and_keeps_the_state():
+    """Hoisted from 1.3 m at 0.25 m/s towards its minimum of 1 m: 1.175 m at 0.5 s, 1.05 m at
+    1 s, then 0.925 m, which the step from 1 s does not reach."""
+    core, found = core_step(LOAD, {"l0": 1.3}, {"v_hoist0": -0.25}, 0.5, 10)
+    statuses = [status for status, _ in found]
+    assert statuses[:2] == [0, 0] and core.STATUS[statuses[2]] == "a rope's length left its range"
+    assert len(found) == 3
+    assert found[2][1][LOAD.state_names().index("l0")] == pytest.approx(1.05, abs=1e-12)  # kept at t
+
+
+def test_a_load_thrown_upward_slackens_the_rope_and_the_step_is_discarded():
+    """A kick upward (F_bob0_y, twice the load's weight) would need the rope to push the load
+    down: the step is discarded, the state kept; hanging still before it, the rope is taut."""
+    scene = Scene(links=(rope(bob_force=True),), outputs=())
+    core = load_core(scene)
+    p = np.array(scene.parameters())
+    values = np.zeros(core.NSTATE + core.NOUTPUT)
+    values[: core.NSTATE] = scene.initial_state({"beta0": 0.3, "alpha0": 0.0})
+    stepper = core.Stepper(p, values)
+    stepper.update_outputs()
+    tension = scene.output_names().index("T_rope0")
+    assert [stepper.step(2, k * 0.1, 0.1, 1e-10, 1e-10, 0.0, 100000) for k in range(3)] == [0, 0, 0]
+    assert values[core.NSTATE + tension] > 0
+    before = values.copy()
+    p[scene.core_parameter_names().index("F_bob0_y")] = 2 * 5.0 * G
+    status = stepper.step(2, 0.3, 0.1, 1e-10, 1e-10, 0.0, 100000)
+    assert core.STATUS[status] == "a rope went slack"
+    np.testing.assert_array_equal(values, before)
+
+
+@pytest.mark.parametrize(
+    "fields, message",
+    [
+        ({"mass": 10.0}, r"link\[0\]\.rope: a rope is a massless link; give link 0 mass = 0"),
+        ({"rope": {"min": 12.0, "max": 30.0}}, r"link\[0\]\.rope: link 0's length 10\.0 m is outside its range"),
+        ({"rope": {"min": -1.0, "max": 30.0}}, r"link\[0\]\.rope\.min: must be a positive finite number, got -1\.0"),
+        ({"rope": {"max": 30.0}}, r"link\[0\]\.rope\.min: must be a positive finite number, got None"),
+        ({"rope": {"min": 1.0, "max": 30.0, "speed": 2}}, r"link\[0\]\.rope: unknown field\(s\) \['speed'\]"),
+        ({"rope": True}, r"link\[0\]\.rope: expected a table \{ min = \.\.\., max = \.\.\. \}, got True"),
+    ],
+)
+def test_a_bad_rope_is_refused_naming_it(fields, message):
+    link = {"length": 10.0, "mass": 0, "bob": {"mass": 5.0}, "rope": {"min": 1.0, "max": 30.0}, **fields}
+    with pytest.raises(SceneError, match=message):
+        scene_from_dict({"link": [link]})
+
+
+def test_ropes_are_refused_where_their_lengths_are_not_derived():
+    with pytest.raises(SceneError, match=r"link\[0\]\.rope: ropes are derived in the expanded formulation"):
+        Scene(links=(rope(),) + (Link(),) * 6)
+    with pytest.raises(SceneError, match=r"link\[0\]\.rope: ropes need kinematics 'consistent'"):
+        Scene(links=(rope(),), kinematics="pydy-example")
+
+
+def test_a_rope_makes_its_length_a_state_and_adds_its_winch():
+    assert LOAD.parameter_names() == ["m0", "g"]
+    assert LOAD.input_names() == ["v_hoist0"]
+    assert LOAD.state_names() == ["alpha0", "beta0", "omega0", "delta0", "W_hoist", "l0"]
+    assert LOAD.output_names()[-2:] == ["T_rope0", "P_hoist0"]
+    assert LOAD.initial_state()[-1] == 10.0
+    header = generate(derive(LOAD))["model.h"]
+    assert "static const double cp_rope_min[CP_NROPE] = {1.0};" in header
