@@ -219,7 +219,8 @@ DESCRIBED = {
     "v_hoist": Described(
         "m/s",
         "speed of rope {link}'s winch: the rate of the rope's length l{link} (> 0 pays out, < 0 hoists) "
-        "[{unit}]; " + HELD_INPUT,
+        "[{unit}]; held over each communication step in every FMU (the rope's equations take l{link}'' "
+        "= 0, so its derivatives must be 0)",
     ),
     "T_rope": Described(
         "N",
