@@ -10,15 +10,21 @@ import pytest
 import sympy as sm
 from scipy.special import jv, yv
 
+from fmpy.fmi1 import FMICallException
+
 from conical_pendulum import Link, Scene, SceneError
+from conical_pendulum.analysis.compare import compare
+from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
 from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.core.codegen import generate
 from conical_pendulum.builder.core.equations import derive
 from conical_pendulum.builder.core.kane import kanes_method
 from conical_pendulum.scene import scene_from_dict
+from fmu_helpers import INSTANCES, Instance
 
 G = 9.8
+ERROR = 3  # fmi2Error, fmi3Error
 
 
 def rope(length=10.0, low=1.0, high=30.0, **fields):
@@ -108,9 +114,8 @@ def test_it_is_sympys_kanes_method_with_the_ropes_length_a_function_of_time(scen
     (mass, forcing), (kane_mass, kane_forcing) = sympy_functions(scene)
     rng = np.random.default_rng(41)
     for _ in range(20):
-        x = rng.uniform(-1.5, 1.5, len(scene.state_names()))
-        for i in scene.ropes():
-            x[scene.state_names().index(f"l{i}")] = rng.uniform(1.0, 20.0)
+        x = rng.uniform(-1.5, 1.5, 4 * scene.n + len(scene.ropes()))  # as Equations.states
+        x[4 * scene.n :] = rng.uniform(1.0, 20.0, len(scene.ropes()))
         p = rng.uniform(0.5, 4.0, len(scene.core_parameter_names()))
         inputs = len(scene.parameter_names())
         p[inputs:] = rng.uniform(-3.0, 3.0, len(scene.input_names()))
@@ -255,3 +260,80 @@ def test_a_rope_makes_its_length_a_state_and_adds_its_winch():
     assert LOAD.initial_state()[-1] == 10.0
     header = generate(derive(LOAD))["model.h"]
     assert "static const double cp_rope_min[CP_NROPE] = {1.0};" in header
+
+
+# the FMUs' scene: a rope with a hook, a load slung below it on a massless sling, on a moving
+# support
+HOISTED = Scene(
+    links=(rope(length=10.0, low=2.0, high=30.0, bob_mass=50.0), Link(has_mass=False, length=3.0, bob_mass=500.0)),
+    coupling=True,
+)
+HOISTING = {"v_hoist0": -0.5, "beta0": 0.2, "alpha1": 0.3, "a_pivot_x": 0.5}
+
+
+@pytest.fixture(scope="module")
+def hoisted_fmu(built_fmu):
+    return lambda backend, fmi_version=2: built_fmu(HOISTED, backend=backend, fmi_version=fmi_version)
+
+
+@pytest.mark.parametrize("backend, fmi_version", [("pythonfmu", 2), ("native", 2), ("native", 3)])
+def test_its_fmus_follow_the_reference_and_keep_the_books(hoisted_fmu, backend, fmi_version):
+    """Hoisted by 5 m in 10 s while the support accelerates: the FMU against the native
+    reference, and energy less W_hoist and W_pivot constant."""
+    comparison = compare(hoisted_fmu(backend, fmi_version), HOISTED, start_values=HOISTING, stop_time=10.0)
+    assert comparison.passed(), comparison.report()
+    result = comparison.result
+    np.testing.assert_allclose(result["l0"][-1], 5.0, rtol=0, atol=1e-12)
+    kept = result["energy"] - result["W_hoist"] - result["W_pivot"]
+    assert result["W_hoist"][-1] > 550.0 * G * 5.0 * 0.9
+    assert np.abs(kept - kept[0]).max() < 1e-8 * np.abs(result["energy"]).max()
+
+
+def test_model_exchange_follows_the_reference(hoisted_fmu):
+    run = run_fmu(
+        hoisted_fmu("native"),
+        stop_time=10.0,
+        fmi_type="ModelExchange",
+        relative_tolerance=1e-10,
+        start_values=HOISTING,
+    )
+    inputs = {k: v for k, v in HOISTING.items() if k in HOISTED.input_names()}
+    state = {k: v for k, v in HOISTING.items() if k in HOISTED.state_names()}
+    reference = simulate(HOISTED, run["time"], parameters=inputs, state=state, rtol=1e-12, atol=1e-12)
+    for name in HOISTED.state_names():  # angles and rates of order one, lengths in m, books in kJ
+        scale = max(1.0, np.abs(reference[name]).max())
+        assert np.abs(run[name] - reference[name]).max() < 1e-6 * scale, name
+
+
+@pytest.mark.parametrize("backend, fmi_version", [("pythonfmu", 2), ("native", 2), ("native", 3)])
+def test_a_rope_hoisted_past_its_minimum_discards_the_step_naming_it(hoisted_fmu, backend, fmi_version):
+    """From 3.1 m at 0.5 m/s towards its minimum of 2 m: the step from 2 s (2.1 m) to 2.5 s is
+    discarded, the message naming the rope, the time and the length."""
+    fmu = INSTANCES[fmi_version](hoisted_fmu(backend, fmi_version), start_values={"l0": 3.1, "v_hoist0": -0.5})
+    for _ in range(4):
+        fmu.step(0.5)
+    assert fmu.get("l0") == [pytest.approx(2.1, abs=1e-12)]
+    with pytest.raises(FMICallException):
+        fmu.step(0.5)
+    message = (
+        "at t = 2.5 s rope l0's length is 1.85 m, outside its range [2, 30] m (the scene's rope min and "
+        "max): its winch (v_hoist0) must stop or turn before"
+    )
+    assert message in fmu.texts(), fmu.messages
+    assert fmu.get("l0") == [pytest.approx(2.1, abs=1e-12)]  # kept at 2 s
+    fmu.close()
+
+
+def test_a_derivative_of_the_winchs_speed_is_refused_naming_it(hoisted_fmu):
+    """fmi2SetRealInputDerivatives: v_hoist is held (its equations take l'' = 0); a derivative of
+    0 is taken, and the other inputs still move."""
+    fmu = Instance(hoisted_fmu("native"))
+    vr = fmu.vr
+    with pytest.raises(FMICallException):
+        fmu.fmu.setRealInputDerivatives([vr["v_hoist0"]], [1], [0.2])
+    assert "derivative 1 of v_hoist0 = 0.2: a rope's winch speed is held over each communication step" in (
+        fmu.texts(ERROR)
+    ), fmu.messages
+    fmu.fmu.setRealInputDerivatives([vr["v_hoist0"], vr["a_pivot_x"]], [1, 1], [0.0, 0.3])
+    fmu.step(0.5)
+    fmu.close()

@@ -61,7 +61,8 @@ def _function(signature, eqs: Equations, targets, prologue=(), epilogue=()):
     """A C function assigning each (lvalue, expr) of targets, between the lines `prologue`
     and `epilogue`."""
     printer = _Printer()
-    rename = {s: sm.Symbol(f"x[{k}]") for k, s in enumerate(eqs.states)}
+    slot = {name: k for k, name in enumerate(eqs.scene.state_names())}
+    rename = {s: sm.Symbol(f"x[{slot[s.name]}]") for s in eqs.states}
     rename.update({s: sm.Symbol(f"p[{k}]") for k, s in enumerate(eqs.params)})
     ndof = len(eqs.rates)
     rename.update({s: sm.Symbol(f"dx[{ndof + k}]") for k, s in enumerate(eqs.rates)})

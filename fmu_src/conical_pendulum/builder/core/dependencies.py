@@ -34,7 +34,7 @@ def dependencies(scene: Scene) -> Dependencies:
 
 
 def _symbolic(scene: Scene, eqs) -> Dependencies:
-    knowns = dict(zip(eqs.states, scene.state_names())) | dict(zip(eqs.params, scene.core_parameter_names()))
+    knowns = {s: s.name for s in eqs.states} | dict(zip(eqs.params, scene.core_parameter_names()))
     rates = set(eqs.rates)
     closure: dict = {}  # symbol -> the knowns (and rates u') it depends on
 

@@ -47,6 +47,8 @@ class Equations:
     p holds the parameters, then the inputs; outputs may depend on u' (`rates`)."""
 
     scene: Scene
+    # what the expressions read of the state: angles, rates, the ropes' lengths (named as
+    # Scene.state_names; the books, which nothing reads, are not here)
     states: list[sm.Symbol]
     params: list[sm.Symbol]
     rates: list[sm.Symbol]
@@ -502,7 +504,6 @@ def derive(scene: Scene) -> Equations:
         + list(sym.beta)
         + list(sym.omega)
         + list(sym.delta)
-        + [sm.Symbol(name) for name in scene.work_names()]
         + [sym.lengths[i] for i in scene.ropes()],
         params=[sym.params[name] for name in scene.core_parameter_names()],
         rates=list(sym.rates),
