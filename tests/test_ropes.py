@@ -86,6 +86,37 @@ def test_a_small_swing_follows_the_lengthening_pendulums_bessel_functions(l0, v)
     assert error < 1e-8, error
 
 
+def swing_amplitude(l0, v, seconds):
+    """A small swing (1e-3 rad) while the rope goes from l0 at v: its amplitude
+    sqrt(theta^2 + theta'^2 l / g) and what the adiabatic invariant predicts for it,
+    a0 (l / l0)^(-3/4) (the action E / omega ~ l^(3/2) theta^2 kept)."""
+    times = np.arange(int(seconds * 60) + 1) / 60.0
+    run = simulate(
+        LOAD,
+        times,
+        parameters={"v_hoist0": v, "g": G},
+        state={"alpha0": 0.0, "beta0": 1e-3, "omega0": 0.0, "delta0": 0.0, "l0": l0},
+        method="core",
+        rtol=1e-10,
+        atol=1e-14,
+    )
+    amplitude = np.sqrt(run["beta0"] ** 2 + run["delta0"] ** 2 * run["l0"] / G)
+    return amplitude, amplitude[0] * (run["l0"] / l0) ** -0.75
+
+
+@pytest.mark.parametrize("l0, direction", [(5.0, 1.0), (20.0, -1.0)], ids=["lengthening", "shortening"])
+def test_slow_hoisting_keeps_the_swings_adiabatic_invariant(l0, direction):
+    """The rope four times as long or a quarter as long, 15 m at 0.04 and at 0.02 m/s: the
+    amplitude follows l^(-3/4) to 0.3 % and 0.15 %, the deviation halving with the speed (it is
+    of the order of the speed over the swing's, v / (l omega))."""
+    errors = []
+    for speed in (0.04, 0.02):
+        amplitude, predicted = swing_amplitude(l0, direction * speed, 15.0 / speed)
+        assert amplitude[-1] / amplitude[0] == pytest.approx(4.0 ** (-0.75 * direction), rel=3e-3)
+        errors.append(np.abs(amplitude / predicted - 1).max())
+    assert errors[0] < 3e-3 and 0.4 < errors[1] / errors[0] < 0.6, errors
+
+
 def sympy_functions(scene):
     """M and F from the fast derivation and from sympy's KanesMethod, as numpy functions of
     (x, p)."""
