@@ -39,6 +39,11 @@ SCENES = {
         links=(Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True), Link(length=3.0)),
         coupling=True,
     ),
+    "rope_recursive": Scene(
+        links=(Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True), Link(length=3.0)),
+        coupling=True,
+        formulation="recursive",
+    ),
 }
 SEEDS = range(5)
 

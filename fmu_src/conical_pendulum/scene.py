@@ -258,8 +258,8 @@ class Scene:
                     raise _given_without(f"link[{i}].{FILE_NAMES[name]}", getattr(link, name), "air_drag")
 
     def _validate_ropes(self) -> None:
-        """A rope is a massless link with a range for its length, in the expanded equations of
-        the consistent kinematics; range fields only with a rope."""
+        """A rope is a massless link with a range for its length, in the consistent kinematics;
+        range fields only with a rope."""
         for i, link in enumerate(self.links):
             where = f"link[{i}].rope"
             if not isinstance(link.rope, bool):
@@ -278,12 +278,6 @@ class Scene:
                 raise SceneError(
                     f"{where}: ropes need kinematics 'consistent'; the published "
                     f"{self.kinematics!r} equations have fixed lengths"
-                )
-            if self.resolved_formulation() != "expanded":
-                raise SceneError(
-                    f"{where}: ropes are derived in the expanded formulation only (up to "
-                    f"{MAX_EXPANDED_LINKS} links); the recursive one has fixed lengths: "
-                    "set formulation = 'expanded'"
                 )
             low, high = link.rope_min, link.rope_max
             for name, value in (("min", low), ("max", high)):

@@ -198,14 +198,25 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
         [f"link {i}" for i in range(scene.n)],
     )
     pivot = index(scene.input_scalars()[0].quantity) if scene.coupling else -1
+    ropes = scene.ropes()
     header = _header(
         scene,
         len(names),
         len(scene.output_names()),
-        scene.coupling,
+        scene.coupling or bool(ropes),  # the pivot force and the ropes' tensions need u'
         [
             "#define CP_RECURSIVE 1",
             c.define("CP_NLINK", scene.n),
+            *(
+                [
+                    "/* Each link's rope (its place in Scene.ropes' order; -1: its length is fixed). */",
+                    "static const int cp_link_rope[CP_NLINK] = "
+                    + c.initializer(ropes.index(i) if i in ropes else -1 for i in range(scene.n))
+                    + ";",
+                ]
+                if ropes
+                else []
+            ),
             c.define("CP_G_INDEX", index("g")),
             c.define("CP_PIVOT_INDEX", pivot),
             *([c.define("CP_DAMPING_INDEX", index("c", 0))] if scene.joint_damping else []),
