@@ -3,12 +3,13 @@ same chain with that link's length fixed.
 
     python benchmarks/hoist_cost.py
 
-Chains of massless links with bobs (the crane's: a rope, then slings), expanded equations,
-1 and 3 links, each with the top link fixed and with it a rope (its length a state, the input
+Chains of massless links with bobs (the crane's: a rope, then slings): 1 and 3 links in the
+expanded equations, 10 in the recursive formulation, each with the top link fixed and with it
+a rope (its length a state, the input
 v_hoist, the Coriolis term of its sliding end, and the book W_hoist, whose power -T v_hoist
 needs the rope's tension, so the accelerations); with and without a moving support (coupling).
 The right-hand side (x', the books' rates included) is timed in a C loop
-(core.seconds_per_call), medians of 7 repeats taken in turn, at a state off equilibrium with
+(core.seconds_per_call), medians of 15 repeats taken in turn, at a state off equilibrium with
 nonzero inputs. Prints the table docs/model.md shows and writes
 benchmarks/results/hoist_cost.csv.
 """
@@ -19,17 +20,17 @@ from conical_pendulum import Link, Scene
 from conical_pendulum.builder.compiler import load_core
 from results_csv import write_rows
 
-CHAINS = {"1 link": 1, "3 links": 3}
+CHAINS = {"1 link, expanded": (1, "expanded"), "3 links, expanded": (3, "expanded"), "10 links, recursive": (10, "recursive")}
 COUPLING = {"fixed support": False, "moving support": True}
-REPEATS, CALLS = 7, 200_000
+REPEATS, CALLS = 15, 200_000
 
 
-def scene(n: int, rope: bool, coupling: bool) -> Scene:
+def scene(n: int, formulation: str, rope: bool, coupling: bool) -> Scene:
     top = Link(has_mass=False, length=10.0, rope=rope, rope_min=1.0 if rope else None, rope_max=30.0 if rope else None)
     return Scene(
         links=(top,) + (Link(has_mass=False, length=3.0),) * (n - 1),
         coupling=coupling,
-        formulation="expanded",
+        formulation=formulation,
     )
 
 
@@ -43,9 +44,11 @@ def prepared(s: Scene):
 
 def main():
     rows = []
-    for chain, n in CHAINS.items():
+    for chain, (n, formulation) in CHAINS.items():
         for support, coupling in COUPLING.items():
-            cases = {label: prepared(scene(n, rope, coupling)) for label, rope in (("fixed", False), ("rope", True))}
+            cases = {
+                label: prepared(scene(n, formulation, rope, coupling)) for label, rope in (("fixed", False), ("rope", True))
+            }
             seconds = {label: [] for label in cases}
             for _ in range(REPEATS):  # in turn, so that the machine's load falls on both alike
                 for label, (core, x, p, _) in cases.items():
@@ -63,7 +66,7 @@ def main():
                         "over_fixed": round(rhs / base, 2),
                     }
                 )
-                print(f"{chain:<8} {support:<15} {label:<6} {n_state:3d} states {rhs * 1e6:8.3f} us  x{rhs / base:.2f}")
+                print(f"{chain:<20} {support:<15} {label:<6} {n_state:3d} states {rhs * 1e6:8.3f} us  x{rhs / base:.2f}")
     write_rows("hoist_cost", rows)
 
 
