@@ -23,6 +23,7 @@ from conical_pendulum.builder.core.equations import derive
 from conical_pendulum.builder.core.kane import kanes_method
 from conical_pendulum.scene import scene_from_dict
 from fmu_helpers import INSTANCES, Instance
+from test_directional import Model
 
 G = 9.8
 ERROR = 3  # fmi2Error, fmi3Error
@@ -420,3 +421,20 @@ def test_a_derivative_of_the_winchs_speed_is_refused_naming_it(hoisted_fmu):
     fmu.fmu.setRealInputDerivatives([vr["v_hoist0"], vr["a_pivot_x"]], [1, 1], [0.0, 0.3])
     fmu.step(0.5)
     fmu.close()
+
+
+def test_model_exchange_discards_the_derivatives_of_a_rope_out_of_its_range(hoisted_fmu):
+    """A host integrating past a rope's minimum gets fmi2Discard from fmi2GetDerivatives, the
+    message naming the rope, the time and the length; back in range, derivatives again."""
+    model = Model(hoisted_fmu("native"), HOISTED)
+    names = HOISTED.state_names()
+    x = np.array(HOISTED.initial_state({"l0": 1.5}))
+    model.set(x, [0.0] * len(HOISTED.input_names()))
+    with pytest.raises(FMICallException):
+        model.values()
+    message = "derivatives at t = 0 s: a rope's length left its range: at t = 0 s rope l0's length is 1.5 m"
+    assert any(message in text for _, text in model.messages), model.messages
+    x[names.index("l0")] = 2.5
+    model.set(x)
+    assert np.all(np.isfinite(model.values()))
+    model.close()

@@ -100,11 +100,7 @@ static void restart(cp_flight *f, const double *p, const double (*rates)[2], dou
     }
 }
 
-/* Whether the ropes (if any) hold at time t in the state x with outputs y: each length in its
- * range (else CP_ROPE_RANGE), each tension not negative (else CP_ROPE_SLACK: a rope cannot
- * push), with *failure's rope fields filled. A NaN tension (a singular mass matrix) is left to
- * the check of the outputs. */
-static int ropes_hold(const double *x, const double *y, double t, cp_failure *failure)
+int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failure)
 {
 #ifdef CP_NROPE
     for (int k = 0; k < CP_NROPE; k++) {
@@ -188,7 +184,7 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
         cp_flight_inputs(&trial, t_reached, p_at, rates_at);
         cp_model model_at = {p_at, 1.0, -1};
         if (CP_NOUTPUT) cp_eval_outputs(x_new, p_at, y_new);
-        int rope_status = ropes_hold(x_new, y_new, t_reached, &rope_failure);
+        int rope_status = cp_ropes_hold(x_new, y_new, t_reached, &rope_failure);
         if (rope_status) {  /* the ropes cannot be where the step got to: the state stays at t */
             status = rope_status;
             t_reached = t;

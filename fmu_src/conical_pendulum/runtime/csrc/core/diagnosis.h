@@ -21,6 +21,10 @@ typedef struct {
     double low, high;     /* ... its length's range [m] */
 } cp_failure;
 
+/* What is wrong with a rope (status CP_ROPE_RANGE or CP_ROPE_SLACK, failure's rope fields):
+ * "at t = ... s rope l<i>'s length is ... m, outside its range ..." into buf, as snprintf. */
+int cp_rope_hint(char *buf, size_t size, int status, const cp_failure *failure);
+
 /* Writes "do_step from t = ... failed: <status>. <diagnosis>. The state is kept ..." into
  * buf (NUL-terminated, cut at size bytes); returns the length the whole message needs. */
 int cp_diagnose(char *buf, size_t size, int status, const cp_failure *failure);

@@ -128,6 +128,18 @@ static ModelStatus derivatives(ModelData *m, double time, char *message, size_t 
     int status = cp_rhs(&model, X(m), m->dx);
     if (status != CP_OK)
         return no_derivatives(time, status, model.bad_dof, model.pivot_ratio, message, size);
+#ifdef CP_NROPE
+    /* a rope out of its range or slack: no derivatives a host could integrate honestly */
+    cp_failure failure;
+    update_outputs(m);
+    status = cp_ropes_hold(X(m), Y(m), time, &failure);
+    if (status != CP_OK) {
+        int used = snprintf(message, size, "derivatives at t = %.9g s: %s: ", time,
+                            cp_status_message(status));
+        if (used >= 0 && (size_t)used < size) cp_rope_hint(message + used, size - used, status, &failure);
+        return MODEL_DISCARD;
+    }
+#endif
     m->dx_valid = 1;
     return MODEL_OK;
 }
