@@ -19,6 +19,7 @@ docs/results/crane.png (the load's path seen from the side, the rope's tension o
 """
 
 import argparse
+import itertools
 import tempfile
 import time
 from pathlib import Path
@@ -62,7 +63,7 @@ def stretches(times):
     before the step from that point, and the outputs there are read after it)."""
     changes = sorted({t for a, b, _ in SCHEDULE["v_hoist0"] for t in (a, b)} - {0.0, STOP})
     cuts = [0] + [int(np.searchsorted(times, t + 0.5 * INTERVAL)) for t in changes] + [len(times)]
-    return list(zip(cuts[:-1], cuts[1:]))
+    return list(itertools.pairwise(cuts))
 
 
 def trolley(times):
@@ -121,7 +122,9 @@ def main():
             drift = max(drift, float(np.abs(kept[a:b] - kept[a]).max()))
             if a:
                 jumps.append(float(kept[a] - kept[a - 1]))
-        swing = np.degrees(np.abs(np.arctan2(run["bob1_x"] - run["bob0_x"], run["bob0_y"] - run["bob1_y"])).max())
+        swing = np.degrees(
+            np.abs(np.arctan2(run["bob1_x"] - run["bob0_x"], run["bob0_y"] - run["bob1_y"])).max()
+        )
         rows.append(
             {
                 "fmu": backend,

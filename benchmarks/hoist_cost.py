@@ -20,13 +20,23 @@ from conical_pendulum import Link, Scene
 from conical_pendulum.builder.compiler import load_core
 from results_csv import write_rows
 
-CHAINS = {"1 link, expanded": (1, "expanded"), "3 links, expanded": (3, "expanded"), "10 links, recursive": (10, "recursive")}
+CHAINS = {
+    "1 link, expanded": (1, "expanded"),
+    "3 links, expanded": (3, "expanded"),
+    "10 links, recursive": (10, "recursive"),
+}
 COUPLING = {"fixed support": False, "moving support": True}
 REPEATS, CALLS = 15, 200_000
 
 
 def scene(n: int, formulation: str, rope: bool, coupling: bool) -> Scene:
-    top = Link(has_mass=False, length=10.0, rope=rope, rope_min=1.0 if rope else None, rope_max=30.0 if rope else None)
+    top = Link(
+        has_mass=False,
+        length=10.0,
+        rope=rope,
+        rope_min=1.0 if rope else None,
+        rope_max=30.0 if rope else None,
+    )
     return Scene(
         links=(top,) + (Link(has_mass=False, length=3.0),) * (n - 1),
         coupling=coupling,
@@ -47,7 +57,8 @@ def main():
     for chain, (n, formulation) in CHAINS.items():
         for support, coupling in COUPLING.items():
             cases = {
-                label: prepared(scene(n, formulation, rope, coupling)) for label, rope in (("fixed", False), ("rope", True))
+                label: prepared(scene(n, formulation, rope, coupling))
+                for label, rope in (("fixed", False), ("rope", True))
             }
             seconds = {label: [] for label in cases}
             for _ in range(REPEATS):  # in turn, so that the machine's load falls on both alike
@@ -66,7 +77,9 @@ def main():
                         "over_fixed": round(rhs / base, 2),
                     }
                 )
-                print(f"{chain:<20} {support:<15} {label:<6} {n_state:3d} states {rhs * 1e6:8.3f} us  x{rhs / base:.2f}")
+                print(
+                    f"{chain:<20} {support:<15} {label:<6} {n_state:3d} states {rhs * 1e6:8.3f} us  x{rhs / base:.2f}"
+                )
     write_rows("hoist_cost", rows)
 
 

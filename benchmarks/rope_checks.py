@@ -15,10 +15,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-import test_ropes as checks  # noqa: E402 - the tests' scenes and closed forms, measured here
-
-from conical_pendulum.analysis.simulate import simulate  # noqa: E402
-from results_csv import write_rows  # noqa: E402
+import test_ropes as checks
+from conical_pendulum.analysis.simulate import simulate
+from results_csv import write_rows
 
 
 def bessel(l0, v):
@@ -87,7 +86,12 @@ def main():
     for l0, direction, what in ((5.0, 1.0, "lengthening"), (20.0, -1.0, "shortening")):
         for speed in (0.04, 0.02):
             amplitude, predicted = checks.swing_amplitude(l0, direction * speed, 15.0 / speed)
-            report("adiabatic invariant, amplitude ~ l^-3/4", f"{what} at {speed} m/s", float(np.abs(amplitude / predicted - 1).max()), "relative")
+            report(
+                "adiabatic invariant, amplitude ~ l^-3/4",
+                f"{what} at {speed} m/s",
+                float(np.abs(amplitude / predicted - 1).max()),
+                "relative",
+            )
     report("energy less the books, 10 s", "slung, every force, hoisted", books(), "of the energy")
     write_rows("rope_checks", rows)
 

@@ -36,11 +36,17 @@ SCENES = {
     # a rope (its length a state, its winch's speed an input) with a forced hook and a link below,
     # on a moving support: the tension and W_hoist need the accelerations
     "rope": Scene(
-        links=(Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True), Link(length=3.0)),
+        links=(
+            Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True),
+            Link(length=3.0),
+        ),
         coupling=True,
     ),
     "rope_recursive": Scene(
-        links=(Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True), Link(length=3.0)),
+        links=(
+            Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True),
+            Link(length=3.0),
+        ),
         coupling=True,
         formulation="recursive",
     ),

@@ -8,9 +8,8 @@ function of time, and the energy less the books."""
 import numpy as np
 import pytest
 import sympy as sm
-from scipy.special import jv, yv
-
 from fmpy.fmi1 import FMICallException
+from scipy.special import jv, yv
 
 from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.analysis.compare import compare
@@ -56,12 +55,10 @@ def lengthening(l0, v, theta0, theta_dot0, times):
     u = (2 / |v|) sqrt(g l), which is the same for lengthening and shortening (in terms of
     l the equation has v only squared); d(u^-1 Z1(u))/du = -u^-1 Z2(u) and du/dt =
     sign(v) sqrt(g / l)."""
-    l = l0 + v * times
-    u = 2.0 / abs(v) * np.sqrt(G * l)
+    length = l0 + v * times
+    u = 2.0 / abs(v) * np.sqrt(G * length)
     u0, rate0 = u[0], np.sign(v) * np.sqrt(G / l0)
-    system = np.array(
-        [[jv(1, u0) / u0, yv(1, u0) / u0], [-rate0 * jv(2, u0) / u0, -rate0 * yv(2, u0) / u0]]
-    )
+    system = np.array([[jv(1, u0) / u0, yv(1, u0) / u0], [-rate0 * jv(2, u0) / u0, -rate0 * yv(2, u0) / u0]])
     a, b = np.linalg.solve(system, [theta0, theta_dot0])
     return (a * jv(1, u) + b * yv(1, u)) / u
 
@@ -318,8 +315,14 @@ def test_a_load_thrown_upward_slackens_the_rope_and_the_step_is_discarded():
     "fields, message",
     [
         ({"mass": 10.0}, r"link\[0\]\.rope: a rope is a massless link; give link 0 mass = 0"),
-        ({"rope": {"min": 12.0, "max": 30.0}}, r"link\[0\]\.rope: link 0's length 10\.0 m is outside its range"),
-        ({"rope": {"min": -1.0, "max": 30.0}}, r"link\[0\]\.rope\.min: must be a positive finite number, got -1\.0"),
+        (
+            {"rope": {"min": 12.0, "max": 30.0}},
+            r"link\[0\]\.rope: link 0's length 10\.0 m is outside its range",
+        ),
+        (
+            {"rope": {"min": -1.0, "max": 30.0}},
+            r"link\[0\]\.rope\.min: must be a positive finite number, got -1\.0",
+        ),
         ({"rope": {"max": 30.0}}, r"link\[0\]\.rope\.min: must be a positive finite number, got None"),
         ({"rope": {"min": 1.0, "max": 30.0, "speed": 2}}, r"link\[0\]\.rope: unknown field\(s\) \['speed'\]"),
         ({"rope": True}, r"link\[0\]\.rope: expected a table \{ min = \.\.\., max = \.\.\. \}, got True"),
@@ -349,7 +352,10 @@ def test_a_rope_makes_its_length_a_state_and_adds_its_winch():
 # the FMUs' scene: a rope with a hook, a load slung below it on a massless sling, on a moving
 # support
 HOISTED = Scene(
-    links=(rope(length=10.0, low=2.0, high=30.0, bob_mass=50.0), Link(has_mass=False, length=3.0, bob_mass=500.0)),
+    links=(
+        rope(length=10.0, low=2.0, high=30.0, bob_mass=50.0),
+        Link(has_mass=False, length=3.0, bob_mass=500.0),
+    ),
     coupling=True,
 )
 HOISTING = {"v_hoist0": -0.5, "beta0": 0.2, "alpha1": 0.3, "a_pivot_x": 0.5}
@@ -393,7 +399,9 @@ def test_model_exchange_follows_the_reference(hoisted_fmu):
 def test_a_rope_hoisted_past_its_minimum_discards_the_step_naming_it(hoisted_fmu, backend, fmi_version):
     """From 3.1 m at 0.5 m/s towards its minimum of 2 m: the step from 2 s (2.1 m) to 2.5 s is
     discarded, the message naming the rope, the time and the length."""
-    fmu = INSTANCES[fmi_version](hoisted_fmu(backend, fmi_version), start_values={"l0": 3.1, "v_hoist0": -0.5})
+    fmu = INSTANCES[fmi_version](
+        hoisted_fmu(backend, fmi_version), start_values={"l0": 3.1, "v_hoist0": -0.5}
+    )
     for _ in range(4):
         fmu.step(0.5)
     assert fmu.get("l0") == [pytest.approx(2.1, abs=1e-12)]

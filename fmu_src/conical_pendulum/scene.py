@@ -282,11 +282,12 @@ class Scene:
             low, high = link.rope_min, link.rope_max
             for name, value in (("min", low), ("max", high)):
                 if value is None or not satisfies(QUANTITIES["l"][0], value):
-                    raise SceneError(f"{where}.{name}: must be {RULES[QUANTITIES['l'][0]].wanted}, got {value!r}")
+                    raise SceneError(
+                        f"{where}.{name}: must be {RULES[QUANTITIES['l'][0]].wanted}, got {value!r}"
+                    )
             if not low <= link.length <= high:
                 raise SceneError(
-                    f"{where}: link {i}'s length {link.length!r} m is outside its range "
-                    f"[{low!r}, {high!r}] m"
+                    f"{where}: link {i}'s length {link.length!r} m is outside its range [{low!r}, {high!r}] m"
                 )
 
     def ropes(self) -> list[int]:

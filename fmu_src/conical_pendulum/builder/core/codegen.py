@@ -133,7 +133,9 @@ def _ropes(scene: Scene) -> list[str]:
         "   the length must stay in [m] (Scene.ropes' order); its tension T_rope<i> is in the",
         "   outputs from CP_TENSION_OUTPUT on. */",
         "static const int cp_rope_link[CP_NROPE] = " + c.initializer(ropes) + ";",
-        "static const int cp_rope_state[CP_NROPE] = " + c.initializer(states.index(f"l{i}") for i in ropes) + ";",
+        "static const int cp_rope_state[CP_NROPE] = "
+        + c.initializer(states.index(f"l{i}") for i in ropes)
+        + ";",
         "static const int cp_rope_hoist[CP_NROPE] = "
         + c.initializer(params.index(f"v_hoist{i}") for i in ropes)
         + ";",
