@@ -5,6 +5,8 @@ what nobody here wrote: the lengthening pendulum's closed form in Bessel functio
 1895; Boas, "The lengthening pendulum"), sympy's own KanesMethod with the rope's length a
 function of time, and the energy less the books."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import sympy as sm
@@ -20,7 +22,7 @@ from conical_pendulum.builder.core import dependencies
 from conical_pendulum.builder.core.codegen import generate
 from conical_pendulum.builder.core.equations import derive
 from conical_pendulum.builder.core.kane import kanes_method
-from conical_pendulum.scene import scene_from_dict
+from conical_pendulum.scene import load_scene, scene_from_dict
 from fmu_helpers import INSTANCES, Instance
 from test_directional import Model
 
@@ -453,3 +455,15 @@ def test_model_exchange_discards_the_derivatives_of_a_rope_out_of_its_range(hois
     model.set(x)
     assert np.all(np.isfinite(model.values()))
     model.close()
+
+
+def test_the_crane_scene_is_a_rope_a_hook_and_a_load_slung_below_on_a_moving_support():
+    """scenes/crane.toml, which benchmarks/crane_run.py runs in both FMUs (docs/model.md)."""
+    scene = load_scene(Path(__file__).resolve().parents[1] / "scenes" / "crane.toml")
+    assert scene.ropes() == [0] and scene.coupling
+    assert (scene.links[0].rope_min, scene.links[0].rope_max, scene.links[0].length) == (3.0, 30.0, 12.0)
+    assert [link.bob_mass for link in scene.links] == [150.0, 2000.0]
+    assert not any(link.has_mass for link in scene.links)
+    assert scene.input_names() == ["a_pivot_x", "a_pivot_y", "a_pivot_z", "v_hoist0"]
+    assert {"l0", "W_hoist", "W_pivot"} <= set(scene.state_names())
+    assert {"T_rope0", "P_hoist0", "bob1_x", "energy"} <= set(scene.output_names())
