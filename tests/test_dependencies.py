@@ -32,6 +32,22 @@ SCENES = {
         air_drag=True,
         coupling=True,
     ),
+    # a rope (its length a state, v_hoist an input) with a forced hook and a link below it
+    "rope": Scene(
+        links=(
+            Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True),
+            Link(length=3.0),
+        ),
+        coupling=True,
+    ),
+    "rope_recursive": Scene(
+        links=(
+            Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True),
+            Link(length=3.0),
+        ),
+        coupling=True,
+        formulation="recursive",
+    ),
 }
 
 # Listed pairs that are zero anyway: not by the expressions' structure but by the physics.
@@ -43,6 +59,8 @@ CANCELLED = {
     "recursive": [("M_pivot_xx", "beta0")],
     "forced": [("M_pivot_xx", "beta0")],
     "forced_recursive": [("M_pivot_xx", "beta0")],
+    "rope": [("M_pivot_xx", "beta0")],
+    "rope_recursive": [("M_pivot_xx", "beta0")],
 }
 
 
@@ -54,7 +72,9 @@ def test_the_chains_rule_is_what_the_expressions_say(name):
     assert dependencies._chain(scene) == dependencies._symbolic(scene, derive(scene))
 
 
-@pytest.mark.parametrize("name", ["seed", "mixed", "recursive", "forced", "forced_recursive"])
+@pytest.mark.parametrize(
+    "name", ["seed", "mixed", "recursive", "forced", "forced_recursive", "rope", "rope_recursive"]
+)
 def test_listed_pairs_are_not_zero_and_the_rest_are(built_fmu, name):
     """fmi2GetDirectionalDerivative at five random points: every pair the Outputs and
     Derivatives lists leave out is exactly zero at each, every listed pair nonzero at one."""

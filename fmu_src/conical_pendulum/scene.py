@@ -32,8 +32,10 @@ FREE_FORCE = ("F_free_x", "F_free_y", "F_free_z")
 APPARENT_MASS = ("M_pivot_xx", "M_pivot_xy", "M_pivot_xz", "M_pivot_yy", "M_pivot_yz", "M_pivot_zz")
 # The energy's books: states with the work of each non-conservative force since the start
 # (the joints' damping, the air's drag on the bobs, the bobs' applied forces, the moving
-# pivot's inertial force)
-WORKS = ("W_damping", "W_drag", "W_external", "W_pivot")
+# pivot's inertial force, the winches of the ropes)
+WORKS = ("W_damping", "W_drag", "W_external", "W_pivot", "W_hoist")
+# A rope's: its tension [N] and its winch's power [W] (-tension * v_hoist)
+ROPE_OUTPUTS = ("T_rope", "P_hoist")
 FORMULATIONS = ("auto", "expanded", "recursive")
 MAX_LINKS = 100
 MAX_EXPANDED_LINKS = 20  # the expanded equations' C grows like n^3: minutes to compile at 20
@@ -66,6 +68,11 @@ class Link:
     # SPHERE_DRAG and pi bob_radius^2)
     bob_drag_coefficient: float | None = None
     bob_area: float | None = None
+    # a rope: a massless link whose length l<i> is a state driven by a winch (input v_hoist<i>),
+    # kept between rope_min and rope_max (a length leaving them discards the step)
+    rope: bool = False
+    rope_min: float | None = None
+    rope_max: float | None = None
 
     def inertia(self) -> tuple[float, float, float]:
         """Central inertia (Ixx, Iyy, Izz): as given, or a solid cylinder along the link's y axis."""
@@ -209,6 +216,7 @@ class Scene:
                     f"link[{i}].bob.force: applied forces need kinematics 'consistent'; the "
                     f"published {self.kinematics!r} equations take none"
                 )
+        self._validate_ropes()
         if not math.isfinite(self.gravity):
             raise SceneError(f"gravity: must be finite, got {self.gravity!r}")
         # A joint whose angles move no mass has an undetermined acceleration.
@@ -249,6 +257,43 @@ class Scene:
                 if getattr(link, name) is not None:
                     raise _given_without(f"link[{i}].{FILE_NAMES[name]}", getattr(link, name), "air_drag")
 
+    def _validate_ropes(self) -> None:
+        """A rope is a massless link with a range for its length, in the consistent kinematics;
+        range fields only with a rope."""
+        for i, link in enumerate(self.links):
+            where = f"link[{i}].rope"
+            if not isinstance(link.rope, bool):
+                raise SceneError(f"{where}: expected a table {{ min = ..., max = ... }}, got {link.rope!r}")
+            if not link.rope:
+                for name in ("rope_min", "rope_max"):
+                    if getattr(link, name) is not None:
+                        raise SceneError(
+                            f"{where}.{name.removeprefix('rope_')}: {getattr(link, name)!r} given, but "
+                            f"link {i} is no rope: give it rope = {{ min = ..., max = ... }}"
+                        )
+                continue
+            if link.has_mass:
+                raise SceneError(f"{where}: a rope is a massless link; give link {i} mass = 0")
+            if self.kinematics != "consistent":
+                raise SceneError(
+                    f"{where}: ropes need kinematics 'consistent'; the published "
+                    f"{self.kinematics!r} equations have fixed lengths"
+                )
+            low, high = link.rope_min, link.rope_max
+            for name, value in (("min", low), ("max", high)):
+                if value is None or not satisfies(QUANTITIES["l"][0], value):
+                    raise SceneError(
+                        f"{where}.{name}: must be {RULES[QUANTITIES['l'][0]].wanted}, got {value!r}"
+                    )
+            if not low <= link.length <= high:
+                raise SceneError(
+                    f"{where}: link {i}'s length {link.length!r} m is outside its range [{low!r}, {high!r}] m"
+                )
+
+    def ropes(self) -> list[int]:
+        """The links that are ropes (a state l<i> and an input v_hoist<i> each)."""
+        return [i for i, link in enumerate(self.links) if link.rope]
+
     def resolved_formulation(self) -> str:
         """The formulation the core is generated in: as chosen, or for "auto" the faster one
         at this number of links (benchmarks/chain_scaling.py measures the crossover)."""
@@ -264,6 +309,8 @@ class Scene:
         options = {name: True for name in ("joint_damping", "air_drag") if getattr(self, name)}
         if self.forced_bobs():
             options["bob_forces"] = self.forced_bobs()
+        if self.ropes():  # the ranges are in the generated C
+            options["ropes"] = [[i, self.links[i].rope_min, self.links[i].rope_max] for i in self.ropes()]
         return {
             "links": [[link.has_mass, link.has_bob] for link in self.links],
             "outputs": list(self.outputs),
@@ -280,7 +327,7 @@ class Scene:
     # --- names: the FMU's contract, in the order of the compiled core's arrays ---
 
     def parameter_scalars(self) -> list[Scalar]:
-        """Parameters in the seed's order: l, m (bobs), M (links), Ixx, Iyy, Izz, then the
+        """Parameters in the seed's order: l (links that are no rope), m (bobs), M (links), Ixx, Iyy, Izz, then the
         joints' damping c (with joint_damping), the bobs' drag coefficients C_d and areas A
         and the air's density rho (with air_drag), then g."""
         n = range(self.n)
@@ -288,7 +335,7 @@ class Scene:
         bobs = [i for i in n if self.links[i].has_bob]
         dragged = self.dragged_bobs()
         return (
-            [Scalar("l", i) for i in n]
+            [Scalar("l", i) for i in n if not self.links[i].rope]
             + [Scalar("m", i) for i in bobs]
             + [Scalar("M", i) for i in massive]
             + [Scalar(axis, i) for axis in ("Ixx", "Iyy", "Izz") for i in massive]
@@ -325,10 +372,17 @@ class Scene:
     def input_scalars(self) -> list[Scalar]:
         """Inputs, held constant over a communication step: the pivot's inertial acceleration
         (first: the core reads it there) and with air drag its velocity, the forces applied to
-        the bobs the scene names, then the wind (all in inertial components)."""
+        the bobs the scene names, the ropes' winch speeds v_hoist<i> (l<i>' [m/s]), then the
+        wind (all in inertial components)."""
         pivot = list(PIVOT_INPUTS) + (list(PIVOT_VELOCITY) if self.air_drag else []) if self.coupling else []
         forces = [Scalar("F_bob", i, f"_{c}") for i in self.forced_bobs() for c in "xyz"]
-        return [Scalar(name) for name in pivot] + forces + [Scalar(name) for name in WIND if self.air_drag]
+        hoists = [Scalar("v_hoist", i) for i in self.ropes()]
+        return (
+            [Scalar(name) for name in pivot]
+            + forces
+            + hoists
+            + [Scalar(name) for name in WIND if self.air_drag]
+        )
 
     def input_names(self) -> list[str]:
         return _names(self.input_scalars())
@@ -342,25 +396,33 @@ class Scene:
 
     def state_scalars(self) -> list[Scalar]:
         """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order; then
-        the energy's books, the work of each force a scene adds since the start (work_names)."""
-        return [Scalar(s, i) for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)] + [
-            Scalar(name) for name in self.work_names()
-        ]
+        the energy's books, the work of each force a scene adds since the start (work_names);
+        then the ropes' lengths l<i>."""
+        return (
+            [Scalar(s, i) for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)]
+            + [Scalar(name) for name in self.work_names()]
+            + [Scalar("l", i) for i in self.ropes()]
+        )
 
     def work_names(self) -> list[str]:
         """The energy's books: states integrating the power of each non-conservative force
         the scene has, so that energy minus their sum stays constant."""
         forces = (self.joint_damping, self.air_drag, bool(self.forced_bobs()))
         # the moving pivot's work is kept with the other forces' (a coupled scene without
-        # them stays as it was)
-        kept = (*forces, self.coupling and any(forces))
+        # them stays as it was); a rope's winch always does work
+        kept = (*forces, self.coupling and (any(forces) or bool(self.ropes())), bool(self.ropes()))
         return [name for name, keep in zip(WORKS, kept) if keep]
 
     def state_names(self) -> list[str]:
         return _names(self.state_scalars())
 
     def state_defaults(self) -> list[float]:
-        return [SEED_ANGLE] * (2 * self.n) + [0.0] * (2 * self.n) + [0.0] * len(self.work_names())
+        return (
+            [SEED_ANGLE] * (2 * self.n)
+            + [0.0] * (2 * self.n)
+            + [0.0] * len(self.work_names())
+            + [self.links[i].length for i in self.ropes()]
+        )
 
     def output_scalars(self) -> list[Scalar]:
         """Calculated outputs besides the state, in the compiled core's order."""
@@ -379,6 +441,9 @@ class Scene:
             scalars.append(Scalar("energy"))
         if self.coupling:
             scalars += [Scalar(name) for name in PIVOT_OUTPUTS + FREE_FORCE + APPARENT_MASS]
+        # each rope's tension and its winch's power (after the pivot's: the core finds those
+        # at fixed places)
+        scalars += [Scalar(stem, i) for stem in ROPE_OUTPUTS for i in self.ropes()]
         return scalars
 
     def output_names(self) -> list[str]:
@@ -450,7 +515,8 @@ SCENE_FIELDS = {
     "air_drag",
     "air_density",
 }
-LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob", "damping"}
+LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob", "damping", "rope"}
+ROPE_FIELDS = {"min", "max"}
 BOB_FIELDS = {"mass", "radius", "force", "drag_coefficient", "area"}
 
 
@@ -480,6 +546,12 @@ def scene_from_dict(data: dict) -> Scene:
         fields.update({f"bob_{name}": value for name, value in (bob or {}).items()})
         if not isinstance(fields.get("bob_force", False), bool):
             raise SceneError(f"{where}.bob.force: expected true or false, got {fields['bob_force']!r}")
+        if "rope" in entry:
+            rope = entry["rope"]
+            if not isinstance(rope, dict):
+                raise SceneError(f"{where}.rope: expected a table {{ min = ..., max = ... }}, got {rope!r}")
+            _known(rope, ROPE_FIELDS, f"{where}.rope")
+            fields.update(rope=True, rope_min=rope.get("min"), rope_max=rope.get("max"))
         if "inertia" in entry:
             fields["moments"] = (
                 tuple(entry["inertia"]) if isinstance(entry["inertia"], list) else entry["inertia"]

@@ -198,6 +198,9 @@ class ConicalPendulum(Fmi2Slave):
             return failure(exc.status, exc.dof, exc.pivot_ratio)
         except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:  # no finite step
             return f"{failure(core.STEP_UNDERFLOW)} (scipy: {exc})"
+        rope = core.rope_diagnosis(radau.y, core.outputs(radau.y, params), t, dt, *settings)
+        if rope:  # a rope out of its range, or slack: the step discarded as cosim.c does
+            return rope
         self._model.set_states(radau.y)
         self._radau_h = radau.h_abs
         return None

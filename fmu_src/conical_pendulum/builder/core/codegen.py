@@ -19,9 +19,10 @@ import sympy as sm
 from sympy.printing.c import C99CodePrinter
 
 from ...runtime.rules import STATISTICS
-from ...scene import WORKS, Scene
+from ...scene import APPARENT_MASS, FREE_FORCE, WORKS, Scene
 from .. import c_literals as c
 from .equations import Equations, joint_kinematics
+from .equations import needed as _needed
 
 # Functions whose complex version (by <tgmath.h>) continues the real one analytically
 # wherever the real one is defined: complex-step differentiation of the generated code is
@@ -56,24 +57,12 @@ def _analytic(source: str) -> str:
     return source
 
 
-def _needed(definitions, exprs):
-    """The definitions the expressions depend on, in evaluation order."""
-    defined = dict(definitions)
-    wanted = set()
-    stack = [s for e in exprs for s in e.free_symbols if s in defined]
-    while stack:
-        s = stack.pop()
-        if s not in wanted:
-            wanted.add(s)
-            stack.extend(t for t in defined[s].free_symbols if t in defined)
-    return [(s, e) for s, e in definitions if s in wanted]
-
-
 def _function(signature, eqs: Equations, targets, prologue=(), epilogue=()):
     """A C function assigning each (lvalue, expr) of targets, between the lines `prologue`
     and `epilogue`."""
     printer = _Printer()
-    rename = {s: sm.Symbol(f"x[{k}]") for k, s in enumerate(eqs.states)}
+    slot = {name: k for k, name in enumerate(eqs.scene.state_names())}
+    rename = {s: sm.Symbol(f"x[{slot[s.name]}]") for s in eqs.states}
     rename.update({s: sm.Symbol(f"p[{k}]") for k, s in enumerate(eqs.params)})
     ndof = len(eqs.rates)
     rename.update({s: sm.Symbol(f"dx[{ndof + k}]") for k, s in enumerate(eqs.rates)})
@@ -90,7 +79,7 @@ def _function(signature, eqs: Equations, targets, prologue=(), epilogue=()):
     return "\n".join(lines)
 
 
-WORK_SIGNATURE = "void cp_work_rates(const cp_real *x, const cp_real *p, cp_real *dW)"
+WORK_SIGNATURE = "void cp_work_rates(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *dW)"
 
 
 def _books(scene: Scene) -> list[str]:
@@ -108,7 +97,8 @@ def _books(scene: Scene) -> list[str]:
             if scene.resolved_formulation() == "recursive"
             else [
                 "/* dW: the power of each force of the energy's books, the rates of the states after",
-                "   the angles and rates (Scene.work_names). */",
+                "   the angles and rates (Scene.work_names); dx: x' (the rates' part read: W_hoist's",
+                "   power needs the ropes' tensions). */",
                 WORK_SIGNATURE + ";",
             ]
         ),
@@ -120,7 +110,43 @@ def _work_function(eqs: Equations) -> list[str]:
     formulation's is chain.c's)."""
     if not eqs.work_rates:
         return []
-    return [_function(WORK_SIGNATURE, eqs, [(f"dW[{k}]", rate) for k, rate in enumerate(eqs.work_rates)])]
+    targets = [(f"dW[{k}]", rate) for k, rate in enumerate(eqs.work_rates)]
+    reads_rates = set().union(
+        *(sm.sympify(e).free_symbols for e in eqs.work_rates),
+        *(e.free_symbols for _, e in _needed(eqs.definitions, [sm.sympify(r) for r in eqs.work_rates])),
+    ) & set(eqs.rates)
+    return [_function(WORK_SIGNATURE, eqs, targets, prologue=[] if reads_rates else ["    (void)dx;"])]
+
+
+def _ropes(scene: Scene) -> list[str]:
+    """model.h's lines for the ropes, if the scene has any (none: no line): their number,
+    where each one's length is in x and its v_hoist in p, its range, and where the tensions
+    are in the outputs."""
+    ropes = scene.ropes()
+    if not ropes:
+        return []
+    states, params = scene.state_names(), scene.core_parameter_names()
+    outputs = scene.output_names()
+    return [
+        c.define("CP_NROPE", len(ropes)),
+        "/* Each rope's link, where its length l<i> is in x and its v_hoist<i> in p, and the range",
+        "   the length must stay in [m] (Scene.ropes' order); its tension T_rope<i> is in the",
+        "   outputs from CP_TENSION_OUTPUT on. */",
+        "static const int cp_rope_link[CP_NROPE] = " + c.initializer(ropes) + ";",
+        "static const int cp_rope_state[CP_NROPE] = "
+        + c.initializer(states.index(f"l{i}") for i in ropes)
+        + ";",
+        "static const int cp_rope_hoist[CP_NROPE] = "
+        + c.initializer(params.index(f"v_hoist{i}") for i in ropes)
+        + ";",
+        "static const double cp_rope_min[CP_NROPE] = "
+        + c.initializer(c.double(scene.links[i].rope_min) for i in ropes)
+        + ";",
+        "static const double cp_rope_max[CP_NROPE] = "
+        + c.initializer(c.double(scene.links[i].rope_max) for i in ropes)
+        + ";",
+        c.define("CP_TENSION_OUTPUT", outputs.index(f"T_rope{ropes[0]}")),
+    ]
 
 
 def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: list[str]) -> str:
@@ -131,7 +157,7 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
         sizes="\n".join(
             [
                 c.define("CP_NDOF", ndof),
-                c.define("CP_NSTATE", 2 * ndof + len(scene.work_names())),
+                c.define("CP_NSTATE", len(scene.state_names())),
                 c.define("CP_NPARAM", nparam),
                 c.define("CP_NINPUT", len(scene.input_names())),
                 c.define("CP_NOUTPUT", noutput),
@@ -148,7 +174,7 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
                 c.define("CP_NSTAT", len(STATISTICS)),
             ]
         ),
-        formulation="\n".join(lines + _books(scene)),
+        formulation="\n".join(lines + _books(scene) + _ropes(scene)),
     )
 
 
@@ -174,14 +200,25 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
         [f"link {i}" for i in range(scene.n)],
     )
     pivot = index(scene.input_scalars()[0].quantity) if scene.coupling else -1
+    ropes = scene.ropes()
     header = _header(
         scene,
         len(names),
         len(scene.output_names()),
-        scene.coupling,
+        scene.coupling or bool(ropes),  # the pivot force and the ropes' tensions need u'
         [
             "#define CP_RECURSIVE 1",
             c.define("CP_NLINK", scene.n),
+            *(
+                [
+                    "/* Each link's rope (its place in Scene.ropes' order; -1: its length is fixed). */",
+                    "static const int cp_link_rope[CP_NLINK] = "
+                    + c.initializer(ropes.index(i) if i in ropes else -1 for i in range(scene.n))
+                    + ";",
+                ]
+                if ropes
+                else []
+            ),
             c.define("CP_G_INDEX", index("g")),
             c.define("CP_PIVOT_INDEX", pivot),
             *([c.define("CP_DAMPING_INDEX", index("c", 0))] if scene.joint_damping else []),
@@ -295,7 +332,9 @@ def generate(eqs: Equations) -> dict[str, str]:
         if needs_rates
         else ["    (void)dx;"]
     )
-    outputs = _function(signature, eqs, [(f"y[{k}]", e) for k, e in enumerate(eqs.outputs)], prologue=unused)
+    # the outputs' slots: F_free and M_app (after F_pivot) are dynamics.c's
+    slots = [k for k, name in enumerate(eqs.scene.output_names()) if name not in FREE_FORCE + APPARENT_MASS]
+    outputs = _function(signature, eqs, [(f"y[{k}]", e) for k, e in zip(slots, eqs.outputs)], prologue=unused)
     functions = [mass, outputs, *_work_function(eqs)]
     if eqs.momentum is not None:
         functions.append(

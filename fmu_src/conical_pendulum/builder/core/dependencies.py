@@ -34,7 +34,7 @@ def dependencies(scene: Scene) -> Dependencies:
 
 
 def _symbolic(scene: Scene, eqs) -> Dependencies:
-    knowns = dict(zip(eqs.states, scene.state_names())) | dict(zip(eqs.params, scene.core_parameter_names()))
+    knowns = {s: s.name for s in eqs.states} | dict(zip(eqs.params, scene.core_parameter_names()))
     rates = set(eqs.rates)
     closure: dict = {}  # symbol -> the knowns (and rates u') it depends on
 
@@ -66,13 +66,12 @@ def _symbolic(scene: Scene, eqs) -> Dependencies:
         return frozenset(name for item in found for name in (rate_of[item] if item in rates else {item}))
 
     names = scene.state_names()
-    result = {
-        name: resolved(expr)
-        for name, expr in zip(scene.output_names(), eqs.outputs)  # the pivot force comes last
-    }
+    computed = [name for name in scene.output_names() if name not in FREE_FORCE + APPARENT_MASS]
+    result = {name: resolved(expr) for name, expr in zip(computed, eqs.outputs)}  # F_free, M_app below
     result |= {f"der({names[k]})": frozenset({names[k + dim]}) for k in range(dim)}  # q' = u
     result |= {f"der({names[dim + k]})": rate_of[eqs.rates[k]] for k in range(dim)}
     result |= {f"der({name})": resolved(rate) for name, rate in zip(scene.work_names(), eqs.work_rates)}
+    result |= {f"der(l{i})": resolved(rate) for i, rate in zip(scene.ropes(), eqs.rope_rates)}  # v_hoist
     if scene.coupling:
         everything = frozenset().union(*rate_of.values())
         momentum = frozenset().union(*(of(entry) for entry in eqs.momentum), of(eqs.total_mass))
@@ -108,6 +107,8 @@ def _chain(scene: Scene) -> Dependencies:
     angles = [frozenset({f"alpha{i}", f"beta{i}"}) for i in range(n)]
     above = [frozenset().union(*angles[: i + 1]) for i in range(n)]  # orientation of link i
     lengths = [frozenset(f"l{k}" for k in range(i + 1)) for i in range(n)]
+    # the winches' speeds that move link i's bob: of the ropes at or above it
+    hoists = [frozenset(f"v_hoist{k}" for k in scene.ropes() if k <= i) for i in range(n)]
     inputs, works = set(scene.input_names()), set(scene.work_names())
     # the forces' coefficients, which move nothing but the chain's dynamics (and the books)
     coefficients = {s.name for s in scene.parameter_scalars() if s.quantity in ("c", "C_d", "A", "rho")}
@@ -123,28 +124,32 @@ def _chain(scene: Scene) -> Dependencies:
             result[scalar.name] = turns | lengths[i]
         elif scalar.stem == "link":  # the orientation quaternion
             result[scalar.name] = above[i]
-        elif scalar.name == "energy":
-            result[scalar.name] = motion - inputs - coefficients
+        elif scalar.name == "energy":  # the velocities: the winches' speeds among the inputs
+            result[scalar.name] = motion - (inputs - hoists[n - 1]) - coefficients
         elif scalar.name in PIVOT_OUTPUTS:
             result[scalar.name] = motion
         elif scalar.name in FREE_FORCE:
             result[scalar.name] = motion - set(PIVOT_INPUTS)
         elif scalar.name in APPARENT_MASS:
-            result[scalar.name] = above[n - 1] | (parameters - {"g"} - coefficients)
+            result[scalar.name] = above[n - 1] | (parameters - {"g"} - coefficients) | lengths[n - 1]
+        elif scalar.stem in ("T_rope", "P_hoist"):  # Newton's law for what hangs from the rope
+            result[scalar.name] = motion
     names = scene.state_names()
     dim = 2 * n
     result |= {f"der({names[k]})": frozenset({names[k + dim]}) for k in range(dim)}
     result |= {f"der({names[dim + k]})": motion for k in range(dim)}
-    result |= _work_rates(scene, above, lengths)
+    result |= _work_rates(scene, above, lengths, hoists)
+    result |= {f"der(l{i})": frozenset({f"v_hoist{i}"}) for i in scene.ropes()}
     return result
 
 
-def _work_rates(scene: Scene, above, lengths) -> Dependencies:
+def _work_rates(scene: Scene, above, lengths, hoists) -> Dependencies:
     """The energy's books' rates: each force's power, its size times the velocity of where
-    it acts (a point of link i moves with the joints and lengths down to i)."""
+    it acts (a point of link i moves with the joints, lengths and winches down to i); the
+    winches' power, their speeds times the ropes' tensions, with everything."""
     n = scene.n
     rates = [frozenset({f"omega{i}", f"delta{i}"}) for i in range(n)]
-    moving = [above[i] | frozenset().union(*rates[: i + 1]) | lengths[i] for i in range(n)]
+    moving = [above[i] | frozenset().union(*rates[: i + 1]) | lengths[i] | hoists[i] for i in range(n)]
 
     def of_kind(*quantities):
         return {s.name for s in scene.parameter_scalars() if s.quantity in quantities}
@@ -159,5 +164,8 @@ def _work_rates(scene: Scene, above, lengths) -> Dependencies:
             *(moving[i] | {f"F_bob{i}_{c}" for c in "xyz"} for i in scene.forced_bobs())
         ),
         "W_pivot": moving[n - 1] | of_kind("m", "M") | set(PIVOT_INPUTS),  # -m a_pivot . v
+        "W_hoist": frozenset(scene.state_names()) - set(scene.work_names())
+        | set(scene.parameter_names())
+        | set(scene.input_names()),
     }
     return {f"der({name})": frozenset(powers[name]) for name in scene.work_names()}

@@ -11,6 +11,12 @@ the work O(n^3) and the code small.
 Generalized speeds are the angle rates u = (omega, delta) = (alpha', beta'), the state
 a user sees, so the kinematic equations are q' = u.
 
+A rope (Link.rope) is a massless link whose length l<i> is a state, l<i>' = v_hoist<i> (an
+input, held over an integration: l<i>'' = 0): its lower end moves relative to the link by
+-v_hoist e_y, which adds 2 w x (-v_hoist e_y) to its acceleration (Coriolis). Its tension is
+Newton's law for everything hanging from it, along the rope; the winch's power is -tension
+v_hoist, and the book W_hoist integrates it.
+
 With coupling, the pivot accelerates by a_pivot (inputs, inertial components): every
 mass centre's acceleration gains a_pivot. The force on the support is Newton's law for
 the whole chain, sum m (g - a), so it needs u' (the symbols `rates`).
@@ -41,6 +47,8 @@ class Equations:
     p holds the parameters, then the inputs; outputs may depend on u' (`rates`)."""
 
     scene: Scene
+    # what the expressions read of the state: angles, rates, the ropes' lengths (named as
+    # Scene.state_names; the books, which nothing reads, are not here)
     states: list[sm.Symbol]
     params: list[sm.Symbol]
     rates: list[sm.Symbol]
@@ -52,19 +60,35 @@ class Equations:
     # total mass, so that F_pivot = F_free - (m I - P M^-1 P^T) a_pivot
     momentum: sm.Matrix | None = None
     total_mass: sm.Expr | None = None
-    # The energy's books: the power of each force of Scene.work_names (x' of those states)
+    # The energy's books: the power of each force of Scene.work_names (x' of those states;
+    # W_hoist's needs u', the symbols `rates`)
     work_rates: list[sm.Expr] = field(default_factory=list)
+    # x' of the ropes' lengths (Scene.ropes' order): their inputs v_hoist
+    rope_rates: list[sm.Expr] = field(default_factory=list)
 
     def lambdify(self):
         """Numpy functions (x, p) -> M, F and (x, p, u') -> outputs of these very
         expressions (for checks)."""
-        cse = lambda exprs: (self.definitions, exprs)  # noqa: E731 - lambdify's hook
+        cse = lambda exprs: (needed(self.definitions, exprs), exprs)  # noqa: E731 - lambdify's hook
         args = [self.states, self.params]
         return (
             sm.lambdify(args, self.mass_matrix, cse=cse),
             sm.lambdify(args, self.forcing, cse=cse),
             sm.lambdify(args + [self.rates], self.outputs, cse=cse),
         )
+
+
+def needed(definitions, exprs):
+    """The definitions the expressions depend on, in evaluation order."""
+    defined = dict(definitions)
+    wanted = set()
+    stack = [s for e in exprs for s in sm.sympify(e).free_symbols if s in defined]
+    while stack:
+        s = stack.pop()
+        if s not in wanted:
+            wanted.add(s)
+            stack.extend(t for t in defined[s].free_symbols if t in defined)
+    return [(s, e) for s, e in definitions if s in wanted]
 
 
 def joint_kinematics():
@@ -115,6 +139,7 @@ def _work_rates(scene: Scene, sym: _Symbols, sums: _Sums) -> list[sm.Expr]:
         "W_drag": lambda: sums.drag_power,
         "W_external": lambda: sums.external_power,
         "W_pivot": lambda: -sym.pivot_acc.dot(sums.linear_momentum),
+        "W_hoist": lambda: sum(sums.hoist_power, sm.S.Zero),
     }
     return [power[name]() for name in scene.work_names()]
 
@@ -152,6 +177,11 @@ class _Symbols:
     rates: tuple
     params: dict[str, sm.Symbol]
     pivot_acc: sm.Matrix | None
+    lengths: tuple  # l<i>: a parameter, or a rope's state
+
+    def hoist(self, i: int):
+        """Link i's rate of lengthening: a rope's v_hoist<i>, else 0."""
+        return self.params.get(f"v_hoist{i}", sm.S.Zero)
 
     @property
     def dim(self) -> int:
@@ -175,6 +205,7 @@ def _symbols(scene: Scene) -> _Symbols:
         rates=sm.symbols(f"domega0:{n}") + sm.symbols(f"ddelta0:{n}"),
         params=params,
         pivot_acc=Vec([params[name] for name in PIVOT_INPUTS]) if scene.coupling else None,
+        lengths=sm.symbols(f"l0:{n}"),
     )
 
 
@@ -237,6 +268,11 @@ class _Sums:
     linear_momentum: sm.Matrix = field(default_factory=lambda: ZERO)
     external_power: sm.Expr = sm.S.Zero  # of the forces applied to the bobs
     drag_power: sm.Expr = sm.S.Zero  # of the air's drag on the bobs
+    # per link, from the pivot down: the masses' m (a - g) (full accelerations, with u') less
+    # the forces applied to them; a rope's tension is the sum of those below it along the rope
+    hangs: list[sm.Matrix] = field(default_factory=list)
+    tensions: list[sm.Expr] = field(default_factory=list)  # each rope's (Scene.ropes' order)
+    hoist_power: list[sm.Expr] = field(default_factory=list)  # each rope's winch's
 
     @classmethod
     def empty(cls, dim: int) -> _Sums:
@@ -275,12 +311,16 @@ def _link_points(b: _Builder, sym: _Symbols, i: int, parent: _Parent, frame: _Fr
     """Link i's mass centre (mid-length) and lower end (its bob, and the next link's joint)
     from the joint down the link's -y axis, with their velocities, partial velocities and
     accelerations at u' = 0 by the rigid-body formulas (v = v_joint + w x r, a = a_joint
-    + w' x r + w x (w x r)); and the link's pose (centre and quaternion) as an output.
+    + w' x r + w x (w x r)), a rope's sliding end adding its -v_hoist e_y and the Coriolis
+    2 w x (-v_hoist e_y) (its centre is only a pose: a rope is massless); and the link's pose
+    (centre and quaternion) as an output.
     Returns (centre, lower end, quaternion)."""
     joint, w, dim = parent.joint, frame.w, sym.dim
-    r = b.name(f"r{i}", -sym.params[f"l{i}"] * frame.rotation[:, 1])
-    w_cross_r = w.cross(r)
-    acc_rel = b.name(f"ar{i}", frame.wb.cross(r) + w.cross(w_cross_r))
+    r = b.name(f"r{i}", -sym.lengths[i] * frame.rotation[:, 1])
+    # a rope's lower end moves along it at -v_hoist e_y relative to the link's frame
+    slide = -sym.hoist(i) * frame.rotation[:, 1]
+    w_cross_r = w.cross(r) + slide
+    acc_rel = b.name(f"ar{i}", frame.wb.cross(r) + w.cross(w.cross(r)) + 2 * w.cross(slide))
     partial_rel = [
         b.name(f"vr{i}_{s}", frame.partial_w[s].cross(r)) if frame.partial_w[s] != ZERO else ZERO
         for s in range(dim)
@@ -313,10 +353,14 @@ def _add_particle(sums: _Sums, sym: _Symbols, mass, point: _Point) -> None:
     inertia force -m v_s . a adds m v_s . v_t to M and -m v_s . a(u' = 0) to F, and gravity
     (along -Y) -m g v_s[Y] to F; its energies; with coupling, its acceleration gains the
     pivot's, its share of the support force uses the full acceleration (with u'), and
-    its momentum per speed (m v_s) goes to P."""
+    its momentum per speed (m v_s) goes to P; with ropes, m (a - g) to its link's hangs."""
     dim, g, partials, acc = sym.dim, sym.g, point.partials, point.acc_bias
     if sym.pivot_acc is not None:
         acc = acc + sym.pivot_acc
+    if sums.hangs:  # with ropes: what the mass asks of what holds it
+        full_acc = acc + sum((partials[s] * sym.rates[s] for s in range(dim)), ZERO)
+        sums.hangs[-1] += mass * (full_acc - Vec([0, -g, 0]))
+    if sym.pivot_acc is not None:
         full_acc = acc + sum((partials[s] * sym.rates[s] for s in range(dim)), ZERO)
         sums.support_force += mass * (Vec([0, -g, 0]) - full_acc)
         sums.momentum = [sums.momentum[s] + mass * partials[s] for s in range(dim)]
@@ -336,12 +380,15 @@ def _add_particle(sums: _Sums, sym: _Symbols, mass, point: _Point) -> None:
 def _add_force(sums: _Sums, sym: _Symbols, point: _Point, force: sm.Matrix) -> sm.Expr:
     """A force F (inertial components) on a point of the chain: F . v_s to F, and with
     coupling its share of the force on the support (Newton's law for the chain: sum m (g - a)
-    + F). Returns its power F . v (v relative to the pivot, as the energy's)."""
+    + F), with ropes -F to its link's hangs. Returns its power F . v (v relative to the pivot,
+    as the energy's)."""
     for s in range(sym.dim):
         if point.partials[s] != ZERO:
             sums.force_terms[s] += point.partials[s].dot(force)
     if sym.pivot_acc is not None:
         sums.support_force += force
+    if sums.hangs:
+        sums.hangs[-1] -= force
     return force.dot(point.velocity)
 
 
@@ -402,7 +449,8 @@ def _mass_matrix_and_forcing(scene: Scene, sums: _Sums, dim: int) -> tuple[sm.Ma
 
 
 def _outputs(scene: Scene, sums: _Sums, bobs: list, poses: list) -> list[sm.Expr]:
-    """The calculated outputs the scene asks for, in the FMU's order (Scene.output_names)."""
+    """The calculated outputs the scene asks for, in the FMU's order (Scene.output_names; the
+    pivot's F_free and M_app, which dynamics.c computes, left out)."""
     outputs = []
     if "bobs" in scene.outputs:
         outputs += [c for p in bobs for c in p]
@@ -412,7 +460,7 @@ def _outputs(scene: Scene, sums: _Sums, bobs: list, poses: list) -> list[sm.Expr
         outputs.append(sums.kinetic + sums.potential)
     if scene.coupling:
         outputs += list(sums.support_force)
-    return outputs
+    return outputs + sums.tensions + sums.hoist_power
 
 
 def derive(scene: Scene) -> Equations:
@@ -423,10 +471,13 @@ def derive(scene: Scene) -> Equations:
     ja, jb, joint_dcm, joint_jac = joint_kinematics()
     joint = (ja, jb, joint_dcm, joint_jac, [joint_jac.diff(ja), joint_jac.diff(jb)])
     b, sums, parent = _Builder(), _Sums.empty(sym.dim), _Parent.pivot(sym.dim)
-    bobs, poses, dragged = [], [], scene.dragged_bobs()
+    bobs, poses, dragged, axes = [], [], scene.dragged_bobs(), []
     for i, link in enumerate(scene.links):
         frame = _link_frame(b, scene, sym, joint, i, parent.frame)
         centre, lower, quaternion = _link_points(b, sym, i, parent, frame)
+        axes.append(frame.rotation[:, 1])
+        if scene.ropes():
+            sums.hangs.append(ZERO)
         poses.append((centre.position, quaternion))
         if link.has_mass:
             _add_particle(sums, sym, sym.params[f"M{i}"], centre)
@@ -442,10 +493,18 @@ def derive(scene: Scene) -> Equations:
         parent = _Parent(frame, lower, quaternion)
     if scene.joint_damping:
         sums.force_terms = [f + q for f, q in zip(sums.force_terms, joint_damping(scene)[0])]
+    for i in scene.ropes():  # the rope holds what hangs below its joint, along e_y
+        held = sum(sums.hangs[i:], ZERO)
+        sums.tensions.append(b.name(f"tension{i}", axes[i].dot(held)))
+        sums.hoist_power.append(-sums.tensions[-1] * sym.hoist(i))
     mass_matrix, forcing = _mass_matrix_and_forcing(scene, sums, sym.dim)
     return Equations(
         scene=scene,
-        states=list(sym.alpha) + list(sym.beta) + list(sym.omega) + list(sym.delta),
+        states=list(sym.alpha)
+        + list(sym.beta)
+        + list(sym.omega)
+        + list(sym.delta)
+        + [sym.lengths[i] for i in scene.ropes()],
         params=[sym.params[name] for name in scene.core_parameter_names()],
         rates=list(sym.rates),
         definitions=b.definitions,
@@ -455,6 +514,7 @@ def derive(scene: Scene) -> Equations:
         momentum=sm.Matrix.hstack(*sums.momentum) if scene.coupling else None,
         total_mass=sums.total_mass if scene.coupling else None,
         work_rates=_work_rates(scene, sym, sums),
+        rope_rates=[sym.hoist(i) for i in scene.ropes()],
     )
 
 

@@ -5,7 +5,8 @@ set_ang_vel(I, omega*I.z + delta*I.x) contradicts its orient calls, and what sym
 derives depends on the frames it happens to express vectors in, so the only faithful
 reproduction is to run the same derivation. Its expressions grow exponentially with n.
 With kinematics="consistent" it is the reference the fast derivation is tested against,
-with a moving pivot and the scene's forces too (joint damping, the air's drag from each
+with a moving pivot, ropes (a length that is a function of time, its end sliding along the
+rope; then l'' = 0 and l' = v_hoist) and the scene's forces too (joint damping, the air's drag from each
 bob's inertial velocity, applied forces: sympy's loads on frames and points); the coupled
 demo's monolithic model builds on `chain`.
 """
@@ -29,9 +30,13 @@ def chain(scene, I, O, p):
         F.orient(parent, "Space", [alpha[i], beta[i], 0], "ZXY")
         if scene.kinematics == "pydy-example":
             F.set_ang_vel(I, omega[i] * I.z + delta[i] * I.x)
-        length = p[f"l{i}"]
+        length = me.dynamicsymbols(f"l{i}") if link.rope else p[f"l{i}"]
         P = joint.locatenew(f"P{i}", -length * F.y)
-        P.v2pt_theory(joint, I, F)
+        if link.rope:  # a rope's end slides along it as its length changes
+            P.set_vel(F, -length.diff() * F.y)
+            P.v1pt_theory(joint, I, F)
+        else:
+            P.v2pt_theory(joint, I, F)
         if link.has_mass:
             G = joint.locatenew(f"G{i}", -length / 2 * F.y)
             G.v2pt_theory(joint, I, F)
@@ -85,6 +90,10 @@ def kanes_method(scene):
     kane = me.KanesMethod(I, q_ind=q, u_ind=u, kd_eqs=kd)
     kane.kanes_equations(bodies, loads)
     plain = {s: sm.Symbol(name) for s, name in zip(q + u, scene.state_names())}
+    for i in scene.ropes():  # a rope's length, a function of time: l'' = 0, l' = v_hoist
+        length = me.dynamicsymbols(f"l{i}")
+        plain.update({length.diff(me.dynamicsymbols._t, 2): 0, length.diff(): p[f"v_hoist{i}"]})
+        plain[length] = sm.Symbol(f"l{i}")
     if scene.coupling:  # the pivot's acceleration, and its velocity where the drag sees it
         plain.update({v.diff(): p[name] for v, name in zip(pivot_velocity, scene.input_names())})
         plain.update({v: p[name] for v, name in zip(pivot_velocity, PIVOT_VELOCITY) if name in p})

@@ -211,6 +211,26 @@ DESCRIBED = {
         "on every mass, relative to the pivot as the energy is; energy minus the W_ outputs' sum "
         "stays constant [{unit}]",
     ),
+    "W_hoist": Described(
+        "J",
+        "work done on the chain by the ropes' winches since the start (the sum of the P_hoist outputs' "
+        "integrals); energy minus the W_ outputs' sum stays constant [{unit}]",
+    ),
+    "v_hoist": Described(
+        "m/s",
+        "speed of rope {link}'s winch: the rate of the rope's length l{link} (> 0 pays out, < 0 hoists) "
+        "[{unit}]; held over each communication step in every FMU (the rope's equations take l{link}'' "
+        "= 0, so its derivatives must be 0)",
+    ),
+    "T_rope": Described(
+        "N",
+        "tension of rope {link}: the force along it that holds what hangs below it (a rope cannot "
+        "push: a negative tension discards the step) [{unit}]",
+    ),
+    "P_hoist": Described(
+        "J/s",
+        "power rope {link}'s winch puts into the chain, -T_rope{link} v_hoist{link} (watts) [{unit}]",
+    ),
     **_axes(
         "force applied to bob {{link}}, inertial {axis} (Y up) [{unit}]; " + HELD_INPUT,
         "N",
@@ -314,6 +334,11 @@ def _frequency(scene: Scene) -> float:
     return math.sqrt(abs(scene.gravity) / sum(link.length for link in scene.links)) or 1.0
 
 
+def _rope_length(scene: Scene) -> float:
+    """The scale of the ropes' lengths: the longest a rope may be."""
+    return max(scene.links[i].rope_max for i in scene.ropes())
+
+
 def _weight_times_length(scene: Scene) -> float:
     """The scale of the energy's books: the chain's weight lifted by its length (1 where g = 0)."""
     mass = sum(link.bob_mass * link.has_bob + link.mass * link.has_mass for link in scene.links)
@@ -328,6 +353,7 @@ NOMINAL = {
     "beta": lambda scene: 1.0,
     "omega": _frequency,
     "delta": _frequency,
+    "l": _rope_length,  # a rope's length, a state
     **dict.fromkeys(WORKS, _weight_times_length),
 }
 

@@ -28,6 +28,7 @@ typedef struct {
     cp_real vel[3];    /* joint velocity, relative to the pivot */
     cp_real d[3];      /* from the parent's joint to this one */
     cp_real r[3];      /* from this joint to the next (along the link) */
+    cp_real s[3];      /* a rope's: its lower end's velocity along it, -v_hoist e_y (else 0) */
     cp_real zeta[6];   /* acceleration at zero rates' rates, less the parent's carried over */
     cp_real I[36];     /* spatial inertia of link and bob about the joint */
     cp_real b[6];      /* velocity-dependent force of link and bob about the joint */
@@ -95,7 +96,7 @@ static void central_inertia(const Link *k, const cp_real *p, const cp_link_param
                             + k->R[i * 3 + 2] * diag[2] * k->R[j * 3 + 2];
 }
 
-#if defined(CP_BOB_FORCES) || defined(CP_DRAG)
+#if defined(CP_BOB_FORCES) || defined(CP_DRAG) || defined(CP_NROPE)
 /* A force F (inertial components) at the link's bob: -[r x F; F] to its bias force. */
 static void apply_at_bob(Link *k, const cp_real F[3])
 {
@@ -114,7 +115,7 @@ static void bob_drag(Link *k, const cp_real *p, int i)
     cp_real wr[3], v[3];
     cross(k->w, k->r, wr);
     for (int j = 0; j < 3; j++) {
-        v[j] = k->vel[j] + wr[j] - p[CP_WIND_INDEX + j];
+        v[j] = k->vel[j] + wr[j] + k->s[j] - p[CP_WIND_INDEX + j];
 #if CP_PIVOT_VELOCITY_INDEX >= 0
         v[j] += p[CP_PIVOT_VELOCITY_INDEX + j];
 #endif
@@ -151,13 +152,14 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
         for (int j = 0; j < 3; j++) k->zeta[j] = t[j] + dE[j];
         if (parent) {
             memcpy(k->d, parent->r, sizeof k->d);
-            cp_real wd[3];
+            cp_real wd[3], ws[3];
             cross(wp, k->d, wd);
             cross(wp, wd, t);
+            cross(wp, parent->s, ws);  /* a rope's sliding end: its Coriolis 2 w x s */
             for (int j = 0; j < 3; j++) {
                 k->pos[j] = parent->pos[j] + k->d[j];
-                k->vel[j] = parent->vel[j] + wd[j];
-                k->zeta[3 + j] = t[j];
+                k->vel[j] = parent->vel[j] + wd[j] + parent->s[j];
+                k->zeta[3 + j] = t[j] + 2 * ws[j];
             }
         } else {
             memset(k->d, 0, sizeof k->d);
@@ -166,8 +168,14 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
             memset(k->zeta + 3, 0, 3 * sizeof(cp_real));
         }
         const cp_link_params *lp = &cp_links[i];
-        const cp_real l = p[lp->l];
-        for (int j = 0; j < 3; j++) k->r[j] = -l * k->R[j * 3 + 1];
+#ifdef CP_NROPE
+        const int rope = cp_link_rope[i];
+        const cp_real l = rope >= 0 ? x[cp_rope_state[rope]] : p[lp->l];
+        const cp_real v = rope >= 0 ? p[cp_rope_hoist[rope]] : 0.0;
+#else
+        const cp_real l = p[lp->l], v = 0.0;
+#endif
+        for (int j = 0; j < 3; j++) k->r[j] = -l * k->R[j * 3 + 1], k->s[j] = -v * k->R[j * 3 + 1];
         memset(k->I, 0, sizeof k->I);
         memset(k->b, 0, sizeof k->b);
         if (lp->M >= 0) {
@@ -176,6 +184,14 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
             add_body(k, p[lp->M], half, Ic);
         }
         if (lp->m >= 0) add_body(k, p[lp->m], k->r, NULL);
+#ifdef CP_NROPE
+        if (rope >= 0 && lp->m >= 0) {  /* the bob on a rope's sliding end: m 2 w x s more */
+            cp_real ws[3], coriolis[3];
+            cross(k->w, k->s, ws);
+            for (int j = 0; j < 3; j++) coriolis[j] = -2 * p[lp->m] * ws[j];
+            apply_at_bob(k, coriolis);
+        }
+#endif
 #ifdef CP_BOB_FORCES
         if (cp_bob_force[i] >= 0) apply_at_bob(k, p + cp_bob_force[i]);
 #endif
@@ -324,13 +340,84 @@ static int accelerate(cp_model *model, const cp_real *x, const Link *links, cp_r
     return CP_OK;
 }
 
-#ifdef CP_NWORK
-/* The energy's books: each force's power, in Scene.work_names' order (CP_WORK_*: -1 for
- * those the scene has not), with velocities relative to the pivot as the energy's. */
-static void work_rates(const cp_real *x, const cp_real *p, const Link *links, cp_real *dW)
+#ifdef CP_NROPE
+/* Newton's law for what hangs from each joint: hang[i] = sum over the bodies of links i and
+ * below of m (a - g) less the forces applied to them (the bobs' and the drag), a their full
+ * accelerations with the rates' rates from dx; the force through joint i is -hang[i]. */
+static void hanging(const cp_real *p, const Link *links, const cp_real *dx, cp_real hang[][3])
 {
     const int n = CP_NLINK;
-    (void)x, (void)p, (void)links, (void)n;
+    cp_real a[6];
+    base_acceleration(p, 0, a);
+    for (int i = 0; i < n; i++) {
+        const Link *k = &links[i];
+        const cp_link_params *lp = &cp_links[i];
+        cp_real ai[6], Eu[3];
+        const cp_real u2[2] = {dx[2 * n + i], dx[3 * n + i]};
+        carry(k, a, ai);
+        mul32(k->E, u2, Eu);
+        for (int j = 0; j < 3; j++) ai[j] += Eu[j];
+        memcpy(a, ai, sizeof a);
+        cp_real *h = hang[i];
+        h[0] = h[1] = h[2] = 0;
+        for (int body = 0; body < 2; body++) {
+            const int index = body ? lp->m : lp->M;
+            if (index < 0) continue;
+            const cp_real share = body ? 1.0 : 0.5;  /* bob at the end, link's centre halfway */
+            cp_real c[3] = {k->r[0] * share, k->r[1] * share, k->r[2] * share}, t[3], wc[3], wwc[3];
+            cross(ai, c, t);
+            cross(k->w, c, wc);
+            cross(k->w, wc, wwc);
+            for (int j = 0; j < 3; j++) h[j] += p[index] * (ai[3 + j] + t[j] + wwc[j]);
+            if (body) {  /* a rope's bob: the Coriolis of its sliding end, 2 w x s */
+                cp_real ws[3];
+                cross(k->w, k->s, ws);
+                for (int j = 0; j < 3; j++) h[j] += p[index] * 2 * ws[j];
+            }
+            h[1] += p[index] * p[CP_G_INDEX];
+        }
+#ifdef CP_BOB_FORCES
+        if (cp_bob_force[i] >= 0)
+            for (int j = 0; j < 3; j++) h[j] -= p[cp_bob_force[i] + j];
+#endif
+#ifdef CP_DRAG
+        if (cp_bob_drag[i] >= 0)
+            for (int j = 0; j < 3; j++) h[j] -= k->drag[j];
+#endif
+    }
+    for (int i = n - 2; i >= 0; i--)
+        for (int j = 0; j < 3; j++) hang[i][j] += hang[i + 1][j];
+}
+#endif
+
+#ifdef CP_NROPE
+/* Each rope's tension (Scene.ropes' order): what hangs from its joint along the rope, e_y. */
+static void tensions(const Link *links, const cp_real hang[][3], cp_real *T)
+{
+    for (int k = 0; k < CP_NROPE; k++) {
+        const Link *rope = &links[cp_rope_link[k]];
+        const cp_real *h = hang[cp_rope_link[k]];
+        T[k] = rope->R[1] * h[0] + rope->R[4] * h[1] + rope->R[7] * h[2];
+    }
+}
+#endif
+
+#ifdef CP_NWORK
+/* The energy's books: each force's power, in Scene.work_names' order (CP_WORK_*: -1 for
+ * those the scene has not), with velocities relative to the pivot as the energy's; the
+ * winches' from the ropes' tensions, which need the rates' rates dx. */
+static void work_rates(const cp_real *x, const cp_real *p, const Link *links, const cp_real *dx,
+                       cp_real *dW)
+{
+    const int n = CP_NLINK;
+    (void)x, (void)p, (void)links, (void)n, (void)dx;
+#if CP_WORK_HOIST >= 0
+    cp_real hang[CP_NLINK][3], T[CP_NROPE], hoist = 0;
+    hanging(p, links, dx, hang);
+    tensions(links, (const cp_real(*)[3])hang, T);
+    for (int k = 0; k < CP_NROPE; k++) hoist -= T[k] * p[cp_rope_hoist[k]];
+    dW[CP_WORK_HOIST] = hoist;
+#endif
 #if CP_WORK_DAMPING >= 0
     cp_real damping = 0;  /* -c (omega^2 + delta^2) per joint (articulate) */
     for (int i = 0; i < n; i++)
@@ -344,7 +431,7 @@ static void work_rates(const cp_real *x, const cp_real *p, const Link *links, cp
         const Link *k = &links[i];
         cp_real wr[3], bob[3];
         cross(k->w, k->r, wr);
-        for (int j = 0; j < 3; j++) bob[j] = k->vel[j] + wr[j];
+        for (int j = 0; j < 3; j++) bob[j] = k->vel[j] + wr[j] + k->s[j];
 #if CP_WORK_PIVOT >= 0
         const cp_link_params *lp = &cp_links[i];
         for (int j = 0; j < 3; j++) {
@@ -382,7 +469,7 @@ int cp_chain_rhs(cp_model *model, const cp_real *x, cp_real *dx)
     int status = articulate(model, x, links);
     if (!status) status = accelerate(model, x, links, dx);
 #ifdef CP_NWORK
-    if (!status) work_rates(x, model->p, links, dx + 2 * CP_NDOF);
+    if (!status) work_rates(x, model->p, links, dx, dx + 2 * CP_NDOF);
 #endif
     return status;
 }
@@ -510,7 +597,7 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
         }
         if (lp->m >= 0) {
             cp_real v[3], mass = p[lp->m];
-            for (int j = 0; j < 3; j++) v[j] = k->vel[j] + wr[j];
+            for (int j = 0; j < 3; j++) v[j] = k->vel[j] + wr[j] + k->s[j];
             energy += 0.5 * mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
                       + mass * g * (k->pos[1] + k->r[1]);
         }
@@ -539,6 +626,13 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
             cross(k->w, c, wc);
             cross(k->w, wc, wwc);
             for (int j = 0; j < 3; j++) force[j] -= p[index] * (ai[3 + j] + t[j] + wwc[j]);
+#ifdef CP_NROPE
+            if (body) {  /* a rope's bob: the Coriolis of its sliding end, 2 w x s */
+                cp_real ws[3];
+                cross(k->w, k->s, ws);
+                for (int j = 0; j < 3; j++) force[j] -= p[index] * 2 * ws[j];
+            }
+#endif
             force[1] -= p[index] * p[CP_G_INDEX];
         }
 #ifdef CP_BOB_FORCES
@@ -551,6 +645,16 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
 #endif
     }
     for (int j = 0; j < 3; j++) *out++ = force[j];
+#endif
+#ifdef CP_NROPE
+    out += 9 * (CP_PIVOT_INDEX >= 0);  /* F_free and M_app: dynamics.c's */
+    cp_real hang[CP_NLINK][3];
+    hanging(p, links, dx, hang);
+    /* each rope's tension, then its winch's power -T v_hoist */
+    cp_real T[CP_NROPE];
+    tensions(links, (const cp_real(*)[3])hang, T);
+    for (int k = 0; k < CP_NROPE; k++) *out++ = T[k];
+    for (int k = 0; k < CP_NROPE; k++) *out++ = -T[k] * p[cp_rope_hoist[k]];
 #endif
 }
 

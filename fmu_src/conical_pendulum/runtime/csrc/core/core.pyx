@@ -53,6 +53,8 @@ cdef extern from "diagnosis.h":
         double rtol, atol, max_step
         long long max_steps
         double kept
+        int rope
+        double at, value, low, high
     int cp_diagnose(char *buf, size_t size, int status, const cp_failure *failure)
 
 cdef extern from "cosim.h":
@@ -65,6 +67,7 @@ cdef extern from "cosim.h":
                       double t, double dt, double *h, double *work, int *fsal, double *stats,
                       cp_failure *failure) noexcept nogil
     int cp_held_rhs(void *ctx, double t, const double *x, double *dx) noexcept nogil
+    int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failure) noexcept nogil
 
 cdef extern from "fmu_model.h":
     ctypedef struct ModelData:
@@ -151,6 +154,24 @@ def diagnose(int status, double t, double dt, int bad_dof, double pivot_ratio, d
     """What a user reads when a step fails (diagnosis.c, the same text in every FMU)."""
     cdef cp_failure failure
     failure.t, failure.dt, failure.bad_dof, failure.pivot_ratio = t, dt, bad_dof, pivot_ratio
+    failure.rtol, failure.atol, failure.max_step, failure.max_steps = rtol, atol, max_step, max_steps
+    failure.kept = t
+    failure.rope, failure.at, failure.value, failure.low, failure.high = -1, t, 0.0, 0.0, 0.0
+    return _diagnosis(status, &failure)
+
+
+def rope_diagnosis(x_in, y_in, double t, double dt, double rtol, double atol, double max_step,
+                   long long max_steps):
+    """None if the ropes hold in the state x with outputs y that a step from t by dt reached
+    (cp_ropes_hold: each length in its range, each tension not negative), else the diagnosis
+    of that step's failure, the state kept at t (for a solver outside the C, the slave's Radau)."""
+    cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
+    cdef const double[::1] y = _vector(y_in, CP_NOUTPUT, "outputs") if CP_NOUTPUT else np.zeros(1)
+    cdef cp_failure failure
+    cdef int status = cp_ropes_hold(&x[0], &y[0], t + dt, &failure)
+    if status == 0:
+        return None
+    failure.t, failure.dt, failure.bad_dof, failure.pivot_ratio = t, dt, -1, 1.0
     failure.rtol, failure.atol, failure.max_step, failure.max_steps = rtol, atol, max_step, max_steps
     failure.kept = t
     return _diagnosis(status, &failure)

@@ -100,6 +100,27 @@ static void restart(cp_flight *f, const double *p, const double (*rates)[2], dou
     }
 }
 
+int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failure)
+{
+#ifdef CP_NROPE
+    for (int k = 0; k < CP_NROPE; k++) {
+        const double length = x[cp_rope_state[k]], tension = y[CP_TENSION_OUTPUT + k];
+        const int range = !(length >= cp_rope_min[k] && length <= cp_rope_max[k]);
+        if (range || tension < 0.0) {
+            failure->rope = cp_rope_link[k];
+            failure->at = t;
+            failure->value = range ? length : tension;
+            failure->low = cp_rope_min[k];
+            failure->high = cp_rope_max[k];
+            return range ? CP_ROPE_RANGE : CP_ROPE_SLACK;
+        }
+    }
+#else
+    (void)x, (void)y, (void)t, (void)failure;
+#endif
+    return CP_OK;
+}
+
 /* The integration of trial from the point t to t + dt: x_new at the time *t_reached it got to
  * (t + dt on success; on failure with early return, the last accepted step or substep). With
  * on_point (or without across_points) it ends on t + dt. */
@@ -150,6 +171,7 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
     cp_stats counts = {0, 0, 0};
     double *x_new = work + CP_WORK_SIZE(CP_NSTATE), *y_new = x_new + CP_NSTATE;
     double t_reached = t, p_at[CP_NPARAM], rates_at[CP_NINPUT + 1][2];
+    cp_failure rope_failure = {0};
     int status = CP_BAD_STEP;
     if (dt >= 0 && dt < INFINITY)
         status = integrate(s, &trial, &system, x, t, dt, t_stop, why == NEW_INPUTS, work, &counts,
@@ -162,7 +184,11 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
         cp_flight_inputs(&trial, t_reached, p_at, rates_at);
         cp_model model_at = {p_at, 1.0, -1};
         if (CP_NOUTPUT) cp_eval_outputs(x_new, p_at, y_new);
-        if (cp_all_finite(CP_NOUTPUT, y_new)) {
+        int rope_status = cp_ropes_hold(x_new, y_new, t_reached, &rope_failure);
+        if (rope_status) {  /* the ropes cannot be where the step got to: the state stays at t */
+            status = rope_status;
+            t_reached = t;
+        } else if (cp_all_finite(CP_NOUTPUT, y_new)) {
             memcpy(x, x_new, CP_NSTATE * sizeof(double));
             memcpy(y, y_new, CP_NOUTPUT * sizeof(double));
             trial.t_point = t_reached;
@@ -179,8 +205,10 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
     }
     if (reached) *reached = t_reached;
     if (status != CP_OK) {
-        cp_failure f = {t, dt, in.model.bad_dof, in.model.pivot_ratio, s->rtol, s->atol,
-                        s->max_step, s->max_steps, t_reached};
+        cp_failure f = rope_failure;
+        f.t = t, f.dt = dt, f.bad_dof = in.model.bad_dof, f.pivot_ratio = in.model.pivot_ratio;
+        f.rtol = s->rtol, f.atol = s->atol, f.max_step = s->max_step, f.max_steps = s->max_steps;
+        f.kept = t_reached;
         *failure = f;
     }
     return status;

@@ -75,6 +75,13 @@ int cp_cosim_step(const cp_settings *settings, const double *p, double *x, doubl
                   double dt, double *h, double *work, int *fsal, double stats[CP_NSTAT],
                   cp_failure *failure);
 
+/* Whether the ropes (if any) hold at time t in the state x with outputs y: each length in its
+ * range (else CP_ROPE_RANGE), each tension not negative (else CP_ROPE_SLACK: a rope cannot
+ * push), with *failure's rope fields filled (cp_rope_hint says what is wrong); CP_OK. A NaN
+ * tension (a singular mass matrix) is left to the check of the outputs. Every step's end is
+ * checked (cp_cosim_advance), and Model Exchange's derivatives. */
+int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failure);
+
 /* cp_rhs as a solver's system's right-hand side (ctx a cp_model): the inputs held as its p
  * has them, whatever t. */
 int cp_held_rhs(void *ctx, double t, const double *x, double *dx);

@@ -6,6 +6,17 @@
 #include "model.h"
 #include "solvers.h"
 
+int cp_rope_hint(char *buf, size_t size, int status, const cp_failure *f)
+{
+    if (status == CP_ROPE_RANGE)
+        return snprintf(buf, size, "at t = %.9g s rope l%d's length is %.9g m, outside its range "
+                        "[%g, %g] m (the scene's rope min and max): its winch (v_hoist%d) must "
+                        "stop or turn before", f->at, f->rope, f->value, f->low, f->high, f->rope);
+    return snprintf(buf, size, "at t = %.9g s rope l%d's tension T_rope%d is %.9g N: a rope "
+                    "cannot push, and this model keeps its ropes taut, so it cannot go on", f->at,
+                    f->rope, f->rope, f->value);
+}
+
 int cp_diagnose(char *buf, size_t size, int status, const cp_failure *f)
 {
     const int n = CP_NDOF / 2, dof = f->bad_dof;
@@ -29,6 +40,10 @@ int cp_diagnose(char *buf, size_t size, int status, const cp_failure *f)
     case CP_NONFINITE:
         snprintf(hint, sizeof hint, "the acceleration of %s is not finite; check parameters and "
                  "state", speed);
+        break;
+    case CP_ROPE_RANGE:
+    case CP_ROPE_SLACK:
+        cp_rope_hint(hint, sizeof hint, status, f);
         break;
     case CP_MAX_STEP_UNRESOLVED:
         snprintf(hint, sizeof hint, "max_step = %g s is shorter than what time t = %.9g s can "

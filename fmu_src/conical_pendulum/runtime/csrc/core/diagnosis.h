@@ -16,7 +16,14 @@ typedef struct {
     double rtol, atol, max_step;  /* the settings the step ran with */
     long long max_steps;
     double kept;          /* the time the state is kept at: t, or where an early return stopped */
+    int rope;             /* CP_ROPE_RANGE, CP_ROPE_SLACK: the rope's link */
+    double at, value;     /* ... the time it was found at and its length [m] or tension [N] */
+    double low, high;     /* ... its length's range [m] */
 } cp_failure;
+
+/* What is wrong with a rope (status CP_ROPE_RANGE or CP_ROPE_SLACK, failure's rope fields):
+ * "at t = ... s rope l<i>'s length is ... m, outside its range ..." into buf, as snprintf. */
+int cp_rope_hint(char *buf, size_t size, int status, const cp_failure *failure);
 
 /* Writes "do_step from t = ... failed: <status>. <diagnosis>. The state is kept ..." into
  * buf (NUL-terminated, cut at size bytes); returns the length the whole message needs. */

@@ -97,7 +97,11 @@ int cp_rhs(void *ctx, const cp_real *x, cp_real *dx)
 #if defined(CP_NWORK) && !CP_RECURSIVE
     /* the energy's books: each added force's power, the rate of its work (the recursive
        formulation's cp_chain_rhs gives them from its own kinematics) */
-    if (!status) cp_work_rates(x, ((cp_model *)ctx)->p, dx + 2 * CP_NDOF);
+    if (!status) cp_work_rates(x, ((cp_model *)ctx)->p, dx, dx + 2 * CP_NDOF);
+#endif
+#ifdef CP_NROPE
+    /* the ropes' lengths grow at their winches' speeds */
+    for (int k = 0; k < CP_NROPE; k++) dx[cp_rope_state[k]] = ((cp_model *)ctx)->p[cp_rope_hoist[k]];
 #endif
     return status;
 }

@@ -11,7 +11,9 @@
     X(CP_BAD_STEP, 3, "invalid communication step") \
     X(CP_MAX_STEP_UNRESOLVED, 4, "max_step below the resolution of time") \
     X(CP_SINGULAR, 10, "singular mass matrix") \
-    X(CP_NONFINITE, 11, "non-finite acceleration")
+    X(CP_NONFINITE, 11, "non-finite acceleration") \
+    X(CP_ROPE_RANGE, 12, "a rope's length left its range") \
+    X(CP_ROPE_SLACK, 13, "a rope went slack")
 
 #define CP_STATUS_ENUM(name, code, text) name = code,
 enum { CP_STATUS_LIST(CP_STATUS_ENUM) };

@@ -293,9 +293,13 @@ FmiStatus fmi_check_input_derivative(FmiInstance *inst, const char *function, un
 {
     const char *name = inst->standard->variable_name(vr);
     char message[MESSAGE_SIZE];
-    if (model_check_input_derivative(inst->model, vr) != MODEL_OK)
+    switch (model_check_input_derivative(inst->model, vr, order, value, message, sizeof message)) {
+    case MODEL_OK: break;
+    case MODEL_REFUSED: return fmi_error(inst, "%s: %s", function, message);
+    default:
         return fmi_error(inst, "%s: value reference %u (%s) is not a continuous input: only "
                          "inputs take derivatives", function, named, name);
+    }
     if (order_refusal(order, "the derivative of", name, message, sizeof message))
         return fmi_error(inst, "%s: %s", function, message);
     if (!isfinite(value))

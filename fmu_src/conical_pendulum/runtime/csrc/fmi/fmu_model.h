@@ -197,8 +197,11 @@ ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], si
 
 #define MODEL_MAX_DERIVATIVE_ORDER 2
 
-/* MODEL_OK if vr is a continuous input whose derivatives may be set, else MODEL_NO_VARIABLE. */
-ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr);
+/* MODEL_OK if vr is a continuous input whose derivatives may be set to value, MODEL_REFUSED
+ * (message) for an input the model holds over each step whose derivative value is not 0,
+ * else MODEL_NO_VARIABLE. */
+ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr, int order, double value,
+                                         char *message, size_t size);
 
 /* Takes the order-th time derivative of the input vr at the current time (order 1 or 2, the
  * value finite, vr accepted by model_check_input_derivative). Over the next step the input

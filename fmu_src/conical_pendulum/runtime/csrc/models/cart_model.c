@@ -273,9 +273,10 @@ static int interpolated(const ModelData *m)
     return 0;
 }
 
-ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr)
+ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr, int order, double value,
+                                         char *message, size_t size)
 {
-    (void)m;
+    (void)m, (void)order, (void)value, (void)message, (void)size;
     return input_index(vr) >= 0 ? MODEL_OK : MODEL_NO_VARIABLE;
 }
 

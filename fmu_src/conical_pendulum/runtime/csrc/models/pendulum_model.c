@@ -128,6 +128,18 @@ static ModelStatus derivatives(ModelData *m, double time, char *message, size_t 
     int status = cp_rhs(&model, X(m), m->dx);
     if (status != CP_OK)
         return no_derivatives(time, status, model.bad_dof, model.pivot_ratio, message, size);
+#ifdef CP_NROPE
+    /* a rope out of its range or slack: no derivatives a host could integrate honestly */
+    cp_failure failure;
+    update_outputs(m);
+    status = cp_ropes_hold(X(m), Y(m), time, &failure);
+    if (status != CP_OK) {
+        int used = snprintf(message, size, "derivatives at t = %.9g s: %s: ", time,
+                            cp_status_message(status));
+        if (used >= 0 && (size_t)used < size) cp_rope_hint(message + used, size - used, status, &failure);
+        return MODEL_DISCARD;
+    }
+#endif
     m->dx_valid = 1;
     return MODEL_OK;
 }
@@ -367,10 +379,26 @@ ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], si
 /* ---- input and output derivatives ---- */
 
 
-ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr)
+ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr, int order, double value,
+                                         char *message, size_t size)
 {
     (void)m;
-    return is_input(vr) ? MODEL_OK : MODEL_NO_VARIABLE;
+    if (!is_input(vr)) return MODEL_NO_VARIABLE;
+#ifdef CP_NROPE
+    /* a rope's winch speed is held over each step: its equations take l'' = 0 */
+    for (int k = 0; k < CP_NROPE; k++)
+        if (value != 0.0 && (int)(vr - CP_VR_INPUT) + CP_NPARAM - CP_NINPUT == cp_rope_hoist[k]) {
+            snprintf(message, size, "derivative %d of %s = %g: a rope's winch speed is held over "
+                     "each communication step (the rope's equations take its length's "
+                     "acceleration l%d'' as 0), so its derivatives must be 0; set v_hoist%d anew "
+                     "at each point instead", order, cp_variable_name(vr), value, cp_rope_link[k],
+                     cp_rope_link[k]);
+            return MODEL_REFUSED;
+        }
+#else
+    (void)order, (void)value, (void)message, (void)size;
+#endif
+    return MODEL_OK;
 }
 
 void model_set_input_derivative(ModelData *m, unsigned vr, int order, double value)

@@ -1,0 +1,469 @@
+"""Ropes (Link.rope): a massless link whose length l<i> is a state driven by its winch, the
+input v_hoist<i>, with its tension T_rope<i>, its winch's power P_hoist<i> and the book
+W_hoist; a length leaving its range or a negative tension discards the step. Checked against
+what nobody here wrote: the lengthening pendulum's closed form in Bessel functions (LeCornu
+1895; Boas, "The lengthening pendulum"), sympy's own KanesMethod with the rope's length a
+function of time, and the energy less the books."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy as sm
+from fmpy.fmi1 import FMICallException
+from scipy.special import jv, yv
+
+from conical_pendulum import Link, Scene, SceneError
+from conical_pendulum.analysis.compare import compare
+from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.analysis.simulate import simulate
+from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.builder.core import dependencies
+from conical_pendulum.builder.core.codegen import generate
+from conical_pendulum.builder.core.equations import derive
+from conical_pendulum.builder.core.kane import kanes_method
+from conical_pendulum.scene import load_scene, scene_from_dict
+from fmu_helpers import INSTANCES, Instance
+from test_directional import Model
+
+G = 9.8
+ERROR = 3  # fmi2Error, fmi3Error
+
+
+def rope(length=10.0, low=1.0, high=30.0, **fields):
+    """A rope with a bob of 5 kg (the default Link's) at its end."""
+    return Link(has_mass=False, rope=True, rope_min=low, rope_max=high, length=length, **fields)
+
+
+# one rope and its load: the lengthening pendulum
+LOAD = Scene(links=(rope(),), outputs=("bobs", "energy"))
+# a rope, a hook and a load slung below it on a massless sling, with every force a scene may add,
+# on a moving support
+SLUNG = Scene(
+    links=(
+        rope(damping=1.0, bob_force=True, bob_mass=20.0),
+        Link(has_mass=False, length=3.0, bob_mass=200.0, damping=2.0),
+        Link(length=1.0, mass=30.0, has_bob=False),
+    ),
+    joint_damping=True,
+    air_drag=True,
+    coupling=True,
+)
+
+
+def lengthening(l0, v, theta0, theta_dot0, times):
+    """The small swing of a point mass on a rope of length l = l0 + v t (v != 0), from
+    theta'' + 2 (v / l) theta' + (g / l) theta = 0: theta = u^-1 [A J1(u) + B Y1(u)] with
+    u = (2 / |v|) sqrt(g l), which is the same for lengthening and shortening (in terms of
+    l the equation has v only squared); d(u^-1 Z1(u))/du = -u^-1 Z2(u) and du/dt =
+    sign(v) sqrt(g / l)."""
+    length = l0 + v * times
+    u = 2.0 / abs(v) * np.sqrt(G * length)
+    u0, rate0 = u[0], np.sign(v) * np.sqrt(G / l0)
+    system = np.array([[jv(1, u0) / u0, yv(1, u0) / u0], [-rate0 * jv(2, u0) / u0, -rate0 * yv(2, u0) / u0]])
+    a, b = np.linalg.solve(system, [theta0, theta_dot0])
+    return (a * jv(1, u) + b * yv(1, u)) / u
+
+
+@pytest.mark.parametrize("l0, v", [(5.0, 0.2), (9.0, -0.2)], ids=["lengthening", "shortening"])
+def test_a_small_swing_follows_the_lengthening_pendulums_bessel_functions(l0, v):
+    """Over 20 s at 60 Hz, in the plane of beta (alpha = 0): 1e-3 rad, where the equation's
+    linearization (sin theta = theta) errs by some 1e-10 rad over this time."""
+    times = np.arange(1201) / 60.0
+    theta0, theta_dot0 = 1e-3, 2e-4
+    run = simulate(
+        LOAD,
+        times,
+        parameters={"v_hoist0": v, "g": G},
+        state={"alpha0": 0.0, "beta0": theta0, "omega0": 0.0, "delta0": theta_dot0, "l0": l0},
+        rtol=1e-13,
+        atol=1e-15,
+    )
+    closed = lengthening(l0, v, theta0, theta_dot0, times)
+    np.testing.assert_allclose(run["l0"], l0 + v * times, rtol=0, atol=1e-12)
+    assert np.abs(run["alpha0"]).max() == 0.0
+    error = np.abs(run["beta0"] - closed).max()
+    assert np.abs(closed).max() > 0.5 * theta0  # it swings
+    assert error < 1e-8, error
+
+
+def swing_amplitude(l0, v, seconds):
+    """A small swing (1e-3 rad) while the rope goes from l0 at v: its amplitude
+    sqrt(theta^2 + theta'^2 l / g) and what the adiabatic invariant predicts for it,
+    a0 (l / l0)^(-3/4) (the action E / omega ~ l^(3/2) theta^2 kept)."""
+    times = np.arange(int(seconds * 60) + 1) / 60.0
+    run = simulate(
+        LOAD,
+        times,
+        parameters={"v_hoist0": v, "g": G},
+        state={"alpha0": 0.0, "beta0": 1e-3, "omega0": 0.0, "delta0": 0.0, "l0": l0},
+        method="core",
+        rtol=1e-10,
+        atol=1e-14,
+    )
+    amplitude = np.sqrt(run["beta0"] ** 2 + run["delta0"] ** 2 * run["l0"] / G)
+    return amplitude, amplitude[0] * (run["l0"] / l0) ** -0.75
+
+
+@pytest.mark.parametrize("l0, direction", [(5.0, 1.0), (20.0, -1.0)], ids=["lengthening", "shortening"])
+def test_slow_hoisting_keeps_the_swings_adiabatic_invariant(l0, direction):
+    """The rope four times as long or a quarter as long, 15 m at 0.04 and at 0.02 m/s: the
+    amplitude follows l^(-3/4) to 0.3 % and 0.15 %, the deviation halving with the speed (it is
+    of the order of the speed over the swing's, v / (l omega))."""
+    errors = []
+    for speed in (0.04, 0.02):
+        amplitude, predicted = swing_amplitude(l0, direction * speed, 15.0 / speed)
+        assert amplitude[-1] / amplitude[0] == pytest.approx(4.0 ** (-0.75 * direction), rel=3e-3)
+        errors.append(np.abs(amplitude / predicted - 1).max())
+    assert errors[0] < 3e-3 and 0.4 < errors[1] / errors[0] < 0.6, errors
+
+
+def sympy_functions(scene):
+    """M and F from the fast derivation and from sympy's KanesMethod, as numpy functions of
+    (x, p)."""
+    eqs = derive(scene)
+    mass, forcing, _ = eqs.lambdify()
+    reference = kanes_method(scene)
+    args = eqs.states + eqs.params
+    kane_mass, kane_forcing = (sm.lambdify(args, matrix) for matrix in reference)
+    return (
+        (mass, forcing),
+        (lambda x, p: kane_mass(*x, *p), lambda x, p: kane_forcing(*x, *p)),
+    )
+
+
+@pytest.mark.parametrize(
+    "scene",
+    [
+        LOAD,
+        Scene(links=(Link(length=2.0), rope(length=6.0)), coupling=True),  # a rope below a link
+        Scene(links=SLUNG.links[:2], joint_damping=True, air_drag=True, coupling=True),
+    ],
+    ids=["load", "rope-below-a-link", "slung-forced-coupled"],
+)
+def test_it_is_sympys_kanes_method_with_the_ropes_length_a_function_of_time(scene):
+    """M and F at random states, lengths, hoist speeds, inputs and parameters."""
+    (mass, forcing), (kane_mass, kane_forcing) = sympy_functions(scene)
+    rng = np.random.default_rng(41)
+    for _ in range(20):
+        x = rng.uniform(-1.5, 1.5, 4 * scene.n + len(scene.ropes()))  # as Equations.states
+        x[4 * scene.n :] = rng.uniform(1.0, 20.0, len(scene.ropes()))
+        p = rng.uniform(0.5, 4.0, len(scene.core_parameter_names()))
+        inputs = len(scene.parameter_names())
+        p[inputs:] = rng.uniform(-3.0, 3.0, len(scene.input_names()))
+        m, f = mass(x, p), forcing(x, p)
+        np.testing.assert_allclose(kane_mass(x, p), m, rtol=0, atol=1e-12 * np.abs(m).max())
+        np.testing.assert_allclose(kane_forcing(x, p), f, rtol=0, atol=1e-12 * np.abs(f).max())
+
+
+@pytest.mark.parametrize(
+    "links, options",
+    [
+        ((rope(),), {}),
+        (SLUNG.links, {"joint_damping": True, "air_drag": True, "coupling": True}),
+        ((Link(length=2.0), rope(length=6.0, bob_force=True), Link(has_mass=False)), {"coupling": True}),
+        ((rope(), Link(has_mass=False, length=3.0), rope(length=4.0)), {"air_drag": True}),  # two ropes
+    ],
+    ids=["load", "slung", "below-a-link", "two-ropes"],
+)
+def test_the_formulations_agree(links, options):
+    """M, F, x' (the lengths' and books' rates too) and every output (the tensions, the
+    winches' power, the pivot force) at random states, lengths and inputs."""
+    cores = [load_core(Scene(links=links, formulation=f, **options)) for f in ("expanded", "recursive")]
+    scene = Scene(links=links, **options)
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        x = rng.uniform(-1, 1, len(scene.state_names()))
+        for i in scene.ropes():
+            x[scene.state_names().index(f"l{i}")] = rng.uniform(1.0, 20.0)
+        p = np.array(scene.parameters())
+        p[len(scene.parameter_names()) :] = rng.uniform(-5, 5, len(scene.input_names()))
+        (me, fe), (mr, fr) = (core.mass_forcing(x, p) for core in cores)
+        np.testing.assert_allclose(mr, me, rtol=0, atol=1e-12 * np.abs(me).max())
+        np.testing.assert_allclose(fr, fe, rtol=0, atol=1e-12 * np.abs(fe).max())
+        de, dr = (core.rhs(x, p) for core in cores)
+        np.testing.assert_allclose(dr, de, rtol=1e-9, atol=1e-9)
+        ye, yr = (core.outputs(x, p) for core in cores)
+        np.testing.assert_allclose(yr, ye, rtol=0, atol=1e-10 * np.abs(ye).max())
+
+
+def test_the_recursive_dependencies_are_what_the_expressions_say():
+    scene = Scene(links=SLUNG.links, joint_damping=True, air_drag=True, coupling=True)
+    assert dependencies._chain(scene) == dependencies._symbolic(scene, derive(scene))
+
+
+def test_energy_less_the_books_stays_constant_with_the_winch_working():
+    """The slung load hoisted at 0.4 m/s on a support accelerating and in a wind, its hook
+    pushed: W_hoist holds what the winch put in."""
+    inputs = {"v_hoist0": -0.4, "a_pivot_x": 0.6, "v_pivot_x": 0.2, "wind_x": 3.0, "F_bob0_z": 40.0}
+    run = simulate(
+        SLUNG,
+        np.linspace(0, 10, 201),
+        parameters=inputs,
+        state={"beta0": 0.2, "alpha1": 0.3, "omega2": 0.2},
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    energy = run["energy"]
+    kept = energy - sum(run[name] for name in SLUNG.work_names())
+    assert "W_hoist" in SLUNG.work_names()
+    assert run["W_hoist"][-1] > 0.9 * 250.0 * G * 4.0  # it lifted 250 kg by 4 m
+    np.testing.assert_allclose(run["l0"][-1], 6.0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(run["P_hoist0"], 0.4 * run["T_rope0"], rtol=1e-14)
+    assert np.abs(kept - kept[0]).max() < 1e-9 * np.abs(energy).max()
+
+
+def test_a_long_chain_on_a_rope_keeps_its_books_in_the_recursive_formulation():
+    """A rope with eight links below it (recursive by 'auto'), hoisted on a moving support."""
+    scene = Scene(links=(rope(length=6.0),) + (Link(length=2.0, mass=3.0, bob_mass=1.0),) * 8, coupling=True)
+    assert scene.resolved_formulation() == "recursive"
+    run = simulate(
+        scene,
+        np.linspace(0, 5, 101),
+        parameters={"v_hoist0": -0.6, "a_pivot_x": 0.8},
+        state={"beta0": 0.3, "alpha4": 0.2},
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    kept = run["energy"] - run["W_hoist"] - run["W_pivot"]
+    assert abs(run["W_hoist"][-1]) > 100.0 and abs(run["W_pivot"][-1]) > 100.0
+    assert np.abs(kept - kept[0]).max() < 1e-9 * np.abs(run["energy"]).max()
+
+
+def test_a_hanging_ropes_tension_is_the_weight_below_it_and_points_along_it():
+    """At rest: the weight of everything below. Swinging, the force what hangs below asks of
+    the rope, sum m (a - g) less the forces on it, lies along the rope: a massless rope with a
+    joint at each end transmits no other force (its tension is that force's length)."""
+    core = load_core(SLUNG)
+    names = SLUNG.state_names()
+    x = np.zeros(len(names))
+    x[names.index("l0")] = 8.0
+    p = np.array(SLUNG.parameters())
+    outputs = dict(zip(SLUNG.output_names(), core.outputs(x, p)))
+    assert outputs["T_rope0"] == pytest.approx((20.0 + 200.0 + 30.0) * G, rel=1e-14)
+    assert outputs["P_hoist0"] == 0.0
+
+
+def test_the_rope_outputs_follow_newtons_law_along_the_rope():
+    """A single load: T = m (g . e_y + a . e_y) with the bob's acceleration from second
+    differences of its position, while it swings and is hoisted."""
+    times = np.linspace(0, 4, 4001)
+    run = simulate(
+        LOAD,
+        times,
+        parameters={"v_hoist0": -0.8},
+        state={"beta0": 0.4, "alpha0": 0.2, "omega0": 0.3},
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    h = times[1] - times[0]
+    position = np.stack([run[f"bob0_{c}"] for c in "xyz"], axis=1)
+    acceleration = (position[2:] - 2 * position[1:-1] + position[:-2]) / h**2
+    along = -position[1:-1] / np.linalg.norm(position[1:-1], axis=1)[:, None]  # bob to pivot
+    expected = 5.0 * np.einsum("ij,ij->i", acceleration + [0.0, G, 0.0], along)
+    tension = run["T_rope0"][1:-1]
+    assert np.abs(tension - expected).max() < 1e-5 * np.abs(tension).max()
+
+
+def core_step(scene, start, inputs, dt, steps):
+    """Steps of the core's co-simulation (cosim.c, as both FMUs take it): the statuses and the
+    states after each."""
+    core = load_core(scene)
+    p = np.array(scene.parameters(inputs))
+    values = np.zeros(core.NSTATE + core.NOUTPUT)
+    values[: core.NSTATE] = scene.initial_state(start)
+    stepper = core.Stepper(p, values)
+    stepper.update_outputs()
+    found = []
+    for k in range(steps):
+        status = stepper.step(2, k * dt, dt, 1e-10, 1e-10, 0.0, 100000)
+        found.append((status, values[: core.NSTATE].copy()))
+        if status:
+            break
+    return core, found
+
+
+def test_a_length_leaving_its_range_discards_the_step_and_keeps_the_state():
+    """Hoisted from 1.3 m at 0.25 m/s towards its minimum of 1 m: 1.175 m at 0.5 s, 1.05 m at
+    1 s, then 0.925 m, which the step from 1 s does not reach."""
+    core, found = core_step(LOAD, {"l0": 1.3}, {"v_hoist0": -0.25}, 0.5, 10)
+    statuses = [status for status, _ in found]
+    assert statuses[:2] == [0, 0] and core.STATUS[statuses[2]] == "a rope's length left its range"
+    assert len(found) == 3
+    assert found[2][1][LOAD.state_names().index("l0")] == pytest.approx(1.05, abs=1e-12)  # kept at t
+
+
+def test_a_load_thrown_upward_slackens_the_rope_and_the_step_is_discarded():
+    """A kick upward (F_bob0_y, twice the load's weight) would need the rope to push the load
+    down: the step is discarded, the state kept; hanging still before it, the rope is taut."""
+    scene = Scene(links=(rope(bob_force=True),), outputs=())
+    core = load_core(scene)
+    p = np.array(scene.parameters())
+    values = np.zeros(core.NSTATE + core.NOUTPUT)
+    values[: core.NSTATE] = scene.initial_state({"beta0": 0.3, "alpha0": 0.0})
+    stepper = core.Stepper(p, values)
+    stepper.update_outputs()
+    tension = scene.output_names().index("T_rope0")
+    assert [stepper.step(2, k * 0.1, 0.1, 1e-10, 1e-10, 0.0, 100000) for k in range(3)] == [0, 0, 0]
+    assert values[core.NSTATE + tension] > 0
+    before = values.copy()
+    p[scene.core_parameter_names().index("F_bob0_y")] = 2 * 5.0 * G
+    status = stepper.step(2, 0.3, 0.1, 1e-10, 1e-10, 0.0, 100000)
+    assert core.STATUS[status] == "a rope went slack"
+    np.testing.assert_array_equal(values, before)
+
+
+@pytest.mark.parametrize(
+    "fields, message",
+    [
+        ({"mass": 10.0}, r"link\[0\]\.rope: a rope is a massless link; give link 0 mass = 0"),
+        (
+            {"rope": {"min": 12.0, "max": 30.0}},
+            r"link\[0\]\.rope: link 0's length 10\.0 m is outside its range",
+        ),
+        (
+            {"rope": {"min": -1.0, "max": 30.0}},
+            r"link\[0\]\.rope\.min: must be a positive finite number, got -1\.0",
+        ),
+        ({"rope": {"max": 30.0}}, r"link\[0\]\.rope\.min: must be a positive finite number, got None"),
+        ({"rope": {"min": 1.0, "max": 30.0, "speed": 2}}, r"link\[0\]\.rope: unknown field\(s\) \['speed'\]"),
+        ({"rope": True}, r"link\[0\]\.rope: expected a table \{ min = \.\.\., max = \.\.\. \}, got True"),
+    ],
+)
+def test_a_bad_rope_is_refused_naming_it(fields, message):
+    link = {"length": 10.0, "mass": 0, "bob": {"mass": 5.0}, "rope": {"min": 1.0, "max": 30.0}, **fields}
+    with pytest.raises(SceneError, match=message):
+        scene_from_dict({"link": [link]})
+
+
+def test_ropes_are_refused_where_their_lengths_are_not_derived():
+    with pytest.raises(SceneError, match=r"link\[0\]\.rope: ropes need kinematics 'consistent'"):
+        Scene(links=(rope(),), kinematics="pydy-example")
+
+
+def test_a_rope_makes_its_length_a_state_and_adds_its_winch():
+    assert LOAD.parameter_names() == ["m0", "g"]
+    assert LOAD.input_names() == ["v_hoist0"]
+    assert LOAD.state_names() == ["alpha0", "beta0", "omega0", "delta0", "W_hoist", "l0"]
+    assert LOAD.output_names()[-2:] == ["T_rope0", "P_hoist0"]
+    assert LOAD.initial_state()[-1] == 10.0
+    header = generate(derive(LOAD))["model.h"]
+    assert "static const double cp_rope_min[CP_NROPE] = {1.0};" in header
+
+
+# the FMUs' scene: a rope with a hook, a load slung below it on a massless sling, on a moving
+# support
+HOISTED = Scene(
+    links=(
+        rope(length=10.0, low=2.0, high=30.0, bob_mass=50.0),
+        Link(has_mass=False, length=3.0, bob_mass=500.0),
+    ),
+    coupling=True,
+)
+HOISTING = {"v_hoist0": -0.5, "beta0": 0.2, "alpha1": 0.3, "a_pivot_x": 0.5}
+
+
+@pytest.fixture(scope="module")
+def hoisted_fmu(built_fmu):
+    return lambda backend, fmi_version=2: built_fmu(HOISTED, backend=backend, fmi_version=fmi_version)
+
+
+@pytest.mark.parametrize("backend, fmi_version", [("pythonfmu", 2), ("native", 2), ("native", 3)])
+def test_its_fmus_follow_the_reference_and_keep_the_books(hoisted_fmu, backend, fmi_version):
+    """Hoisted by 5 m in 10 s while the support accelerates: the FMU against the native
+    reference, and energy less W_hoist and W_pivot constant."""
+    comparison = compare(hoisted_fmu(backend, fmi_version), HOISTED, start_values=HOISTING, stop_time=10.0)
+    assert comparison.passed(), comparison.report()
+    result = comparison.result
+    np.testing.assert_allclose(result["l0"][-1], 5.0, rtol=0, atol=1e-12)
+    kept = result["energy"] - result["W_hoist"] - result["W_pivot"]
+    assert result["W_hoist"][-1] > 550.0 * G * 5.0 * 0.9
+    assert np.abs(kept - kept[0]).max() < 1e-8 * np.abs(result["energy"]).max()
+
+
+def test_model_exchange_follows_the_reference(hoisted_fmu):
+    run = run_fmu(
+        hoisted_fmu("native"),
+        stop_time=10.0,
+        fmi_type="ModelExchange",
+        relative_tolerance=1e-10,
+        start_values=HOISTING,
+    )
+    inputs = {k: v for k, v in HOISTING.items() if k in HOISTED.input_names()}
+    state = {k: v for k, v in HOISTING.items() if k in HOISTED.state_names()}
+    reference = simulate(HOISTED, run["time"], parameters=inputs, state=state, rtol=1e-12, atol=1e-12)
+    for name in HOISTED.state_names():  # angles and rates of order one, lengths in m, books in kJ
+        scale = max(1.0, np.abs(reference[name]).max())
+        assert np.abs(run[name] - reference[name]).max() < 1e-6 * scale, name
+
+
+@pytest.mark.parametrize(
+    "backend, fmi_version, solver",
+    [("pythonfmu", 2, 2), ("pythonfmu", 2, 3), ("native", 2, 2), ("native", 3, 2)],
+    ids=["pythonfmu", "pythonfmu-radau", "native-2", "native-3"],
+)
+def test_a_rope_hoisted_past_its_minimum_discards_the_step_naming_it(
+    hoisted_fmu, backend, fmi_version, solver
+):
+    """From 3.1 m at 0.5 m/s towards its minimum of 2 m: the step from 2 s (2.1 m) to 2.5 s is
+    discarded, the message naming the rope, the time and the length (DOP853, and the
+    pythonfmu FMU's Radau, which scipy integrates)."""
+    fmu = INSTANCES[fmi_version](
+        hoisted_fmu(backend, fmi_version), start_values={"l0": 3.1, "v_hoist0": -0.5, "solver": solver}
+    )
+    for _ in range(4):
+        fmu.step(0.5)
+    assert fmu.get("l0") == [pytest.approx(2.1, abs=1e-12)]
+    with pytest.raises(FMICallException):
+        fmu.step(0.5)
+    message = (
+        "at t = 2.5 s rope l0's length is 1.85 m, outside its range [2, 30] m (the scene's rope min and "
+        "max): its winch (v_hoist0) must stop or turn before"
+    )
+    assert message in fmu.texts(), fmu.messages
+    assert fmu.get("l0") == [pytest.approx(2.1, abs=1e-12)]  # kept at 2 s
+    fmu.close()
+
+
+def test_a_derivative_of_the_winchs_speed_is_refused_naming_it(hoisted_fmu):
+    """fmi2SetRealInputDerivatives: v_hoist is held (its equations take l'' = 0); a derivative of
+    0 is taken, and the other inputs still move."""
+    fmu = Instance(hoisted_fmu("native"))
+    vr = fmu.vr
+    with pytest.raises(FMICallException):
+        fmu.fmu.setRealInputDerivatives([vr["v_hoist0"]], [1], [0.2])
+    assert "derivative 1 of v_hoist0 = 0.2: a rope's winch speed is held over each communication step" in (
+        fmu.texts(ERROR)
+    ), fmu.messages
+    fmu.fmu.setRealInputDerivatives([vr["v_hoist0"], vr["a_pivot_x"]], [1, 1], [0.0, 0.3])
+    fmu.step(0.5)
+    fmu.close()
+
+
+def test_model_exchange_discards_the_derivatives_of_a_rope_out_of_its_range(hoisted_fmu):
+    """A host integrating past a rope's minimum gets fmi2Discard from fmi2GetDerivatives, the
+    message naming the rope, the time and the length; back in range, derivatives again."""
+    model = Model(hoisted_fmu("native"), HOISTED)
+    names = HOISTED.state_names()
+    x = np.array(HOISTED.initial_state({"l0": 1.5}))
+    model.set(x, [0.0] * len(HOISTED.input_names()))
+    with pytest.raises(FMICallException):
+        model.values()
+    message = "derivatives at t = 0 s: a rope's length left its range: at t = 0 s rope l0's length is 1.5 m"
+    assert any(message in text for _, text in model.messages), model.messages
+    x[names.index("l0")] = 2.5
+    model.set(x)
+    assert np.all(np.isfinite(model.values()))
+    model.close()
+
+
+def test_the_crane_scene_is_a_rope_a_hook_and_a_load_slung_below_on_a_moving_support():
+    """scenes/crane.toml, which benchmarks/crane_run.py runs in both FMUs (docs/model.md)."""
+    scene = load_scene(Path(__file__).resolve().parents[1] / "scenes" / "crane.toml")
+    assert scene.ropes() == [0] and scene.coupling
+    assert (scene.links[0].rope_min, scene.links[0].rope_max, scene.links[0].length) == (3.0, 30.0, 12.0)
+    assert [link.bob_mass for link in scene.links] == [150.0, 2000.0]
+    assert not any(link.has_mass for link in scene.links)
+    assert scene.input_names() == ["a_pivot_x", "a_pivot_y", "a_pivot_z", "v_hoist0"]
+    assert {"l0", "W_hoist", "W_pivot"} <= set(scene.state_names())
+    assert {"T_rope0", "P_hoist0", "bob1_x", "energy"} <= set(scene.output_names())
