@@ -340,10 +340,11 @@ static int accelerate(cp_model *model, const cp_real *x, const Link *links, cp_r
     return CP_OK;
 }
 
-#ifdef CP_NROPE
+#if defined(CP_NROPE) || CP_PIVOT_INDEX >= 0
 /* Newton's law for what hangs from each joint: hang[i] = sum over the bodies of links i and
  * below of m (a - g) less the forces applied to them (the bobs' and the drag), a their full
- * accelerations with the rates' rates from dx; the force through joint i is -hang[i]. */
+ * accelerations with the rates' rates from dx; the force through joint i is -hang[i] (through
+ * the pivot, -hang[0]: the support force F_pivot). */
 static void hanging(const cp_real *p, const Link *links, const cp_real *dx, cp_real hang[][3])
 {
     const int n = CP_NLINK;
@@ -369,11 +370,13 @@ static void hanging(const cp_real *p, const Link *links, const cp_real *dx, cp_r
             cross(k->w, c, wc);
             cross(k->w, wc, wwc);
             for (int j = 0; j < 3; j++) h[j] += p[index] * (ai[3 + j] + t[j] + wwc[j]);
+#ifdef CP_NROPE
             if (body) {  /* a rope's bob: the Coriolis of its sliding end, 2 w x s */
                 cp_real ws[3];
                 cross(k->w, k->s, ws);
                 for (int j = 0; j < 3; j++) h[j] += p[index] * 2 * ws[j];
             }
+#endif
             h[1] += p[index] * p[CP_G_INDEX];
         }
 #ifdef CP_BOB_FORCES
@@ -604,52 +607,15 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
     }
     *out++ = energy;
 #endif
+#if defined(CP_NROPE) || CP_PIVOT_INDEX >= 0
+    cp_real hang[CP_NLINK][3];
+    hanging(p, links, dx, hang);
+#endif
 #if CP_PIVOT_INDEX >= 0
-    /* Newton's law for the whole chain: sum m (g - a), with the rates' rates from dx. */
-    cp_real a[6], force[3] = {0, 0, 0};
-    base_acceleration(p, 0, a);
-    for (int i = 0; i < n; i++) {
-        const Link *k = &links[i];
-        const cp_link_params *lp = &cp_links[i];
-        cp_real ai[6], Eu[3];
-        const cp_real u2[2] = {dx[2 * n + i], dx[3 * n + i]};
-        carry(k, a, ai);
-        mul32(k->E, u2, Eu);
-        for (int j = 0; j < 3; j++) ai[j] += Eu[j];
-        memcpy(a, ai, sizeof a);
-        for (int body = 0; body < 2; body++) {
-            const int index = body ? lp->m : lp->M;
-            if (index < 0) continue;
-            const cp_real share = body ? 1.0 : 0.5;  /* bob at the end, link's centre halfway */
-            cp_real c[3] = {k->r[0] * share, k->r[1] * share, k->r[2] * share}, t[3], wc[3], wwc[3];
-            cross(ai, c, t);
-            cross(k->w, c, wc);
-            cross(k->w, wc, wwc);
-            for (int j = 0; j < 3; j++) force[j] -= p[index] * (ai[3 + j] + t[j] + wwc[j]);
-#ifdef CP_NROPE
-            if (body) {  /* a rope's bob: the Coriolis of its sliding end, 2 w x s */
-                cp_real ws[3];
-                cross(k->w, k->s, ws);
-                for (int j = 0; j < 3; j++) force[j] -= p[index] * 2 * ws[j];
-            }
-#endif
-            force[1] -= p[index] * p[CP_G_INDEX];
-        }
-#ifdef CP_BOB_FORCES
-        if (cp_bob_force[i] >= 0)  /* what the bob's applied force passes on to the support */
-            for (int j = 0; j < 3; j++) force[j] += p[cp_bob_force[i] + j];
-#endif
-#ifdef CP_DRAG
-        if (cp_bob_drag[i] >= 0)  /* and the air's drag on it */
-            for (int j = 0; j < 3; j++) force[j] += k->drag[j];
-#endif
-    }
-    for (int j = 0; j < 3; j++) *out++ = force[j];
+    for (int j = 0; j < 3; j++) *out++ = -hang[0][j];  /* the support holds all that hangs */
 #endif
 #ifdef CP_NROPE
     out += 9 * (CP_PIVOT_INDEX >= 0);  /* F_free and M_app: dynamics.c's */
-    cp_real hang[CP_NLINK][3];
-    hanging(p, links, dx, hang);
     /* each rope's tension, then its winch's power -T v_hoist */
     cp_real T[CP_NROPE];
     tensions(links, (const cp_real(*)[3])hang, T);
