@@ -30,7 +30,7 @@ from pathlib import Path
 import pytest
 
 import conical_pendulum
-from conical_pendulum import Scene
+from conical_pendulum import Link, Scene
 from conical_pendulum.builder.core.cache import cache_root
 from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.builder.models.cart import build_cart
@@ -38,6 +38,12 @@ from conical_pendulum.builder.packaging.native import COMPILERS
 
 SEED = Scene.uniform(3)
 COUPLED = Scene.uniform(3, coupling=True)
+# a rope (its length a state, its winch's speed an input) with a forced hook and a link below,
+# on a moving support: the tension and W_hoist need the accelerations
+HOISTED_LINKS = (
+    Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True),
+    Link(length=3.0),
+)
 RUN_RECORD = "fmu-cache"  # under the run's base temporary folder, the workers' shared parent
 KEPT = "test-fmus"  # under the cache root: the FMUs kept across runs
 KEPT_DAYS = 14  # an FMU no run has used for this long is deleted at the start of a run

@@ -8,6 +8,7 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
+from conftest import HOISTED_LINKS
 from conical_pendulum import Link, Scene
 from conical_pendulum.builder.core import dependencies
 from conical_pendulum.builder.core.equations import derive
@@ -32,22 +33,8 @@ SCENES = {
         air_drag=True,
         coupling=True,
     ),
-    # a rope (its length a state, v_hoist an input) with a forced hook and a link below it
-    "rope": Scene(
-        links=(
-            Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True),
-            Link(length=3.0),
-        ),
-        coupling=True,
-    ),
-    "rope_recursive": Scene(
-        links=(
-            Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True),
-            Link(length=3.0),
-        ),
-        coupling=True,
-        formulation="recursive",
-    ),
+    "rope": Scene(links=HOISTED_LINKS, coupling=True),
+    "rope_recursive": Scene(links=HOISTED_LINKS, coupling=True, formulation="recursive"),
 }
 
 # Listed pairs that are zero anyway: not by the expressions' structure but by the physics.

@@ -9,6 +9,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model
 
+from conftest import HOISTED_LINKS
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 from conical_pendulum.builder.compiler import load_core
@@ -33,23 +34,8 @@ SCENES = {
         air_drag=True,
         coupling=True,
     ),
-    # a rope (its length a state, its winch's speed an input) with a forced hook and a link below,
-    # on a moving support: the tension and W_hoist need the accelerations
-    "rope": Scene(
-        links=(
-            Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True),
-            Link(length=3.0),
-        ),
-        coupling=True,
-    ),
-    "rope_recursive": Scene(
-        links=(
-            Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, bob_force=True),
-            Link(length=3.0),
-        ),
-        coupling=True,
-        formulation="recursive",
-    ),
+    "rope": Scene(links=HOISTED_LINKS, coupling=True),
+    "rope_recursive": Scene(links=HOISTED_LINKS, coupling=True, formulation="recursive"),
 }
 SEEDS = range(5)
 
