@@ -13,11 +13,9 @@ turn, at a state off equilibrium with nonzero inputs. Prints the table docs/mode
 and writes benchmarks/results/force_cost.csv.
 """
 
-import numpy as np
-
 from conical_pendulum import Link, Scene
-from conical_pendulum.builder.compiler import load_core
 from results_csv import write_rows
+from rhs_rounds import prepared, rhs_medians
 
 CHAINS = {"3 links, expanded": (3, "expanded"), "10 links, recursive": (10, "recursive")}
 OPTIONS = {  # a link's fields, and air_drag for the scene
@@ -45,21 +43,13 @@ def scene(n: int, formulation: str, option: dict) -> Scene:
 def main():
     rows = []
     for chain, (n, formulation) in CHAINS.items():
-        cases = {}
-        for label, option in OPTIONS.items():
-            s = scene(n, formulation, option)
-            core = load_core(s)
-            x = np.array(s.initial_state()) + np.linspace(0.1, 0.3, core.NSTATE)
-            p = np.array(s.parameters())
-            p[len(s.parameter_names()) :] = np.linspace(1.0, 5.0, len(s.input_names()))
-            cases[label] = (core, x, p, len(s.state_names()))
-        seconds = {label: [] for label in cases}
-        for _ in range(REPEATS):  # in turn, so that the machine's load falls on all alike
-            for label, (core, x, p, _) in cases.items():
-                seconds[label].append(core.seconds_per_call("rhs", x, p, CALLS // n))
-        base = np.median(seconds["none"])
+        cases = {
+            label: prepared(scene(n, formulation, option), (1.0, 5.0)) for label, option in OPTIONS.items()
+        }
+        medians = rhs_medians(cases, CALLS // n, REPEATS)
+        base = medians["none"]
         for label, (_, _, _, n_state) in cases.items():
-            rhs = float(np.median(seconds[label]))
+            rhs = medians[label]
             rows.append(
                 {
                     "chain": chain,

@@ -14,11 +14,9 @@ nonzero inputs. Prints the table docs/model.md shows and writes
 benchmarks/results/hoist_cost.csv.
 """
 
-import numpy as np
-
 from conical_pendulum import Link, Scene
-from conical_pendulum.builder.compiler import load_core
 from results_csv import write_rows
+from rhs_rounds import prepared, rhs_medians
 
 CHAINS = {
     "1 link, expanded": (1, "expanded"),
@@ -44,29 +42,18 @@ def scene(n: int, formulation: str, rope: bool, coupling: bool) -> Scene:
     )
 
 
-def prepared(s: Scene):
-    core = load_core(s)
-    x = np.array(s.initial_state()) + np.linspace(0.1, 0.3, core.NSTATE)
-    p = np.array(s.parameters())
-    p[len(s.parameter_names()) :] = np.linspace(-0.5, 1.0, len(s.input_names()))
-    return core, x, p, len(s.state_names())
-
-
 def main():
     rows = []
     for chain, (n, formulation) in CHAINS.items():
         for support, coupling in COUPLING.items():
             cases = {
-                label: prepared(scene(n, formulation, rope, coupling))
+                label: prepared(scene(n, formulation, rope, coupling), (-0.5, 1.0))
                 for label, rope in (("fixed", False), ("rope", True))
             }
-            seconds = {label: [] for label in cases}
-            for _ in range(REPEATS):  # in turn, so that the machine's load falls on both alike
-                for label, (core, x, p, _) in cases.items():
-                    seconds[label].append(core.seconds_per_call("rhs", x, p, CALLS // n))
-            base = np.median(seconds["fixed"])
+            medians = rhs_medians(cases, CALLS // n, REPEATS)
+            base = medians["fixed"]
             for label, (_, _, _, n_state) in cases.items():
-                rhs = float(np.median(seconds[label]))
+                rhs = medians[label]
                 rows.append(
                     {
                         "chain": chain,
