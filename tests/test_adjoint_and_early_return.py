@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from conical_pendulum import Link, Scene
-from differences import assert_adjoint_and_directional_match_differences
+from differences import assert_adjoint_and_directional_match_differences, bad_reference_cases, bisection
 from model_host import MODEL_DISCARD, MODEL_OK, MODEL_REFUSED, Model, compile_model
 
 SCENES = {
@@ -123,17 +123,8 @@ def test_bad_references_and_seeds_are_refused_and_the_model_goes_on(built):
     vr, der = m.vr, m.unknowns[0]
     before = bytes(m.data)
     _, expected = m.adjoint(m.unknowns, m.knowns, np.ones(len(m.unknowns)))
-    unknown, known = (
-        ": only outputs and state derivatives are",
-        ": only states, inputs and Real parameters are",
-    )
     cases = [
-        ([vr["l0"]], [vr["alpha0"]], [1.0], f"value reference {vr['l0']} (l0) as an unknown{unknown}"),
-        ([vr["rtol"]], [vr["alpha0"]], [1.0], f"value reference {vr['rtol']} (rtol) as an unknown{unknown}"),
-        ([der], [vr["energy"]], [1.0], f"value reference {vr['energy']} (energy) as a known{known}"),
-        ([der], [vr["bob2_x"]], [1.0], f"value reference {vr['bob2_x']} (bob2_x) as a known{known}"),
-        ([10_000], [vr["alpha0"]], [1.0], f"value reference 10000 (?) as an unknown{unknown}"),
-        ([der], [10_000], [1.0], f"value reference 10000 (?) as a known{known}"),
+        *bad_reference_cases(vr, der),
         ([der], [vr["alpha0"]], [math.nan], "seed of der(alpha0) = nan: must be finite"),
         ([vr["energy"], der], [vr["alpha0"]], [0.0, -math.inf], "seed of der(alpha0) = -inf: must be finite"),
     ]
@@ -243,12 +234,7 @@ def rk4_step_onto_the_pole(built, start):
         alpha, rate = m.get("alpha1", "der(alpha1)")
         return alpha + 0.5 * h * rate - math.pi / 2
 
-    low, high = 0.01, 0.06
-    assert miss(low) < 0 < miss(high)
-    for _ in range(60):
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if miss(middle) < 0 else (low, middle)
-    return low
+    return bisection(miss, 0.01, 0.06)
 
 
 def test_a_state_leaving_the_model_mid_step_returns_at_the_last_good_substep(built):

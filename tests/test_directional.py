@@ -13,7 +13,7 @@ from conftest import HOISTED_LINKS
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 from conical_pendulum.builder.compiler import load_core
-from differences import richardson, ridders
+from differences import bad_reference_cases, richardson, ridders
 from fmu_helpers import Instance
 
 SCENES = {
@@ -310,17 +310,8 @@ def test_bad_references_are_errors_naming_them_and_the_instance_goes_on(native, 
     model = models("coupled")
     vr = model.vr
     der = model.unknowns[0]
-    unknown, known = (
-        ": only outputs and state derivatives are",
-        ": only states, inputs and Real parameters are",
-    )
     cases = [
-        ([vr["l0"]], [vr["alpha0"]], [1.0], f"value reference {vr['l0']} (l0) as an unknown{unknown}"),
-        ([vr["rtol"]], [vr["alpha0"]], [1.0], f"value reference {vr['rtol']} (rtol) as an unknown{unknown}"),
-        ([der], [vr["energy"]], [1.0], f"value reference {vr['energy']} (energy) as a known{known}"),
-        ([der], [vr["bob2_x"]], [1.0], f"value reference {vr['bob2_x']} (bob2_x) as a known{known}"),
-        ([10_000], [vr["alpha0"]], [1.0], f"value reference 10000 (?) as an unknown{unknown}"),
-        ([der], [10_000], [1.0], f"value reference 10000 (?) as a known{known}"),
+        *bad_reference_cases(vr, der),
         ([der], [vr["alpha0"]], [float("nan")], "dvKnown of alpha0 = nan: must be finite"),
     ]
     for unknowns, knowns, seed, message in cases:

@@ -15,7 +15,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import fmi3Boolean, fmi3Float64
 
 from conical_pendulum import Link, Scene
-from differences import assert_adjoint_and_directional_match_differences
+from differences import assert_adjoint_and_directional_match_differences, bisection
 from fmu_helpers import Instance3
 
 OK, DISCARD, ERROR = 0, 2, 3
@@ -323,12 +323,7 @@ def rk4_step_onto_the_pole(fmus, start):
         fmu.close()
         return alpha + 0.5 * h * rate - math.pi / 2
 
-    low, high = 0.01, 0.06
-    assert miss(low) < 0 < miss(high)
-    for _ in range(60):
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if miss(middle) < 0 else (low, middle)
-    return low
+    return bisection(miss, 0.01, 0.06)
 
 
 def test_a_state_leaving_the_model_mid_step_returns_early_at_the_last_good_substep(fmus):
