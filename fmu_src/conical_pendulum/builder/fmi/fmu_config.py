@@ -87,6 +87,10 @@ def config_header(model: NativeModel, data: dict, records: list[Variable], guid:
         ),
         real_rules=c.initializer(RULE_INDEX[v.rule] for v in reals),
         real_whats=c.initializer(c.string(v.what) for v in reals),
+        state_nominals=c.rows(
+            [c.double(v.nominal) for v in records if v.group == "states"],
+            [v.name for v in records if v.group == "states"],
+        ),
         n_variable=c.define("CP_NVARIABLE", len(records)),
         settable=c.initializer(map(settable, records)),
         names=c.rows([c.string(v.name) for v in records]),

@@ -181,7 +181,7 @@ const char *model_set_states(ModelData *m, const double x[], char *message, size
 void model_get_nominals(const ModelData *m, double x_nominal[])
 {
     (void)m;
-    for (int k = 0; k < N_STATE; k++) x_nominal[k] = 1.0;  /* metres and metres per second */
+    memcpy(x_nominal, cp_state_nominal, N_STATE * sizeof x_nominal[0]);
 }
 
 ModelStatus model_get_derivatives(ModelData *m, double dx[], double time, char *message,

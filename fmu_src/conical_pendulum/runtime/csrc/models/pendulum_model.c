@@ -264,7 +264,7 @@ const char *model_set_states(ModelData *m, const double x[], char *message, size
 void model_get_nominals(const ModelData *m, double x_nominal[])
 {
     (void)m;
-    for (int k = 0; k < CP_NSTATE; k++) x_nominal[k] = 1.0;  /* angles and rates: order one */
+    memcpy(x_nominal, cp_state_nominal, CP_NSTATE * sizeof x_nominal[0]);
 }
 
 ModelStatus model_get_derivatives(ModelData *m, double dx[], double time, char *message,
