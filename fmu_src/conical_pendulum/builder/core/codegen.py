@@ -118,6 +118,28 @@ def _work_function(eqs: Equations) -> list[str]:
     return [_function(WORK_SIGNATURE, eqs, targets, prologue=[] if reads_rates else ["    (void)dx;"])]
 
 
+ENERGY_SIGNATURE = "void cp_energy(const cp_real *x, const cp_real *p, cp_real *E)"
+
+
+def _jumps(scene: Scene) -> list[str]:
+    """model.h's lines for the energy's jumps, if a value set at an event can move it (a rope's
+    winch speed; none: no line): the energy at (x, p), whose change the book of that work takes."""
+    if not scene.ropes():
+        return []
+    return [
+        "#define CP_ENERGY_JUMPS 1",
+        "/* E: the chain's energy at (x, p), kinetic and potential as the output energy's: a value",
+        "   set at an event that moves it (a rope's v_hoist) jumps its book by the change. */",
+        ENERGY_SIGNATURE + ";",
+    ]
+
+
+def _energy_function(eqs: Equations) -> list[str]:
+    """model.c's cp_energy, if the scene's energy can jump (the recursive formulation's is
+    chain.c's)."""
+    return [_function(ENERGY_SIGNATURE, eqs, [("*E", eqs.energy)])] if _jumps(eqs.scene) else []
+
+
 def _ropes(scene: Scene) -> list[str]:
     """model.h's lines for the ropes, if the scene has any (none: no line): their number,
     where each one's length is in x and its v_hoist in p, its range, and where the tensions
@@ -174,7 +196,7 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
                 c.define("CP_NSTAT", len(STATISTICS)),
             ]
         ),
-        formulation="\n".join(lines + _books(scene) + _ropes(scene)),
+        formulation="\n".join(lines + _books(scene) + _ropes(scene) + _jumps(scene)),
     )
 
 
@@ -335,7 +357,7 @@ def generate(eqs: Equations) -> dict[str, str]:
     # the outputs' slots: F_free and M_app (after F_pivot) are dynamics.c's
     slots = [k for k, name in enumerate(eqs.scene.output_names()) if name not in FREE_FORCE + APPARENT_MASS]
     outputs = _function(signature, eqs, [(f"y[{k}]", e) for k, e in zip(slots, eqs.outputs)], prologue=unused)
-    functions = [mass, outputs, *_work_function(eqs)]
+    functions = [mass, outputs, *_work_function(eqs), *_energy_function(eqs)]
     if eqs.momentum is not None:
         functions.append(
             _function(

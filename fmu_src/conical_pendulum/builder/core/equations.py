@@ -65,6 +65,9 @@ class Equations:
     work_rates: list[sm.Expr] = field(default_factory=list)
     # x' of the ropes' lengths (Scene.ropes' order): their inputs v_hoist
     rope_rates: list[sm.Expr] = field(default_factory=list)
+    # the chain's energy, kinetic (relative to the pivot) and potential: the output energy, and
+    # what a value set at an event jumps (a rope's winch speed, a load's mass)
+    energy: sm.Expr = sm.S.Zero
 
     def lambdify(self):
         """Numpy functions (x, p) -> M, F and (x, p, u') -> outputs of these very
@@ -515,6 +518,7 @@ def derive(scene: Scene) -> Equations:
         total_mass=sums.total_mass if scene.coupling else None,
         work_rates=_work_rates(scene, sym, sums),
         rope_rates=[sym.hoist(i) for i in scene.ropes()],
+        energy=sums.kinetic + sums.potential,
     )
 
 
