@@ -89,9 +89,11 @@ def _books(scene: Scene) -> list[str]:
     works = scene.work_names()
     if not works:
         return []
+    # W_load's slot only where kept (#ifdef CP_WORK_LOAD): scenes without loads keep their C
+    named = [name for name in WORKS if name != "W_load" or name in works]
     return [
         c.define("CP_NWORK", len(works)),
-        *(c.define(f"CP_WORK_{name.removeprefix('W_').upper()}", _index(works, name)) for name in WORKS),
+        *(c.define(f"CP_WORK_{name.removeprefix('W_').upper()}", _index(works, name)) for name in named),
         *(
             []
             if scene.resolved_formulation() == "recursive"
@@ -123,14 +125,29 @@ ENERGY_SIGNATURE = "void cp_energy(const cp_real *x, const cp_real *p, cp_real *
 
 def _jumps(scene: Scene) -> list[str]:
     """model.h's lines for the energy's jumps, if a value set at an event can move it (a rope's
-    winch speed; none: no line): the energy at (x, p), whose change the book of that work takes."""
-    if not scene.ropes():
+    winch speed, a load's mass; none: no line): the energy at (x, p), whose change the book of
+    that work takes, and where the loads' masses are in p."""
+    if not (scene.ropes() or scene.loads()):
         return []
+    loads = scene.loads()
+    params = scene.core_parameter_names()
     return [
         "#define CP_ENERGY_JUMPS 1",
         "/* E: the chain's energy at (x, p), kinetic and potential as the output energy's: a value",
-        "   set at an event that moves it (a rope's v_hoist) jumps its book by the change. */",
+        "   set at an event that moves it (a rope's v_hoist, a load's mass) jumps its book by the",
+        "   change. */",
         ENERGY_SIGNATURE + ";",
+        *(
+            [
+                c.define("CP_NLOAD", len(loads)),
+                "/* Where each load's mass m<i> is in p (Scene.loads' order). */",
+                "static const int cp_load_mass[CP_NLOAD] = "
+                + c.initializer(params.index(f"m{i}") for i in loads)
+                + ";",
+            ]
+            if loads
+            else []
+        ),
     ]
 
 

@@ -143,6 +143,7 @@ def _work_rates(scene: Scene, sym: _Symbols, sums: _Sums) -> list[sm.Expr]:
         "W_external": lambda: sums.external_power,
         "W_pivot": lambda: -sym.pivot_acc.dot(sums.linear_momentum),
         "W_hoist": lambda: sum(sums.hoist_power, sm.S.Zero),
+        "W_load": lambda: sm.S.Zero,  # it jumps at a load's change (the model's), and stays between
     }
     return [power[name]() for name in scene.work_names()]
 

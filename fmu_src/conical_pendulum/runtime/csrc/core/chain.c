@@ -408,7 +408,7 @@ static void tensions(const Link *links, const cp_real hang[][3], cp_real *T)
 #ifdef CP_NWORK
 /* The energy's books: each force's power, in Scene.work_names' order (CP_WORK_*: -1 for
  * those the scene has not), with velocities relative to the pivot as the energy's; the
- * winches' from the ropes' tensions, which need the rates' rates dx. */
+ * winches' from the ropes' tensions, which need the rates' rates dx; the loads' none. */
 static void work_rates(const cp_real *x, const cp_real *p, const Link *links, const cp_real *dx,
                        cp_real *dW)
 {
@@ -420,6 +420,9 @@ static void work_rates(const cp_real *x, const cp_real *p, const Link *links, co
     tensions(links, (const cp_real(*)[3])hang, T);
     for (int k = 0; k < CP_NROPE; k++) hoist -= T[k] * p[cp_rope_hoist[k]];
     dW[CP_WORK_HOIST] = hoist;
+#endif
+#ifdef CP_WORK_LOAD  /* defined only where kept: it jumps at a load's change, and stays between */
+    dW[CP_WORK_LOAD] = 0;
 #endif
 #if CP_WORK_DAMPING >= 0
     cp_real damping = 0;  /* -c (omega^2 + delta^2) per joint (articulate) */

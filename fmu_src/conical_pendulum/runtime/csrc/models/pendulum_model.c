@@ -208,18 +208,26 @@ ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int 
 }
 
 #ifdef CP_ENERGY_JUMPS
-/* The state of the book that a change of p[k] jumps (a rope's winch speed: W_hoist), or -1. */
+/* The state of the book that a change of p[k] jumps (a rope's winch speed: W_hoist; a load's
+ * mass: W_load), or -1. */
 static int jump_book(unsigned k)
 {
+#ifdef CP_NROPE
     for (int r = 0; r < CP_NROPE; r++)
         if ((int)k == cp_rope_hoist[r]) return 2 * CP_NDOF + CP_WORK_HOIST;
+#endif
+#ifdef CP_NLOAD
+    for (int j = 0; j < CP_NLOAD; j++)
+        if ((int)k == cp_load_mass[j]) return 2 * CP_NDOF + CP_WORK_LOAD;
+#endif
     return -1;
 }
 
 /* p[k] becomes value at the state x, which keeps its angles and angle rates: the speeds of
- * what the value moves jump (a winch's start or stop, along its rope), and the book of that
- * work takes the energy's change E(x, p new) - E(x, p), the impulse's work, so that energy
- * less the books is as it was. */
+ * what a winch moves jump (its start or stop, along its rope), or a load's mass changes at
+ * the velocities it had; the book takes the energy's change E(x, p new) - E(x, p) (the
+ * impulse's work, the energy the load took away or brought), so that energy less the books
+ * is as it was. */
 static void book_jump(ModelData *m, unsigned k, double value)
 {
     const int book = jump_book(k);
