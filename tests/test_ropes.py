@@ -10,7 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import sympy as sm
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
 from scipy.special import jv, yv
 
 from conical_pendulum import Link, Scene, SceneError
@@ -550,6 +552,19 @@ def test_a_winch_set_in_continuous_time_mode_jumps_no_state(hoisted_fmu):
     assert model.fmu.getReal([model.vr["W_hoist"]]) == [0.0]
     assert abs(model.fmu.getReal([model.vr["energy"]])[0] - before) > 10.0  # 550 kg, 0.5 m/s
     model.close()
+
+
+@pytest.mark.parametrize("backend, fmi_version", [("pythonfmu", 2), ("native", 2), ("native", 3)])
+def test_the_winchs_power_is_declared_in_watts(built_fmu, backend, fmi_version):
+    """P_hoist in W (kg m2 s-3), a unit of its own beside the books' rates' J/s; fmpy validates
+    the model description's units."""
+    path = built_fmu(CRANE, backend=backend, fmi_version=fmi_version)
+    assert validate_fmu(str(path)) == []
+    md = read_model_description(str(path))
+    power = next(v for v in md.modelVariables if v.name == "P_hoist0")
+    watt = next(u for u in md.unitDefinitions if u.name == "W")
+    assert (power.unit, power.quantity) == ("W", "Power")
+    assert (watt.baseUnit.kg, watt.baseUnit.m, watt.baseUnit.s) == (1, 2, -3)
 
 
 def test_the_crane_scene_is_a_rope_a_hook_and_a_load_slung_below_on_a_moving_support():

@@ -236,8 +236,8 @@ DESCRIBED = {
         "push: a negative tension discards the step) [{unit}]",
     ),
     "P_hoist": Described(
-        "J/s",
-        "power rope {link}'s winch puts into the chain, -T_rope{link} v_hoist{link} (watts) [{unit}]",
+        "W",
+        "power rope {link}'s winch puts into the chain, -T_rope{link} v_hoist{link} [{unit}]",
     ),
     **_axes(
         "force applied to bob {{link}}, inertial {axis} (Y up) [{unit}]; " + HELD_INPUT,
