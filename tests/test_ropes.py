@@ -10,7 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import sympy as sm
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
 from scipy.special import jv, yv
 
 from conical_pendulum import Link, Scene, SceneError
@@ -455,6 +457,114 @@ def test_model_exchange_discards_the_derivatives_of_a_rope_out_of_its_range(hois
     model.set(x)
     assert np.all(np.isfinite(model.values()))
     model.close()
+
+
+CRANE = load_scene(Path(__file__).resolve().parents[1] / "scenes" / "crane.toml")
+CRANE_START = {"rtol": 1e-10, "atol": 1e-10, "alpha0": 0.0, "alpha1": 0.0, "beta0": 0.0, "beta1": 0.0}
+
+
+def crane_inputs():
+    """fmpy's input table of a short crane run: the trolley accelerates at 0.4 m/s2 until
+    2.5 s; the winch hoists at 0.5 m/s from 1 s to 5 s (two rows at each edge: the value before
+    it, then after it)."""
+    rows = [(0.0, 0.4, 0.0), (1.0, 0.4, 0.0), (1.0, 0.4, -0.5), (2.5, 0.4, -0.5), (2.5, 0.0, -0.5)]
+    rows += [(5.0, 0.0, -0.5), (5.0, 0.0, 0.0), (8.0, 0.0, 0.0)]
+    return np.array(rows, dtype=[("time", float), ("a_pivot_x", float), ("v_hoist0", float)])
+
+
+def books_drift(run):
+    """The largest change of energy less the books over the run, relative to the energy: some
+    8e-4 where the books miss the winch's start (270 J of the crane's 3.3e5 J)."""
+    kept = run["energy"] - run["W_hoist"] - run["W_pivot"]
+    assert run["W_hoist"][-1] > 2150 * G * 2.0 * 0.9  # 2 m lifted
+    return np.abs(kept - kept[0]).max() / np.abs(run["energy"]).max()
+
+
+@pytest.mark.parametrize("backend, fmi_version", [("pythonfmu", 2), ("native", 2), ("native", 3)])
+def test_the_winchs_starts_and_stops_are_booked_in_w_hoist(built_fmu, backend, fmi_version):
+    """A new v_hoist at a communication point jumps the speed of everything below the rope
+    along it (some 270 J of the crane's 2150 kg at 0.5 m/s): W_hoist takes the jump where the
+    input is set, so energy less the books stays constant across the winch's start and stop."""
+    fmu = built_fmu(CRANE, backend=backend, fmi_version=fmi_version)
+    run = run_fmu(fmu, 8.0, 0.02, CRANE_START | {"solver": 2}, input=crane_inputs())
+    assert books_drift(run) < 1e-11
+
+
+# a rope with six links below it: the recursive formulation (chain.c's cp_energy)
+LONG_HOISTED = Scene(
+    links=(rope(length=6.0),) + (Link(length=2.0, mass=3.0, bob_mass=1.0),) * 6, coupling=True
+)
+
+
+@pytest.mark.parametrize("scene", [HOISTED, LONG_HOISTED], ids=["expanded", "recursive"])
+def test_a_winch_set_at_a_point_jumps_w_hoist_by_the_energys_jump(built_fmu, scene):
+    """At a communication point the state keeps its angles and rates; the winch's new speed
+    changes the energy (the speed of everything below along the rope) and W_hoist by as much,
+    in both formulations; the state is otherwise as it was."""
+    assert LONG_HOISTED.resolved_formulation() == "recursive"
+    fmu = Instance(built_fmu(scene, backend="native"), start_values={"beta0": 0.3, "omega1": 0.4})
+    names = ["energy", *scene.state_names()]
+
+    def values():
+        found = dict(zip(names, fmu.get(*names)))
+        return found, found["energy"] - sum(found[name] for name in scene.work_names())
+
+    fmu.set({"v_hoist0": -0.3})
+    fmu.step(0.5)
+    before, kept = values()
+    fmu.set({"v_hoist0": 0.4})
+    after, kept_after = values()
+    jump = after["energy"] - before["energy"]
+    assert abs(jump) > 1.0
+    assert after["W_hoist"] - before["W_hoist"] == pytest.approx(jump, rel=1e-12)
+    assert kept_after == pytest.approx(kept, rel=1e-15)
+    assert {n: v for n, v in after.items() if n not in ("energy", "W_hoist")} == {
+        n: v for n, v in before.items() if n not in ("energy", "W_hoist")
+    }
+    fmu.step(0.5)  # the integration restarts from there
+    assert values()[1] == pytest.approx(kept, rel=1e-9)
+    fmu.close()
+
+
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_model_exchange_books_the_winchs_jumps_set_in_event_mode(built_fmu, fmi_version):
+    """fmpy sets an input's step change in event mode: the book jumps, fmi2NewDiscreteStates
+    (fmi3UpdateDiscreteStates) says valuesOfContinuousStatesChanged, the host reads the states
+    again, and energy less the books stays constant to the integrator's tolerance."""
+    fmu = built_fmu(CRANE, backend="native", fmi_version=fmi_version)
+    run = run_fmu(
+        fmu, 8.0, 0.02, CRANE_START, input=crane_inputs(), fmi_type="ModelExchange", relative_tolerance=1e-10
+    )
+    assert books_drift(run) < 1e-9
+
+
+def test_a_winch_set_in_continuous_time_mode_jumps_no_state(hoisted_fmu):
+    """In continuous-time mode the host integrates the states, which cannot jump: a new v_hoist
+    there is taken, W_hoist stays, and energy less the books jumps by the impulse's work (what
+    docs/model.md says a host that wants it booked does: set v_hoist in event mode)."""
+    model = Model(hoisted_fmu("native"), HOISTED)
+    x = np.array(HOISTED.initial_state({"beta0": 0.2, "omega1": 0.3}))
+    inputs = np.zeros(len(HOISTED.input_names()))
+    model.set(x, inputs)
+    before = model.fmu.getReal([model.vr["energy"]])[0]
+    inputs[HOISTED.input_names().index("v_hoist0")] = -0.5
+    model.set(x, inputs)
+    assert model.fmu.getReal([model.vr["W_hoist"]]) == [0.0]
+    assert abs(model.fmu.getReal([model.vr["energy"]])[0] - before) > 10.0  # 550 kg, 0.5 m/s
+    model.close()
+
+
+@pytest.mark.parametrize("backend, fmi_version", [("pythonfmu", 2), ("native", 2), ("native", 3)])
+def test_the_winchs_power_is_declared_in_watts(built_fmu, backend, fmi_version):
+    """P_hoist in W (kg m2 s-3), a unit of its own beside the books' rates' J/s; fmpy validates
+    the model description's units."""
+    path = built_fmu(CRANE, backend=backend, fmi_version=fmi_version)
+    assert validate_fmu(str(path)) == []
+    md = read_model_description(str(path))
+    power = next(v for v in md.modelVariables if v.name == "P_hoist0")
+    watt = next(u for u in md.unitDefinitions if u.name == "W")
+    assert (power.unit, power.quantity) == ("W", "Power")
+    assert (watt.baseUnit.kg, watt.baseUnit.m, watt.baseUnit.s) == (1, 2, -3)
 
 
 def test_the_crane_scene_is_a_rope_a_hook_and_a_load_slung_below_on_a_moving_support():

@@ -32,8 +32,9 @@ FREE_FORCE = ("F_free_x", "F_free_y", "F_free_z")
 APPARENT_MASS = ("M_pivot_xx", "M_pivot_xy", "M_pivot_xz", "M_pivot_yy", "M_pivot_yz", "M_pivot_zz")
 # The energy's books: states with the work of each non-conservative force since the start
 # (the joints' damping, the air's drag on the bobs, the bobs' applied forces, the moving
-# pivot's inertial force, the winches of the ropes)
-WORKS = ("W_damping", "W_drag", "W_external", "W_pivot", "W_hoist")
+# pivot's inertial force, the winches of the ropes), and the energy that changes of the loads'
+# masses took or gave
+WORKS = ("W_damping", "W_drag", "W_external", "W_pivot", "W_hoist", "W_load")
 # A rope's: its tension [N] and its winch's power [W] (-tension * v_hoist)
 ROPE_OUTPUTS = ("T_rope", "P_hoist")
 FORMULATIONS = ("auto", "expanded", "recursive")
@@ -73,6 +74,9 @@ class Link:
     rope: bool = False
     rope_min: float | None = None
     rope_max: float | None = None
+    # a load: the bob's mass m<i> may be changed at a communication point (a tunable
+    # parameter; a load set down, picked up or released), its energy's jump booked in W_load
+    bob_load: bool = False
 
     def inertia(self) -> tuple[float, float, float]:
         """Central inertia (Ixx, Iyy, Izz): as given, or a solid cylinder along the link's y axis."""
@@ -206,16 +210,7 @@ class Scene:
                 if link.damping != 0:
                     raise _given_without(f"link[{i}].damping", link.damping, "joint_damping")
         self._validate_drag()
-        for i, link in enumerate(self.links):
-            if not isinstance(link.bob_force, bool):
-                raise SceneError(f"link[{i}].bob.force: expected true or false, got {link.bob_force!r}")
-            if link.bob_force and not link.has_bob:
-                raise SceneError(f"link[{i}].bob.force: link {i} has no bob to apply a force to")
-            if link.bob_force and self.kinematics != "consistent":
-                raise SceneError(
-                    f"link[{i}].bob.force: applied forces need kinematics 'consistent'; the "
-                    f"published {self.kinematics!r} equations take none"
-                )
+        self._validate_bob_flags()
         self._validate_ropes()
         if not math.isfinite(self.gravity):
             raise SceneError(f"gravity: must be finite, got {self.gravity!r}")
@@ -290,6 +285,30 @@ class Scene:
                     f"{where}: link {i}'s length {link.length!r} m is outside its range [{low!r}, {high!r}] m"
                 )
 
+    def _validate_bob_flags(self) -> None:
+        """A bob's flags (an applied force, a load): true or false, only on a bob, and in the
+        consistent kinematics (a force's book and a load's are states of the energy's)."""
+        flags = {  # the file's name: the field, what a bob is for, what needs it, what the published lack
+            "force": ("bob_force", "to apply a force to", "applied forces need", "take none"),
+            "load": ("bob_load", "to be a load", "loads need", "keep no energy's books"),
+        }
+        for i, link in enumerate(self.links):
+            for flag, (name, purpose, needs, lacks) in flags.items():
+                where, value = f"link[{i}].bob.{flag}", getattr(link, name)
+                if not isinstance(value, bool):
+                    raise SceneError(f"{where}: expected true or false, got {value!r}")
+                if value and not link.has_bob:
+                    raise SceneError(f"{where}: link {i} has no bob {purpose}")
+                if value and self.kinematics != "consistent":
+                    raise SceneError(
+                        f"{where}: {needs} kinematics 'consistent'; the published "
+                        f"{self.kinematics!r} equations {lacks}"
+                    )
+
+    def loads(self) -> list[int]:
+        """The links whose bob is a load (its mass m<i> tunable, the book W_load)."""
+        return [i for i, link in enumerate(self.links) if link.bob_load]
+
     def ropes(self) -> list[int]:
         """The links that are ropes (a state l<i> and an input v_hoist<i> each)."""
         return [i for i, link in enumerate(self.links) if link.rope]
@@ -311,6 +330,8 @@ class Scene:
             options["bob_forces"] = self.forced_bobs()
         if self.ropes():  # the ranges are in the generated C
             options["ropes"] = [[i, self.links[i].rope_min, self.links[i].rope_max] for i in self.ropes()]
+        if self.loads():
+            options["loads"] = self.loads()
         return {
             "links": [[link.has_mass, link.has_bob] for link in self.links],
             "outputs": list(self.outputs),
@@ -408,9 +429,10 @@ class Scene:
         """The energy's books: states integrating the power of each non-conservative force
         the scene has, so that energy minus their sum stays constant."""
         forces = (self.joint_damping, self.air_drag, bool(self.forced_bobs()))
-        # the moving pivot's work is kept with the other forces' (a coupled scene without
-        # them stays as it was); a rope's winch always does work
-        kept = (*forces, self.coupling and (any(forces) or bool(self.ropes())), bool(self.ropes()))
+        ropes, loads = bool(self.ropes()), bool(self.loads())
+        # the moving pivot's work is kept with the other books (a coupled scene without them
+        # stays as it was); a rope's winch always does work, and a load's change moves energy
+        kept = (*forces, self.coupling and (any(forces) or ropes or loads), ropes, loads)
         return [name for name, keep in zip(WORKS, kept) if keep]
 
     def state_names(self) -> list[str]:
@@ -517,7 +539,7 @@ SCENE_FIELDS = {
 }
 LINK_FIELDS = {"length", "mass", "radius", "inertia", "bob", "damping", "rope"}
 ROPE_FIELDS = {"min", "max"}
-BOB_FIELDS = {"mass", "radius", "force", "drag_coefficient", "area"}
+BOB_FIELDS = {"mass", "radius", "force", "drag_coefficient", "area", "load"}
 
 
 def scene_from_dict(data: dict) -> Scene:
@@ -544,8 +566,9 @@ def scene_from_dict(data: dict) -> Scene:
         }
         fields.update({name: entry[name] for name in ("length", "radius", "damping") if name in entry})
         fields.update({f"bob_{name}": value for name, value in (bob or {}).items()})
-        if not isinstance(fields.get("bob_force", False), bool):
-            raise SceneError(f"{where}.bob.force: expected true or false, got {fields['bob_force']!r}")
+        for flag in ("force", "load"):
+            if not isinstance(fields.get(f"bob_{flag}", False), bool):
+                raise SceneError(f"{where}.bob.{flag}: expected true or false, got {fields[f'bob_{flag}']!r}")
         if "rope" in entry:
             rope = entry["rope"]
             if not isinstance(rope, dict):

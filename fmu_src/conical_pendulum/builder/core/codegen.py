@@ -89,9 +89,11 @@ def _books(scene: Scene) -> list[str]:
     works = scene.work_names()
     if not works:
         return []
+    # W_load's slot only where kept (#ifdef CP_WORK_LOAD): scenes without loads keep their C
+    named = [name for name in WORKS if name != "W_load" or name in works]
     return [
         c.define("CP_NWORK", len(works)),
-        *(c.define(f"CP_WORK_{name.removeprefix('W_').upper()}", _index(works, name)) for name in WORKS),
+        *(c.define(f"CP_WORK_{name.removeprefix('W_').upper()}", _index(works, name)) for name in named),
         *(
             []
             if scene.resolved_formulation() == "recursive"
@@ -116,6 +118,43 @@ def _work_function(eqs: Equations) -> list[str]:
         *(e.free_symbols for _, e in _needed(eqs.definitions, [sm.sympify(r) for r in eqs.work_rates])),
     ) & set(eqs.rates)
     return [_function(WORK_SIGNATURE, eqs, targets, prologue=[] if reads_rates else ["    (void)dx;"])]
+
+
+ENERGY_SIGNATURE = "void cp_energy(const cp_real *x, const cp_real *p, cp_real *E)"
+
+
+def _jumps(scene: Scene) -> list[str]:
+    """model.h's lines for the energy's jumps, if a value set at an event can move it (a rope's
+    winch speed, a load's mass; none: no line): the energy at (x, p), whose change the book of
+    that work takes, and where the loads' masses are in p."""
+    if not (scene.ropes() or scene.loads()):
+        return []
+    loads = scene.loads()
+    params = scene.core_parameter_names()
+    return [
+        "#define CP_ENERGY_JUMPS 1",
+        "/* E: the chain's energy at (x, p), kinetic and potential as the output energy's: a value",
+        "   set at an event that moves it (a rope's v_hoist, a load's mass) jumps its book by the",
+        "   change. */",
+        ENERGY_SIGNATURE + ";",
+        *(
+            [
+                c.define("CP_NLOAD", len(loads)),
+                "/* Where each load's mass m<i> is in p (Scene.loads' order). */",
+                "static const int cp_load_mass[CP_NLOAD] = "
+                + c.initializer(params.index(f"m{i}") for i in loads)
+                + ";",
+            ]
+            if loads
+            else []
+        ),
+    ]
+
+
+def _energy_function(eqs: Equations) -> list[str]:
+    """model.c's cp_energy, if the scene's energy can jump (the recursive formulation's is
+    chain.c's)."""
+    return [_function(ENERGY_SIGNATURE, eqs, [("*E", eqs.energy)])] if _jumps(eqs.scene) else []
 
 
 def _ropes(scene: Scene) -> list[str]:
@@ -174,7 +213,7 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
                 c.define("CP_NSTAT", len(STATISTICS)),
             ]
         ),
-        formulation="\n".join(lines + _books(scene) + _ropes(scene)),
+        formulation="\n".join(lines + _books(scene) + _ropes(scene) + _jumps(scene)),
     )
 
 
@@ -335,7 +374,7 @@ def generate(eqs: Equations) -> dict[str, str]:
     # the outputs' slots: F_free and M_app (after F_pivot) are dynamics.c's
     slots = [k for k, name in enumerate(eqs.scene.output_names()) if name not in FREE_FORCE + APPARENT_MASS]
     outputs = _function(signature, eqs, [(f"y[{k}]", e) for k, e in zip(slots, eqs.outputs)], prologue=unused)
-    functions = [mass, outputs, *_work_function(eqs)]
+    functions = [mass, outputs, *_work_function(eqs), *_energy_function(eqs)]
     if eqs.momentum is not None:
         functions.append(
             _function(

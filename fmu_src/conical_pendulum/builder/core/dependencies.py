@@ -167,5 +167,6 @@ def _work_rates(scene: Scene, above, lengths, hoists) -> Dependencies:
         "W_hoist": frozenset(scene.state_names()) - set(scene.work_names())
         | set(scene.parameter_names())
         | set(scene.input_names()),
+        "W_load": frozenset(),  # it jumps at a load's change, and stays between
     }
     return {f"der({name})": frozenset(powers[name]) for name in scene.work_names()}

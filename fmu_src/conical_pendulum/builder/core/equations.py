@@ -65,6 +65,9 @@ class Equations:
     work_rates: list[sm.Expr] = field(default_factory=list)
     # x' of the ropes' lengths (Scene.ropes' order): their inputs v_hoist
     rope_rates: list[sm.Expr] = field(default_factory=list)
+    # the chain's energy, kinetic (relative to the pivot) and potential: the output energy, and
+    # what a value set at an event jumps (a rope's winch speed, a load's mass)
+    energy: sm.Expr = sm.S.Zero
 
     def lambdify(self):
         """Numpy functions (x, p) -> M, F and (x, p, u') -> outputs of these very
@@ -140,6 +143,7 @@ def _work_rates(scene: Scene, sym: _Symbols, sums: _Sums) -> list[sm.Expr]:
         "W_external": lambda: sums.external_power,
         "W_pivot": lambda: -sym.pivot_acc.dot(sums.linear_momentum),
         "W_hoist": lambda: sum(sums.hoist_power, sm.S.Zero),
+        "W_load": lambda: sm.S.Zero,  # it jumps at a load's change (the model's), and stays between
     }
     return [power[name]() for name in scene.work_names()]
 
@@ -515,6 +519,7 @@ def derive(scene: Scene) -> Equations:
         total_mass=sums.total_mass if scene.coupling else None,
         work_rates=_work_rates(scene, sym, sums),
         rope_rates=[sym.hoist(i) for i in scene.ropes()],
+        energy=sums.kinetic + sums.potential,
     )
 
 

@@ -111,7 +111,8 @@ def _description(variable: Fmi3Variable) -> str:
     first = variable.members[0]
     if not variable.array:
         return first.description
-    return describe(first.quantity, every_link=True) + " (element [k + 1]: link k)"
+    own = first.description.removeprefix(describe(first.quantity, first.link))  # a load's words
+    return describe(first.quantity, every_link=True) + own + " (element [k + 1]: link k)"
 
 
 def model_description(described: Description) -> bytes:

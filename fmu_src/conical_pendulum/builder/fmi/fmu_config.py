@@ -29,10 +29,13 @@ def log_constant(category: str) -> str:
 
 
 def settable(variable: Variable) -> str:
-    """When a variable may be set, as cp_settable says it: an input always, a parameter or an
-    exact start value before initialization, a calculated one never."""
-    if variable.causality == "input" or variable.variability == "tunable":
+    """When a variable may be set, as cp_settable says it: an input always, a tunable
+    parameter also at events (not in continuous-time mode), a fixed parameter or an exact start
+    value before initialization, a calculated one never."""
+    if variable.causality == "input":
         return "CP_SET_ALWAYS"
+    if variable.variability == "tunable":
+        return "CP_SET_AT_EVENTS"
     if variable.causality == "parameter" or variable.initial in ("exact", "approx"):
         return "CP_SET_BEFORE_INIT"
     return "CP_SET_NEVER"

@@ -60,6 +60,7 @@ UNITS = {
         Unit("N", {"kg": 1, "m": 1, "s": -2}, "Force"),
         Unit("J", {"kg": 1, "m": 2, "s": -2}, "Energy"),
         Unit("J/s", {"kg": 1, "m": 2, "s": -3}, "Power"),  # the energy's books' rates
+        Unit("W", {"kg": 1, "m": 2, "s": -3}, "Power"),  # a power put in: a winch's
         Unit("N/m", {"kg": 1, "s": -2}, "TranslationalSpringConstant"),
         Unit("N.s/m", {"kg": 1, "s": -1}, "TranslationalDampingConstant"),
         Unit("N.m.s/rad", {"kg": 1, "m": 2, "s": -1, "rad": -1}, "RotationalDampingConstant"),

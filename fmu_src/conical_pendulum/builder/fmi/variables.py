@@ -39,7 +39,7 @@ class Variable:
     name: str
     type: str  # "Real" or "Integer"
     causality: str  # FMI 2.0's: parameter, input, output, local
-    variability: str  # fixed, continuous, discrete
+    variability: str  # fixed, tunable, continuous, discrete
     initial: str | None  # exact, calculated, or None (FMI's default for the causality)
     value_reference: int
     start: float | int | None
@@ -109,6 +109,7 @@ class Member:
     derivative_of: str | None = None
     unit: str | None = None
     nominal: float | None = None
+    variability: str | None = None  # the group's, unless given (a load's mass: tunable)
 
     @property
     def name(self) -> str:
@@ -214,7 +215,14 @@ DESCRIBED = {
     "W_hoist": Described(
         "J",
         "work done on the chain by the ropes' winches since the start (the sum of the P_hoist outputs' "
-        "integrals); energy minus the W_ outputs' sum stays constant [{unit}]",
+        "integrals, and the impulses' work where a v_hoist is set anew); energy minus the W_ outputs' "
+        "sum stays constant [{unit}]",
+    ),
+    "W_load": Described(
+        "J",
+        "energy the loads' changes of mass gave the chain since the start: at each new value of a "
+        "load's mass, the energy's jump at the same state; energy minus the W_ outputs' sum stays "
+        "constant [{unit}]",
     ),
     "v_hoist": Described(
         "m/s",
@@ -228,8 +236,8 @@ DESCRIBED = {
         "push: a negative tension discards the step) [{unit}]",
     ),
     "P_hoist": Described(
-        "J/s",
-        "power rope {link}'s winch puts into the chain, -T_rope{link} v_hoist{link} (watts) [{unit}]",
+        "W",
+        "power rope {link}'s winch puts into the chain, -T_rope{link} v_hoist{link} [{unit}]",
     ),
     **_axes(
         "force applied to bob {{link}}, inertial {axis} (Y up) [{unit}]; " + HELD_INPUT,
@@ -313,8 +321,21 @@ def _described(scalars, starts=None, depends=lambda scalar: ()):
     ]
 
 
+# What a load's mass is besides a bob's
+LOAD = (
+    "; a load: tunable, set at a communication point (Model Exchange: in event mode) as when the "
+    "load is set down, picked up or released, the velocities kept and the energy's jump booked in W_load"
+)
+
+
 def _parameters(scene, settings):
-    return _described(scene.parameter_scalars(), scene.parameter_defaults())
+    loads = {f"m{i}" for i in scene.loads()}
+    return [
+        replace(member, description=member.description + LOAD, variability="tunable")
+        if member.name in loads
+        else member
+        for member in _described(scene.parameter_scalars(), scene.parameter_defaults())
+    ]
 
 
 def _inputs(scene, settings):  # at rest; held over each communication step
@@ -470,7 +491,7 @@ def variables_of(in_order, scene: Scene | None = None, settings: dict | None = N
                     name=member.name,
                     type=group.type,
                     causality=group.causality,
-                    variability=group.variability,
+                    variability=member.variability or group.variability,
                     initial=group.initial,
                     value_reference=len(result),
                     start=member.start,
@@ -492,13 +513,20 @@ def variables_of(in_order, scene: Scene | None = None, settings: dict | None = N
 
 
 def _arrays(members: list[Member], scene: Scene | None) -> set[str]:
-    """The quantities of members with one member per link of the scene, link by link."""
+    """The quantities of members with one member per link of the scene, link by link, all of
+    one variability (an array has one: a chain with a load among fixed bobs has none of m)."""
     links: dict[str, list[int]] = {}
+    variabilities: dict[str, set] = {}
     for member in members:
         if member.scalar.link is not None:
             links.setdefault(member.scalar.quantity, []).append(member.scalar.link)
+            variabilities.setdefault(member.scalar.quantity, set()).add(member.variability)
     every = list(range(scene.n)) if scene is not None else None
-    return {quantity for quantity, found in links.items() if sorted(found) == every}
+    return {
+        quantity
+        for quantity, found in links.items()
+        if sorted(found) == every and len(variabilities[quantity]) == 1
+    }
 
 
 def first_references(records: list[Variable], in_order) -> dict[str, int]:

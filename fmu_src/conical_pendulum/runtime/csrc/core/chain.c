@@ -408,7 +408,7 @@ static void tensions(const Link *links, const cp_real hang[][3], cp_real *T)
 #ifdef CP_NWORK
 /* The energy's books: each force's power, in Scene.work_names' order (CP_WORK_*: -1 for
  * those the scene has not), with velocities relative to the pivot as the energy's; the
- * winches' from the ropes' tensions, which need the rates' rates dx. */
+ * winches' from the ropes' tensions, which need the rates' rates dx; the loads' none. */
 static void work_rates(const cp_real *x, const cp_real *p, const Link *links, const cp_real *dx,
                        cp_real *dW)
 {
@@ -420,6 +420,9 @@ static void work_rates(const cp_real *x, const cp_real *p, const Link *links, co
     tensions(links, (const cp_real(*)[3])hang, T);
     for (int k = 0; k < CP_NROPE; k++) hoist -= T[k] * p[cp_rope_hoist[k]];
     dW[CP_WORK_HOIST] = hoist;
+#endif
+#ifdef CP_WORK_LOAD  /* defined only where kept: it jumps at a load's change, and stays between */
+    dW[CP_WORK_LOAD] = 0;
 #endif
 #if CP_WORK_DAMPING >= 0
     cp_real damping = 0;  /* -c (omega^2 + delta^2) per joint (articulate) */
@@ -561,6 +564,47 @@ static void quaternion(const cp_real parent[4], cp_real a, cp_real b, cp_real q[
 }
 #endif
 
+#if CP_OUTPUT_ENERGY || defined(CP_ENERGY_JUMPS)
+/* The chain's energy from its links' kinematics: kinetic, relative to the pivot, and potential
+ * (zero at Y = 0). */
+static cp_real energy_of(const Link *links, const cp_real *p)
+{
+    const cp_real g = p[CP_G_INDEX];
+    cp_real energy = 0;
+    for (int i = 0; i < CP_NLINK; i++) {
+        const Link *k = &links[i];
+        const cp_link_params *lp = &cp_links[i];
+        cp_real wr[3];
+        cross(k->w, k->r, wr);
+        if (lp->M >= 0) {
+            cp_real Ic[9], v[3], Iw[3], mass = p[lp->M];
+            central_inertia(k, p, lp, Ic);
+            for (int j = 0; j < 3; j++) v[j] = k->vel[j] + wr[j] / 2;
+            mul3(Ic, k->w, 1, Iw);
+            energy += 0.5 * mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+                      + 0.5 * (k->w[0] * Iw[0] + k->w[1] * Iw[1] + k->w[2] * Iw[2])
+                      + mass * g * (k->pos[1] + k->r[1] / 2);
+        }
+        if (lp->m >= 0) {
+            cp_real v[3], mass = p[lp->m];
+            for (int j = 0; j < 3; j++) v[j] = k->vel[j] + wr[j] + k->s[j];
+            energy += 0.5 * mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+                      + mass * g * (k->pos[1] + k->r[1]);
+        }
+    }
+    return energy;
+}
+#endif
+
+#ifdef CP_ENERGY_JUMPS
+void cp_energy(const cp_real *x, const cp_real *p, cp_real *E)
+{
+    Link links[CP_NLINK];
+    kinematics(x, p, links);
+    *E = energy_of(links, p);
+}
+#endif
+
 void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *y)
 {
     const int n = CP_NLINK;
@@ -582,30 +626,7 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
     }
 #endif
 #if CP_OUTPUT_ENERGY
-    const cp_real g = p[CP_G_INDEX];
-    cp_real energy = 0;
-    for (int i = 0; i < n; i++) {
-        const Link *k = &links[i];
-        const cp_link_params *lp = &cp_links[i];
-        cp_real wr[3];
-        cross(k->w, k->r, wr);
-        if (lp->M >= 0) {
-            cp_real Ic[9], v[3], Iw[3], mass = p[lp->M];
-            central_inertia(k, p, lp, Ic);
-            for (int j = 0; j < 3; j++) v[j] = k->vel[j] + wr[j] / 2;
-            mul3(Ic, k->w, 1, Iw);
-            energy += 0.5 * mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-                      + 0.5 * (k->w[0] * Iw[0] + k->w[1] * Iw[1] + k->w[2] * Iw[2])
-                      + mass * g * (k->pos[1] + k->r[1] / 2);
-        }
-        if (lp->m >= 0) {
-            cp_real v[3], mass = p[lp->m];
-            for (int j = 0; j < 3; j++) v[j] = k->vel[j] + wr[j] + k->s[j];
-            energy += 0.5 * mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-                      + mass * g * (k->pos[1] + k->r[1]);
-        }
-    }
-    *out++ = energy;
+    *out++ = energy_of(links, p);
 #endif
 #if defined(CP_NROPE) || CP_PIVOT_INDEX >= 0
     cp_real hang[CP_NLINK][3];

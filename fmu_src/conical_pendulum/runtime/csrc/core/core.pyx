@@ -88,9 +88,11 @@ cdef extern from "fmu_model.h":
     void model_initialize(ModelData *m)
     ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time,
                                char *message, size_t size)
-    ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int initialized,
+    ctypedef enum ModelPhase:
+        MODEL_BEFORE_INIT, MODEL_AT_EVENT
+    ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int phase,
                                  char *message, size_t size)
-    void model_set_real(ModelData *m, unsigned vr, double value)
+    void model_set_real(ModelData *m, unsigned vr, double value, int phase)
     ModelStatus model_get_integer(const ModelData *m, unsigned vr, int *value)
     ModelStatus model_check_integer(const ModelData *m, unsigned vr, int value, int initialized,
                                     char *message, size_t size)
@@ -424,12 +426,15 @@ cdef class Model:
 
     def set_reals(self, vrs, values, bint initialized):
         """Every value checked (model_check_real) before any is taken (model_set_real), as
-        the FMI layers take them; raises Refusal with the model's message."""
+        the FMI layers take them; raises Refusal with the model's message. Initialized, the
+        slave (Co-Simulation) is at a communication point: a change that moves the energy
+        jumps its book."""
+        cdef int phase = MODEL_AT_EVENT if initialized else MODEL_BEFORE_INIT
         for vr, value in zip(vrs, values):
-            self._refused(model_check_real(self.m, vr, value, initialized, self.message,
+            self._refused(model_check_real(self.m, vr, value, phase, self.message,
                                            sizeof(self.message)), vr)
         for vr, value in zip(vrs, values):
-            model_set_real(self.m, vr, value)
+            model_set_real(self.m, vr, value, phase)
 
     def get_integers(self, vrs):
         cdef int value
@@ -476,7 +481,7 @@ cdef class Model:
         the slave's Radau, spent on it."""
         cdef double value
         self._refused(model_get_real(self.m, vr, &value, 0.0, self.message, sizeof(self.message)), vr)
-        model_set_real(self.m, vr, value + cost)
+        model_set_real(self.m, vr, value + cost, MODEL_BEFORE_INIT)  # a count: nothing jumps
 
     @property
     def states(self):

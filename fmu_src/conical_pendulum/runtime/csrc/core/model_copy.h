@@ -23,6 +23,7 @@
 #define cp_joint CP_COPY_PASTE(cp_joint, CP_COPY_SUFFIX)
 #define cp_momentum CP_COPY_PASTE(cp_momentum, CP_COPY_SUFFIX)
 #define cp_work_rates CP_COPY_PASTE(cp_work_rates, CP_COPY_SUFFIX)
+#define cp_energy CP_COPY_PASTE(cp_energy, CP_COPY_SUFFIX)
 #define cp_chain_rates_and_apparent_mass CP_COPY_PASTE(cp_chain_rates_and_apparent_mass, CP_COPY_SUFFIX)
 
 #include "model.c"

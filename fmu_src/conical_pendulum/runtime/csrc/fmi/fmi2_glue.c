@@ -107,6 +107,7 @@ static const FmiStandard standard = {
     .initialization = INITIALIZATION,
     .stepping = STEP_COMPLETE,
     .event_mode = EVENT_MODE,
+    .continuous_time = CONTINUOUS_TIME,
     .step_failed = STEP_FAILED,
     .in_state = "state ",
     .co_simulation_where = "Co-Simulation, section 4.2.4",
@@ -249,7 +250,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2SetReal: vr or value is NULL");
     for (size_t k = 0; k < nvr; k++)  /* all checked before any is taken */
         if (fmi_check_real(inst, "fmi2SetReal", "Real", vr[k], vr[k], value[k])) return fmi2Error;
-    for (size_t k = 0; k < nvr; k++) model_set_real(inst->model, vr[k], value[k]);
+    for (size_t k = 0; k < nvr; k++) model_set_real(inst->model, vr[k], value[k], fmi_phase(inst));
     return fmi2OK;
 }
 
@@ -349,7 +350,9 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
     FmiInstance *inst = CHECKED(c, fmi2NewDiscreteStates);
     if (!inst) return fmi2Error;
     if (!eventInfo) return REFUSE(inst, "fmi2NewDiscreteStates: eventInfo is NULL");
-    memset(eventInfo, 0, sizeof *eventInfo);  /* no events: nothing changes, nothing to wait for */
+    memset(eventInfo, 0, sizeof *eventInfo);  /* no events: nothing to wait for */
+    /* a value set in event mode may have jumped a book (a rope's winch, a load's mass) */
+    eventInfo->valuesOfContinuousStatesChanged = model_states_jumped(inst->model) ? fmi2True : fmi2False;
     return fmi2OK;
 }
 

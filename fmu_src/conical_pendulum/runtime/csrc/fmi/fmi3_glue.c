@@ -117,6 +117,7 @@ static const FmiStandard standard = {
     .initialization = INITIALIZATION,
     .stepping = STEP_MODE,
     .event_mode = EVENT_MODE,
+    .continuous_time = CONTINUOUS_TIME,
     .step_failed = 0,  /* a discarded step leaves the instance in Step Mode */
     .in_state = "",
     .co_simulation_where = "Co-Simulation",
@@ -372,7 +373,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
         const unsigned *members;
         const size_t n = elements(vr[k], &members);
         for (size_t e = 0; e < n; e++, j++)
-            model_set_real(inst->model, ELEMENT(vr[k], members, e), values[j]);
+            model_set_real(inst->model, ELEMENT(vr[k], members, e), values[j], fmi_phase(inst));
     }
     return fmi3OK;
 }
@@ -577,9 +578,11 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *discreteStatesN
     if (!discreteStatesNeedUpdate || !terminateSimulation || !nominalsOfContinuousStatesChanged
         || !valuesOfContinuousStatesChanged || !nextEventTimeDefined || !nextEventTime)
         return REFUSE(inst, "fmi3UpdateDiscreteStates: a pointer is NULL");
-    /* no events: nothing changes, nothing to wait for */
+    /* no events: nothing to wait for; a value set in event mode may have jumped a book (a
+     * rope's winch, a load's mass) */
     *discreteStatesNeedUpdate = *terminateSimulation = *nominalsOfContinuousStatesChanged = fmi3False;
-    *valuesOfContinuousStatesChanged = *nextEventTimeDefined = fmi3False;
+    *valuesOfContinuousStatesChanged = model_states_jumped(inst->model) ? fmi3True : fmi3False;
+    *nextEventTimeDefined = fmi3False;
     *nextEventTime = 0.0;
     return fmi3OK;
 }

@@ -100,6 +100,13 @@ int fmi_initialized(const FmiInstance *inst)
     return !(inst->machine.state & (inst->standard->instantiated | inst->standard->initialization));
 }
 
+int fmi_phase(const FmiInstance *inst)
+{
+    if (!fmi_initialized(inst)) return MODEL_BEFORE_INIT;
+    return inst->machine.state & inst->standard->continuous_time ? MODEL_CONTINUOUS_TIME
+                                                                 : MODEL_AT_EVENT;
+}
+
 /* ---- the functions both standards have ----------------------------------------------------- */
 
 FmiStatus fmi_set_debug_logging(FmiInstance *inst, const char *function, int on, size_t n,
@@ -198,8 +205,7 @@ FmiStatus fmi_check_real(FmiInstance *inst, const char *function, const char *ty
                          unsigned named, double value)
 {
     char message[MESSAGE_SIZE];
-    switch (model_check_real(inst->model, vr, value, fmi_initialized(inst), message,
-                             sizeof message)) {
+    switch (model_check_real(inst->model, vr, value, fmi_phase(inst), message, sizeof message)) {
     case MODEL_OK: return FMI_OK;
     case MODEL_NO_VARIABLE:
         return fmi_error(inst, "%s: value reference %u is not a %s variable", function, named, type);

@@ -47,6 +47,7 @@ typedef struct {
     int instantiated, initialization;
     int stepping;                         /* a Co-Simulation instance after initialization */
     int event_mode;                       /* a Model Exchange one */
+    int continuous_time;                  /* Model Exchange's continuous-time mode */
     int step_failed;                      /* after a discarded step (0: none) */
     /* checked's message: "<function> is not allowed in <in_state><name> (<standard>,
      * <where>)<why>"; never: why for a function allowed in no state this FMU enters;
@@ -116,6 +117,11 @@ FmiInstance *fmi_checked(void *c, const char *function, int co_simulation, int m
 /* Whether the instance is past initialization mode, where only inputs may still be set. */
 int fmi_initialized(const FmiInstance *inst);
 
+/* Where the instance is for a value set (fmu_model.h's ModelPhase): before initialization;
+ * Model Exchange's continuous-time mode; else at an event (a Co-Simulation communication
+ * point, Model Exchange's event mode). */
+int fmi_phase(const FmiInstance *inst);
+
 /* ---- the functions both standards have ----------------------------------------------------- */
 
 /* SetDebugLogging (FMI 2.0, section 2.1.5; FMI 3.0, section 2.3.1): with n = 0, on applies to
@@ -152,8 +158,8 @@ FmiStatus fmi_communication_point(FmiInstance *inst, const char *function, doubl
 FmiStatus fmi_get_real(FmiInstance *inst, const char *function, const char *type, unsigned vr,
                        unsigned named, double *value);
 
-/* Whether value may be set into the Real variable vr (model_check_real), without taking it:
- * FMI_OK, or refused. */
+/* Whether value may be set into the Real variable vr (model_check_real, in fmi_phase), without
+ * taking it: FMI_OK, or refused. */
 FmiStatus fmi_check_real(FmiInstance *inst, const char *function, const char *type, unsigned vr,
                          unsigned named, double value);
 

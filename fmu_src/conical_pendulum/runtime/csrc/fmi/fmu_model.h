@@ -128,15 +128,33 @@ void model_initialize(ModelData *m);
 ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time, char *message,
                            size_t size);
 
-/* Whether value may be set into the Real variable vr, without taking it: MODEL_OK,
- * MODEL_REFUSED (message: a calculated variable; a fixed one once initialized, that is
- * after initialization mode; or the value breaks the variable's rule), MODEL_NO_VARIABLE.
- * An FMI layer checks every value of a call before it sets any. */
-ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int initialized,
+/* Where an instance is when a value is set: what it may take, and whether the state may jump
+ * there. Nonzero: initialized. */
+typedef enum {
+    MODEL_BEFORE_INIT = 0,     /* instantiated, initialization mode: the start values */
+    MODEL_AT_EVENT = 1,        /* a Co-Simulation communication point, Model Exchange's event
+                                  mode: inputs and tunable parameters; the state may jump */
+    MODEL_CONTINUOUS_TIME = 2  /* Model Exchange's continuous-time mode: continuous inputs only;
+                                  the host integrates the state, which cannot jump */
+} ModelPhase;
+
+/* Whether value may be set into the Real variable vr in phase (a ModelPhase), without taking
+ * it: MODEL_OK, MODEL_REFUSED (message: a calculated variable; a fixed one once initialized,
+ * that is after initialization mode; a tunable one in continuous-time mode; or the value
+ * breaks the variable's rule), MODEL_NO_VARIABLE. An FMI layer checks every value of a call
+ * before it sets any. */
+ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int phase,
                              char *message, size_t size);
 
-/* Takes a value model_check_real accepted (what depends on it is computed again). */
-void model_set_real(ModelData *m, unsigned vr, double value);
+/* Takes a value model_check_real accepted in phase (what depends on it is computed again). At
+ * MODEL_AT_EVENT a value that moves the energy at the state (a rope's winch speed, a load's
+ * mass) jumps the book that holds that work, so that energy less the books stays as it was
+ * (model_states_jumped then says so). */
+void model_set_real(ModelData *m, unsigned vr, double value, int phase);
+
+/* Whether a value set at an event changed the continuous states (a book's jump) since the last
+ * call, which forgets it: Model Exchange's valuesOfContinuousStatesChanged. */
+int model_states_jumped(ModelData *m);
 
 /* The Integer variable vr into *value: MODEL_OK or MODEL_NO_VARIABLE. */
 ModelStatus model_get_integer(const ModelData *m, unsigned vr, int *value);

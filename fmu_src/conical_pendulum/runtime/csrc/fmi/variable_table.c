@@ -4,18 +4,23 @@
 #include <stdio.h>
 
 #include "fmu_config.h"
+#include "fmu_model.h"
 
 const char *cp_variable_name(unsigned vr)
 {
     return vr < CP_NVARIABLE ? cp_names[vr] : "?";
 }
 
-const char *cp_not_settable(unsigned vr, int initialized, char *message, size_t size)
+const char *cp_not_settable(unsigned vr, int phase, char *message, size_t size)
 {
     int how = vr < CP_NVARIABLE ? cp_settable[vr] : CP_SET_NEVER;
     if (how == CP_SET_NEVER) snprintf(message, size, CP_CALCULATED_MESSAGE, cp_variable_name(vr));
-    else if (how == CP_SET_BEFORE_INIT && initialized)
+    else if (how == CP_SET_BEFORE_INIT && phase != MODEL_BEFORE_INIT)
         snprintf(message, size, CP_FIXED_MESSAGE, cp_variable_name(vr));
+    else if (how == CP_SET_AT_EVENTS && phase == MODEL_CONTINUOUS_TIME)
+        snprintf(message, size, "%s is a tunable parameter: it may be set in event mode, not in "
+                 "continuous-time mode (the state cannot change under the host's integrator)",
+                 cp_variable_name(vr));
     else return NULL;
     return message;
 }

@@ -7,8 +7,10 @@
 
 #include <stddef.h>
 
-/* cp_settable's values: when a variable may be set (its causality, variability, initial). */
-enum { CP_SET_NEVER, CP_SET_BEFORE_INIT, CP_SET_ALWAYS };
+/* cp_settable's values: when a variable may be set (its causality, variability, initial):
+ * never, before initialization (a fixed parameter), always (an input), or also at events (a
+ * tunable parameter: at a communication point or in event mode, not in continuous-time mode). */
+enum { CP_SET_NEVER, CP_SET_BEFORE_INIT, CP_SET_ALWAYS, CP_SET_AT_EVENTS };
 
 /* cp_role's bits: the directional derivatives' knowns (states, inputs and Real parameters)
  * and unknowns (outputs, states among them, and state derivatives). */
@@ -18,10 +20,10 @@ enum { CP_KNOWN = 1, CP_UNKNOWN = 2 };
  * none. */
 const char *cp_variable_name(unsigned vr);
 
-/* NULL if the variable may be set now, or why not (in message): a calculated variable never,
- * a fixed one (a parameter or a setting) only before the model is initialized, an input
- * always. */
-const char *cp_not_settable(unsigned vr, int initialized, char *message, size_t size);
+/* NULL if the variable may be set now, in phase (fmu_model.h's ModelPhase), or why not (in
+ * message): a calculated variable never, a fixed one (a parameter or a setting) only before
+ * the model is initialized, a tunable one but in continuous-time mode, an input always. */
+const char *cp_not_settable(unsigned vr, int phase, char *message, size_t size);
 
 /* NULL if the variable is a known of a directional derivative (a state, an input or a Real
  * parameter), or why not (in message). */

@@ -122,22 +122,29 @@ ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time
     return MODEL_NO_VARIABLE;
 }
 
-ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int initialized,
+ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int phase,
                              char *message, size_t size)
 {
     (void)m;
     if (vr >= CP_NREAL && (vr < CP_VR_DERIVATIVE || vr >= CP_VR_DERIVATIVE + N_STATE))
         return MODEL_NO_VARIABLE;
-    if (cp_not_settable(vr, initialized, message, size)
+    if (cp_not_settable(vr, phase, message, size)
         || real_rule_refusal(vr, value, message, size))
         return MODEL_REFUSED;
     return MODEL_OK;
 }
 
-void model_set_real(ModelData *m, unsigned vr, double value)
+void model_set_real(ModelData *m, unsigned vr, double value, int phase)
 {
+    (void)phase;  /* nothing the cart holds jumps with a value set */
     m->r[vr] = value;
     if (vr == CP_VR_F_X) m->force = value;
+}
+
+int model_states_jumped(ModelData *m)
+{
+    (void)m;
+    return 0;
 }
 
 ModelStatus model_get_integer(const ModelData *m, unsigned vr, int *value)

@@ -37,6 +37,7 @@ struct ModelData {
      * once it is 1 */
     double rates[CP_NSTATE + CP_NOUTPUT][2];
     int rates_valid;
+    int states_jumped;            /* a value set at an event jumped a book (model_states_jumped) */
 };
 
 const ModelSizes model_sizes = {sizeof(ModelData), CP_NREAL, CP_VR_DERIVATIVE - CP_NREAL,
@@ -196,24 +197,72 @@ ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time
     return status;
 }
 
-ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int initialized,
+ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int phase,
                              char *message, size_t size)
 {
     (void)m;
     if (vr >= CP_NREAL && !is_derivative(vr)) return MODEL_NO_VARIABLE;
-    if (cp_not_settable(vr, initialized, message, size)
-        || real_rule_refusal(vr, value, message, size))
+    if (cp_not_settable(vr, phase, message, size) || real_rule_refusal(vr, value, message, size))
         return MODEL_REFUSED;
     return MODEL_OK;
 }
 
-void model_set_real(ModelData *m, unsigned vr, double value)
+#ifdef CP_ENERGY_JUMPS
+/* The state of the book that a change of p[k] jumps (a rope's winch speed: W_hoist; a load's
+ * mass: W_load), or -1. */
+static int jump_book(unsigned k)
 {
-    if (m->r[vr] != value) forget_values(m);
-    /* an input: the step decides (cosim.h), an input of the same bits changing nothing */
+#ifdef CP_NROPE
+    for (int r = 0; r < CP_NROPE; r++)
+        if ((int)k == cp_rope_hoist[r]) return 2 * CP_NDOF + CP_WORK_HOIST;
+#endif
+#ifdef CP_NLOAD
+    for (int j = 0; j < CP_NLOAD; j++)
+        if ((int)k == cp_load_mass[j]) return 2 * CP_NDOF + CP_WORK_LOAD;
+#endif
+    return -1;
+}
+
+/* p[k] becomes value at the state x, which keeps its angles and angle rates: the speeds of
+ * what a winch moves jump (its start or stop, along its rope), or a load's mass changes at
+ * the velocities it had; the book takes the energy's change E(x, p new) - E(x, p) (the
+ * impulse's work, the energy the load took away or brought), so that energy less the books
+ * is as it was. */
+static void book_jump(ModelData *m, unsigned k, double value)
+{
+    const int book = jump_book(k);
+    if (book < 0) return;
+    double p[CP_NPARAM], before, after;
+    memcpy(p, m->r, sizeof p);  /* the parameters, then the inputs: the core's p */
+    cp_energy(X(m), p, &before);
+    p[k] = value;
+    cp_energy(X(m), p, &after);
+    X(m)[book] += after - before;
+    m->states_jumped = 1;
+}
+#endif
+
+void model_set_real(ModelData *m, unsigned vr, double value, int phase)
+{
+    if (m->r[vr] != value) {
+        forget_values(m);
+#ifdef CP_ENERGY_JUMPS
+        if (phase == MODEL_AT_EVENT && vr < CP_NPARAM) book_jump(m, vr, value);
+#endif
+    }
+    (void)phase;
+    /* an input: the step decides (cosim.h), an input of the same bits changing nothing (a
+     * book it jumped is in the state the restart takes) */
     if (!is_input(vr)) m->flight.live = 0;
     if (vr == CP_VR_RTOL) m->rtol_set = 1;
     m->r[vr] = value;
+}
+
+int model_states_jumped(ModelData *m)
+{
+    const int jumped = m->states_jumped;
+    m->states_jumped = 0;
+    return jumped;
 }
 
 ModelStatus model_get_integer(const ModelData *m, unsigned vr, int *value)
@@ -543,7 +592,7 @@ const char *model_invalid(const ModelData *m, char *message, size_t size)
     const struct { const char *name; int value; } flags[] = {
         {"rtol_set", m->rtol_set}, {"live", m->flight.live}, {"fsal", m->flight.step.fsal},
         {"dense", m->flight.step.dense}, {"dx_valid", m->dx_valid},
-        {"outputs_valid", m->outputs_valid}};
+        {"outputs_valid", m->outputs_valid}, {"states_jumped", m->states_jumped}};
     for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
         if (flags[k].value != 0 && flags[k].value != 1) {
             snprintf(message, size, "%s = %d: must be 0 or 1", flags[k].name, flags[k].value);
