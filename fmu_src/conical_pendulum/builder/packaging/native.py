@@ -80,9 +80,6 @@ def compile_binary(
         *compiler,
         "-std=c99",
         "-O2",
-        # link-time optimization: the FMI layer's getters and the solver's right-hand side
-        # inlined across files (a tenth off the sweep runner's runs, the same bits)
-        "-flto=auto",
         "-shared",
         "-Wall",
         "-Wextra",

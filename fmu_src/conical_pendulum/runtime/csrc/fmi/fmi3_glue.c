@@ -424,7 +424,7 @@ fmi3Status fmi3GetInt64(fmi3Instance c, const fmi3ValueReference vr[], size_t nv
     if (check_scalars(inst, "fmi3GetInt64", vr, nvr, values, nValues)) return fmi3Error;
     if (check_kind(inst, "fmi3GetInt64", "Int64", vr, nvr, 1)) return fmi3Error;
     for (size_t k = 0; k < nvr; k++) {
-        int value = 0;  /* set unless refused; link-time inlining cannot tell */
+        int value;
         if (fmi_get_integers(inst, "fmi3GetInt64", "Int64", &vr[k], 1, &value)) return fmi3Error;
         values[k] = value;
     }
