@@ -235,11 +235,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     FmiInstance *inst = CHECKED(c, fmi2GetReal);
     if (!inst) return fmi2Error;
     if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2GetReal: vr or value is NULL");
-    for (size_t k = 0; k < nvr; k++) {
-        const FmiStatus status = fmi_get_real(inst, "fmi2GetReal", "Real", vr[k], vr[k], &value[k]);
-        if (status != FMI_OK) return (fmi2Status)status;
-    }
-    return fmi2OK;
+    return (fmi2Status)fmi_get_reals(inst, "fmi2GetReal", "Real", vr, nvr, value);
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,

@@ -188,17 +188,38 @@ FmiStatus fmi_communication_point(FmiInstance *inst, const char *function, doubl
                      function, t, inst->machine.time);
 }
 
-FmiStatus fmi_get_real(FmiInstance *inst, const char *function, const char *type, unsigned vr,
-                       unsigned named, double *value)
+/* What the model's answer for the Real vr makes of the call (message: the model's, if any). */
+static FmiStatus got_real(FmiInstance *inst, const char *function, const char *type,
+                          ModelStatus status, unsigned named, const char *message)
 {
-    char message[MESSAGE_SIZE];
-    switch (model_get_real(inst->model, vr, value, inst->machine.time, message, sizeof message)) {
+    switch (status) {
     case MODEL_OK: return FMI_OK;
     case MODEL_DISCARD: return fmi_discard(inst, message);
     case MODEL_REFUSED: return fmi_error(inst, "%s: %s", function, message);
     default:
         return fmi_error(inst, "%s: value reference %u is not a %s variable", function, named, type);
     }
+}
+
+FmiStatus fmi_get_real(FmiInstance *inst, const char *function, const char *type, unsigned vr,
+                       unsigned named, double *value)
+{
+    char message[MESSAGE_SIZE];
+    const ModelStatus status = model_get_real(inst->model, vr, value, inst->machine.time, message,
+                                              sizeof message);
+    return got_real(inst, function, type, status, named, message);
+}
+
+FmiStatus fmi_get_reals(FmiInstance *inst, const char *function, const char *type,
+                        const unsigned vr[], size_t nvr, double values[])
+{
+    char message[MESSAGE_SIZE];
+    for (size_t k = 0; k < nvr; k++) {
+        const ModelStatus status = model_get_real(inst->model, vr[k], &values[k],
+                                                  inst->machine.time, message, sizeof message);
+        if (status != MODEL_OK) return got_real(inst, function, type, status, vr[k], message);
+    }
+    return FMI_OK;
 }
 
 FmiStatus fmi_check_real(FmiInstance *inst, const char *function, const char *type, unsigned vr,

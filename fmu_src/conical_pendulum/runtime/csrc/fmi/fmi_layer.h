@@ -158,6 +158,12 @@ FmiStatus fmi_communication_point(FmiInstance *inst, const char *function, doubl
 FmiStatus fmi_get_real(FmiInstance *inst, const char *function, const char *type, unsigned vr,
                        unsigned named, double *value);
 
+/* fmi_get_real for each of vr[0..nvr) into values, stopping at the first not FMI_OK: one call
+ * for a whole row (FMI 2.0's fmi2GetReal), as a host reading every output at every
+ * communication point calls it. */
+FmiStatus fmi_get_reals(FmiInstance *inst, const char *function, const char *type,
+                        const unsigned vr[], size_t nvr, double values[]);
+
 /* Whether value may be set into the Real variable vr (model_check_real, in fmi_phase), without
  * taking it: FMI_OK, or refused. */
 FmiStatus fmi_check_real(FmiInstance *inst, const char *function, const char *type, unsigned vr,
