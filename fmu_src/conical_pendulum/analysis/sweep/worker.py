@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import faulthandler
+import functools
 import io
 import logging
 import math
@@ -128,19 +129,29 @@ class LoadedFmu:
         shutil.rmtree(self.directory, ignore_errors=True)
 
 
+@functools.cache
+def _leading_reals(dtype: np.dtype) -> tuple[str, ...]:
+    """The names of fmpy's record's leading float64 fields at offsets 0, 8, 16, ...: the time
+    and the Reals."""
+    leading = []
+    for name in dtype.names:
+        if dtype.fields[name][0] != np.float64 or dtype.fields[name][1] != 8 * len(leading):
+            break
+        leading.append(name)
+    return tuple(leading)
+
+
 def non_finite_columns(rows: np.ndarray, names: list[str]) -> list[str]:
     """The columns among `names` holding a NaN or an infinity. fmpy's record begins with the
     time and the Reals, 8 bytes each: one isfinite over that block, not one pass per column (a
     quarter of the runner's time outside its C loop). Integers and Booleans are always finite."""
-    dtype = rows.dtype
-    leading = 0  # the time and the Reals: the float64 fields at offsets 0, 8, 16, ...
-    for name in dtype.names:
-        if dtype.fields[name][0] != np.float64 or dtype.fields[name][1] != 8 * leading:
-            break
-        leading += 1
-    block = np.ndarray((len(rows), leading), np.float64, buffer=rows, strides=(dtype.itemsize, 8))
-    finite = dict(zip(dtype.names[:leading], np.isfinite(block).all(axis=0)))
-    return [name for name in names if not finite.get(name, True)]
+    leading = _leading_reals(rows.dtype)
+    block = np.ndarray((len(rows), len(leading)), np.float64, buffer=rows, strides=(rows.dtype.itemsize, 8))
+    finite = np.isfinite(block)
+    if finite.all():  # the common case, at a third of the cost of the columns' answers
+        return []
+    by_name = dict(zip(leading, finite.all(axis=0)))
+    return [name for name in names if not by_name.get(name, True)]
 
 
 class FmuPlugin(WorkerPlugin):
