@@ -566,9 +566,6 @@ def scene_from_dict(data: dict) -> Scene:
         }
         fields.update({name: entry[name] for name in ("length", "radius", "damping") if name in entry})
         fields.update({f"bob_{name}": value for name, value in (bob or {}).items()})
-        for flag in ("force", "load"):
-            if not isinstance(fields.get(f"bob_{flag}", False), bool):
-                raise SceneError(f"{where}.bob.{flag}: expected true or false, got {fields[f'bob_{flag}']!r}")
         if "rope" in entry:
             rope = entry["rope"]
             if not isinstance(rope, dict):
