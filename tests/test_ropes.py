@@ -13,6 +13,7 @@ import sympy as sm
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
+from scipy.integrate import solve_ivp
 from scipy.special import jv, yv
 
 from conical_pendulum import Link, Scene, SceneError
@@ -27,9 +28,9 @@ from conical_pendulum.builder.core.kane import kanes_method
 from conical_pendulum.scene import load_scene, scene_from_dict
 from fmu_helpers import INSTANCES, Instance
 from test_directional import Model
+from test_interpolation import assert_derivatives_match_differences, continuous_outputs
 
 G = 9.8
-ERROR = 3  # fmi2Error, fmi3Error
 
 
 def rope(length=10.0, low=1.0, high=30.0, **fields):
@@ -144,15 +145,17 @@ def sympy_functions(scene):
     ids=["load", "rope-below-a-link", "slung-forced-coupled"],
 )
 def test_it_is_sympys_kanes_method_with_the_ropes_length_a_function_of_time(scene):
-    """M and F at random states, lengths, hoist speeds, inputs and parameters."""
+    """M and F at random states, lengths, hoist speeds and accelerations, inputs and
+    parameters."""
     (mass, forcing), (kane_mass, kane_forcing) = sympy_functions(scene)
     rng = np.random.default_rng(41)
     for _ in range(20):
         x = rng.uniform(-1.5, 1.5, 4 * scene.n + len(scene.ropes()))  # as Equations.states
         x[4 * scene.n :] = rng.uniform(1.0, 20.0, len(scene.ropes()))
-        p = rng.uniform(0.5, 4.0, len(scene.core_parameter_names()))
+        # as Equations.params: the parameters, then the inputs and the lengths' accelerations
+        p = rng.uniform(0.5, 4.0, len(scene.core_parameter_names()) + len(scene.ropes()))
         inputs = len(scene.parameter_names())
-        p[inputs:] = rng.uniform(-3.0, 3.0, len(scene.input_names()))
+        p[inputs:] = rng.uniform(-3.0, 3.0, len(p) - inputs)
         m, f = mass(x, p), forcing(x, p)
         np.testing.assert_allclose(kane_mass(x, p), m, rtol=0, atol=1e-12 * np.abs(m).max())
         np.testing.assert_allclose(kane_forcing(x, p), f, rtol=0, atol=1e-12 * np.abs(f).max())
@@ -170,7 +173,8 @@ def test_it_is_sympys_kanes_method_with_the_ropes_length_a_function_of_time(scen
 )
 def test_the_formulations_agree(links, options):
     """M, F, x' (the lengths' and books' rates too) and every output (the tensions, the
-    winches' power, the pivot force) at random states, lengths and inputs."""
+    winches' power, the pivot force) at random states, lengths, inputs and the lengths'
+    accelerations."""
     cores = [load_core(Scene(links=links, formulation=f, **options)) for f in ("expanded", "recursive")]
     scene = Scene(links=links, **options)
     rng = np.random.default_rng(5)
@@ -180,12 +184,13 @@ def test_the_formulations_agree(links, options):
             x[scene.state_names().index(f"l{i}")] = rng.uniform(1.0, 20.0)
         p = np.array(scene.parameters())
         p[len(scene.parameter_names()) :] = rng.uniform(-5, 5, len(scene.input_names()))
-        (me, fe), (mr, fr) = (core.mass_forcing(x, p) for core in cores)
+        acc = rng.uniform(-2, 2, len(scene.ropes()))
+        (me, fe), (mr, fr) = (core.mass_forcing(x, p, acc) for core in cores)
         np.testing.assert_allclose(mr, me, rtol=0, atol=1e-12 * np.abs(me).max())
         np.testing.assert_allclose(fr, fe, rtol=0, atol=1e-12 * np.abs(fe).max())
-        de, dr = (core.rhs(x, p) for core in cores)
+        de, dr = (core.rhs(x, p, acc) for core in cores)
         np.testing.assert_allclose(dr, de, rtol=1e-9, atol=1e-9)
-        ye, yr = (core.outputs(x, p) for core in cores)
+        ye, yr = (core.outputs(x, p, acc) for core in cores)
         np.testing.assert_allclose(yr, ye, rtol=0, atol=1e-10 * np.abs(ye).max())
 
 
@@ -427,19 +432,113 @@ def test_a_rope_hoisted_past_its_minimum_discards_the_step_naming_it(
     fmu.close()
 
 
-def test_a_derivative_of_the_winchs_speed_is_refused_naming_it(hoisted_fmu):
-    """fmi2SetRealInputDerivatives: v_hoist is held (its equations take l'' = 0); a derivative of
-    0 is taken, and the other inputs still move."""
-    fmu = Instance(hoisted_fmu("native"))
-    vr = fmu.vr
-    with pytest.raises(FMICallException):
-        fmu.fmu.setRealInputDerivatives([vr["v_hoist0"]], [1], [0.2])
-    assert "derivative 1 of v_hoist0 = 0.2: a rope's winch speed is held over each communication step" in (
-        fmu.texts(ERROR)
-    ), fmu.messages
-    fmu.fmu.setRealInputDerivatives([vr["v_hoist0"], vr["a_pivot_x"]], [1, 1], [0.0, 0.3])
-    fmu.step(0.5)
-    fmu.close()
+# the winch's speed and the support's acceleration at the step's start, then their first and
+# second derivatives (fmi2SetRealInputDerivatives)
+WINCH_INPUTS = ("v_hoist0", "a_pivot_x")
+WINCH = ((-0.5, 0.3), (0.4, -0.2), (-0.6, 0.5))
+
+
+def winch_inputs_at(t, order):
+    """The inputs t after the step's start, on the polynomials the master set."""
+    u, u1, u2 = (np.array(v) for v in WINCH)
+    return u + u1 * t + (u2 * t * t / 2 if order == 2 else 0.0)
+
+
+def winch_acceleration_at(t, order):
+    """v_hoist0's rate there: the rope's l''."""
+    return np.array([WINCH[1][0] + (WINCH[2][0] * t if order == 2 else 0.0)])
+
+
+def winch_reference(start, parameters, dt, order, accelerating=True):
+    """The state after dt from start: scipy's DOP853 on the compiled core's right-hand side, the
+    inputs functions of time and the rope's l'' their rate (accelerating=False: 0, as an FMU
+    that held the winch's acceleration would take it)."""
+    core = load_core(HOISTED)
+    inputs = {name: k for k, name in enumerate(WINCH_INPUTS)}
+
+    def p_at(t):
+        p = np.concatenate([parameters, np.zeros(len(HOISTED.input_names()))])
+        values = winch_inputs_at(t, order)
+        for name, k in inputs.items():
+            p[HOISTED.core_parameter_names().index(name)] = values[k]
+        return p
+
+    def rhs(t, x):
+        return core.rhs(x, p_at(t), winch_acceleration_at(t, order) if accelerating else None)
+
+    end = solve_ivp(rhs, (0.0, dt), start, method="DOP853", rtol=1e-13, atol=1e-13).y[:, -1]
+    return core, end, p_at(dt)
+
+
+def winch_instance(hoisted_fmu, order):
+    """The native FMI 2.0 FMU at a swinging state, its winch's speed and the support's
+    acceleration set with their derivatives to order."""
+    inst = Instance(hoisted_fmu("native"), start_values={"rtol": 1e-13, "atol": 1e-13, "beta0": 0.2, "alpha1": 0.3})
+    inst.fmu.setReal([inst.vr[n] for n in WINCH_INPUTS], list(WINCH[0]))
+    vr = [inst.vr[n] for n in WINCH_INPUTS]
+    second = WINCH[2] if order == 2 else (0.0, 0.0)
+    inst.fmu.setRealInputDerivatives(vr + vr, [1, 1, 2, 2], [*WINCH[1], *second])
+    return inst
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_a_winch_speed_given_with_its_derivatives_accelerates_the_rope(hoisted_fmu, order):
+    """v_hoist0 a line (order 1) or a parabola (2) in time, as derivatives, with the support's
+    acceleration: one step of 1 s equals scipy's integration with those inputs and the rope's l''
+    their rate, the length l0 + v t + v' t^2 / 2 + v'' t^3 / 6 exactly; the tension at the end
+    is the model's with l'' there (leaving l'' out would be off by the load's mass times it)."""
+    inst = winch_instance(hoisted_fmu, order)
+    states = list(HOISTED.state_names())
+    parameters = np.array(inst.get(*HOISTED.parameter_names()))
+    start = np.array(inst.get(*states))
+    dt = 1.0
+    inst.step(dt)
+    core, expected, p_end = winch_reference(start, parameters, dt, order)
+    scale = np.maximum(np.abs(expected), 1.0)  # the books in J: relative to their size
+    np.testing.assert_array_less(np.abs(np.array(inst.get(*states)) - expected) / scale, 1e-11)
+    v, v1, v2 = (WINCH[k][0] for k in range(3))
+    length = start[states.index("l0")] + v * dt + v1 * dt**2 / 2 + (v2 * dt**3 / 6 if order == 2 else 0.0)
+    assert inst.get("l0")[0] == pytest.approx(length, rel=0, abs=1e-12)
+    outputs = HOISTED.output_names()
+    x_end = np.array(inst.get(*states))
+    with_acceleration = core.outputs(x_end, p_end, winch_acceleration_at(dt, order))
+    np.testing.assert_allclose(inst.get(*outputs), with_acceleration, rtol=1e-12, atol=1e-9)
+    # l'' left out: off by the apparent mass along the rope times l'', between the hook's 50 kg
+    # and 550 kg with the load (its sling swings: the load's share is 500 kg cos^2 of the angle)
+    held = core.outputs(x_end, p_end)[outputs.index("T_rope0")]
+    acceleration = abs(winch_acceleration_at(dt, order)[0])
+    assert 50.0 * acceleration < abs(held - inst.get("T_rope0")[0]) < 550.0 * acceleration
+    _, held_end, _ = winch_reference(start, parameters, dt, order, accelerating=False)
+    assert np.abs(held_end - expected).max() > 1e-4  # what leaving l'' out would have cost
+    inst.close()
+
+
+def test_energy_less_the_books_stays_constant_while_the_winch_accelerates(hoisted_fmu):
+    """Three steps of 1 s along v_hoist0's parabola (the FMU steps its inputs along it, the rope
+    from 10 m to 7.6 m): W_hoist holds the winch's work, the acceleration's included."""
+    inst = winch_instance(hoisted_fmu, 2)
+    kept = []
+    for step in range(4):
+        if step:
+            inst.step(1.0)
+        energy, hoist, pivot = inst.get("energy", "W_hoist", "W_pivot")
+        kept.append(energy - hoist - pivot)
+    assert inst.get("l0")[0] == pytest.approx(7.6, abs=1e-12)
+    assert abs(inst.get("W_hoist")[0]) > 1000.0
+    assert np.ptp(kept) < 1e-9 * abs(inst.get("energy")[0]), kept
+    inst.close()
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_the_output_derivatives_see_the_winchs_acceleration(hoisted_fmu, order):
+    """fmi2GetRealOutputDerivatives of the tension, the winch's power and every other continuous
+    output, with v_hoist0 moving: Richardson differences in time of the outputs (over 0.4 ms:
+    the light hook between its rope and the heavy load swings fast, its force's second derivative
+    some 5e5 N/s^2, and the differences' error is of order h^4)."""
+    inst = winch_instance(hoisted_fmu, order)
+    inst.step(0.3)
+    assert_derivatives_match_differences(inst, continuous_outputs(inst), h=4e-4, bound=1e-7)
+    inst.close()
 
 
 def test_model_exchange_discards_the_derivatives_of_a_rope_out_of_its_range(hoisted_fmu):

@@ -415,6 +415,12 @@ class Scene:
     def core_parameter_names(self) -> list[str]:
         return _names(self.core_parameter_scalars())
 
+    def hoist_acceleration_names(self) -> list[str]:
+        """What the core reads after the parameters and inputs (no variable holds them): each
+        rope's l<i>'', the rate of its v_hoist<i>, which the native FMUs interpolate (0 where
+        the inputs are held)."""
+        return [f"a_hoist{i}" for i in self.ropes()]
+
     def state_scalars(self) -> list[Scalar]:
         """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order; then
         the energy's books, the work of each force a scene adds since the start (work_names);

@@ -3,7 +3,8 @@
 Intermediate definitions are emitted in order, then the final expressions after
 common-subexpression elimination. States and parameters are read from the arrays
 x and p in the order of Scene.state_names() and Scene.core_parameter_names(); outputs
-that need the accelerations u' (the pivot force) read them from dx = x'.
+that need the accelerations u' (the pivot force) read them from dx = x'. After the parameters,
+p holds each rope's l'' (Scene.hoist_acceleration_names).
 
 Every quantity is a `cp_real` (runtime/csrc/core/real.h): double in the core and the FMU, double
 complex where directional.c compiles the same model.c for complex-step derivatives. So the
@@ -199,6 +200,9 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
                 c.define("CP_NSTATE", len(scene.state_names())),
                 c.define("CP_NPARAM", nparam),
                 c.define("CP_NINPUT", len(scene.input_names())),
+                "/* The core's p: the parameters and inputs (CP_NPARAM, the FMU's first variables), then",
+                "   each rope's l'' (Scene.ropes' order; dynamics.h's cp_model and cp_eval_outputs). */",
+                c.define("CP_PSIZE", nparam + len(scene.hoist_acceleration_names())),
                 c.define("CP_NOUTPUT", noutput),
                 c.define("CP_STATE_NAMES", c.string(" ".join(scene.state_names()))),
                 c.define("CP_PARAMETER_NAMES", c.string(" ".join(scene.core_parameter_names()))),
@@ -338,7 +342,7 @@ def generate(eqs: Equations) -> dict[str, str]:
     momentum_signature = "void cp_momentum(const cp_real *x, const cp_real *p, cp_real *P, cp_real *total)"
     header = _header(
         eqs.scene,
-        len(eqs.params),
+        len(eqs.scene.core_parameter_names()),
         len(eqs.scene.output_names()),
         needs_rates,
         [

@@ -44,7 +44,8 @@ ZERO, UNIT_X, UNIT_Z = Vec([0, 0, 0]), Vec([1, 0, 0]), Vec([0, 0, 1])
 class Equations:
     """M(x, p) u' = F(x, p), with intermediate definitions evaluated in order.
 
-    p holds the parameters, then the inputs; outputs may depend on u' (`rates`)."""
+    p holds the parameters, then the inputs, then the ropes' l'' (Scene.hoist_acceleration_names);
+    outputs may depend on u' (`rates`)."""
 
     scene: Scene
     # what the expressions read of the state: angles, rates, the ropes' lengths (named as
@@ -187,6 +188,10 @@ class _Symbols:
         """Link i's rate of lengthening: a rope's v_hoist<i>, else 0."""
         return self.params.get(f"v_hoist{i}", sm.S.Zero)
 
+    def hoist_acc(self, i: int):
+        """Link i's length's acceleration: a rope's a_hoist<i> (l<i>''), else 0."""
+        return self.params.get(f"a_hoist{i}", sm.S.Zero)
+
     @property
     def dim(self) -> int:
         return 2 * self.n
@@ -196,10 +201,15 @@ class _Symbols:
         return self.params["g"]
 
 
+def _core_p_names(scene: Scene) -> list[str]:
+    """Everything the core reads from p, in its order."""
+    return scene.core_parameter_names() + scene.hoist_acceleration_names()
+
+
 def _symbols(scene: Scene) -> _Symbols:
     """Symbols named as the FMU's variables, so that the generated C reads like the model."""
     n = scene.n
-    params = {name: sm.Symbol(name) for name in scene.core_parameter_names()}
+    params = {name: sm.Symbol(name) for name in _core_p_names(scene)}
     return _Symbols(
         n=n,
         alpha=sm.symbols(f"alpha0:{n}"),
@@ -324,7 +334,11 @@ def _link_points(b: _Builder, sym: _Symbols, i: int, parent: _Parent, frame: _Fr
     # a rope's lower end moves along it at -v_hoist e_y relative to the link's frame
     slide = -sym.hoist(i) * frame.rotation[:, 1]
     w_cross_r = w.cross(r) + slide
-    acc_rel = b.name(f"ar{i}", frame.wb.cross(r) + w.cross(w.cross(r)) + 2 * w.cross(slide))
+    # and accelerates along it at -l'' e_y
+    acc_rel = b.name(
+        f"ar{i}",
+        frame.wb.cross(r) + w.cross(w.cross(r)) + 2 * w.cross(slide) - sym.hoist_acc(i) * frame.rotation[:, 1],
+    )
     partial_rel = [
         b.name(f"vr{i}_{s}", frame.partial_w[s].cross(r)) if frame.partial_w[s] != ZERO else ZERO
         for s in range(dim)
@@ -509,7 +523,7 @@ def derive(scene: Scene) -> Equations:
         + list(sym.omega)
         + list(sym.delta)
         + [sym.lengths[i] for i in scene.ropes()],
-        params=[sym.params[name] for name in scene.core_parameter_names()],
+        params=[sym.params[name] for name in _core_p_names(scene)],
         rates=list(sym.rates),
         definitions=b.definitions,
         mass_matrix=mass_matrix,

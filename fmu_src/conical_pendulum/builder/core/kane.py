@@ -79,7 +79,8 @@ def kanes_method(scene):
 
     Bodies the scene leaves out are not created. With coupling, the pivot moves with a
     prescribed velocity whose derivative becomes the inputs a_pivot_x/y/z. Returns (M, F)
-    in plain symbols named as Scene.state_names() and Scene.core_parameter_names().
+    in plain symbols named as Scene.state_names(), Scene.core_parameter_names() and
+    Scene.hoist_acceleration_names().
     """
     p = {name: sm.Symbol(name) for name in scene.core_parameter_names()}
     I = me.ReferenceFrame("I")
@@ -90,9 +91,11 @@ def kanes_method(scene):
     kane = me.KanesMethod(I, q_ind=q, u_ind=u, kd_eqs=kd)
     kane.kanes_equations(bodies, loads)
     plain = {s: sm.Symbol(name) for s, name in zip(q + u, scene.state_names())}
-    for i in scene.ropes():  # a rope's length, a function of time: l'' = 0, l' = v_hoist
+    for i in scene.ropes():  # a rope's length, a function of time: l' = v_hoist, l'' = a_hoist
         length = me.dynamicsymbols(f"l{i}")
-        plain.update({length.diff(me.dynamicsymbols._t, 2): 0, length.diff(): p[f"v_hoist{i}"]})
+        plain.update(
+            {length.diff(me.dynamicsymbols._t, 2): sm.Symbol(f"a_hoist{i}"), length.diff(): p[f"v_hoist{i}"]}
+        )
         plain[length] = sm.Symbol(f"l{i}")
     if scene.coupling:  # the pivot's acceleration, and its velocity where the drag sees it
         plain.update({v.diff(): p[name] for v, name in zip(pivot_velocity, scene.input_names())})

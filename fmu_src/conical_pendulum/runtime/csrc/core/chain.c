@@ -29,6 +29,8 @@ typedef struct {
     cp_real d[3];      /* from the parent's joint to this one */
     cp_real r[3];      /* from this joint to the next (along the link) */
     cp_real s[3];      /* a rope's: its lower end's velocity along it, -v_hoist e_y (else 0) */
+    cp_real as[3];     /* and that end's acceleration relative to the link's frame, 2 w x s -
+                          l'' e_y: its Coriolis and the winch's acceleration (else 0) */
     cp_real zeta[6];   /* acceleration at zero rates' rates, less the parent's carried over */
     cp_real I[36];     /* spatial inertia of link and bob about the joint */
     cp_real b[6];      /* velocity-dependent force of link and bob about the joint */
@@ -152,14 +154,13 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
         for (int j = 0; j < 3; j++) k->zeta[j] = t[j] + dE[j];
         if (parent) {
             memcpy(k->d, parent->r, sizeof k->d);
-            cp_real wd[3], ws[3];
+            cp_real wd[3];
             cross(wp, k->d, wd);
             cross(wp, wd, t);
-            cross(wp, parent->s, ws);  /* a rope's sliding end: its Coriolis 2 w x s */
-            for (int j = 0; j < 3; j++) {
+            for (int j = 0; j < 3; j++) {  /* the joint on a rope's sliding end: its as more */
                 k->pos[j] = parent->pos[j] + k->d[j];
                 k->vel[j] = parent->vel[j] + wd[j] + parent->s[j];
-                k->zeta[3 + j] = t[j] + 2 * ws[j];
+                k->zeta[3 + j] = t[j] + parent->as[j];
             }
         } else {
             memset(k->d, 0, sizeof k->d);
@@ -172,10 +173,14 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
         const int rope = cp_link_rope[i];
         const cp_real l = rope >= 0 ? x[cp_rope_state[rope]] : p[lp->l];
         const cp_real v = rope >= 0 ? p[cp_rope_hoist[rope]] : 0.0;
+        const cp_real a = rope >= 0 ? p[CP_NPARAM + rope] : 0.0;  /* l'' (cp_model's p) */
 #else
-        const cp_real l = p[lp->l], v = 0.0;
+        const cp_real l = p[lp->l], v = 0.0, a = 0.0;
 #endif
+        cp_real ws[3];
         for (int j = 0; j < 3; j++) k->r[j] = -l * k->R[j * 3 + 1], k->s[j] = -v * k->R[j * 3 + 1];
+        cross(k->w, k->s, ws);
+        for (int j = 0; j < 3; j++) k->as[j] = 2 * ws[j] - a * k->R[j * 3 + 1];
         memset(k->I, 0, sizeof k->I);
         memset(k->b, 0, sizeof k->b);
         if (lp->M >= 0) {
@@ -185,11 +190,10 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
         }
         if (lp->m >= 0) add_body(k, p[lp->m], k->r, NULL);
 #ifdef CP_NROPE
-        if (rope >= 0 && lp->m >= 0) {  /* the bob on a rope's sliding end: m 2 w x s more */
-            cp_real ws[3], coriolis[3];
-            cross(k->w, k->s, ws);
-            for (int j = 0; j < 3; j++) coriolis[j] = -2 * p[lp->m] * ws[j];
-            apply_at_bob(k, coriolis);
+        if (rope >= 0 && lp->m >= 0) {  /* the bob on a rope's sliding end: m as more */
+            cp_real sliding[3];
+            for (int j = 0; j < 3; j++) sliding[j] = -p[lp->m] * k->as[j];
+            apply_at_bob(k, sliding);
         }
 #endif
 #ifdef CP_BOB_FORCES
@@ -371,11 +375,8 @@ static void hanging(const cp_real *p, const Link *links, const cp_real *dx, cp_r
             cross(k->w, wc, wwc);
             for (int j = 0; j < 3; j++) h[j] += p[index] * (ai[3 + j] + t[j] + wwc[j]);
 #ifdef CP_NROPE
-            if (body) {  /* a rope's bob: the Coriolis of its sliding end, 2 w x s */
-                cp_real ws[3];
-                cross(k->w, k->s, ws);
-                for (int j = 0; j < 3; j++) h[j] += p[index] * 2 * ws[j];
-            }
+            if (body)  /* a rope's bob: its sliding end's acceleration */
+                for (int j = 0; j < 3; j++) h[j] += p[index] * k->as[j];
 #endif
             h[1] += p[index] * p[CP_G_INDEX];
         }

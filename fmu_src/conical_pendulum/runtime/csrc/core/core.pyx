@@ -31,7 +31,7 @@ cdef extern from "solvers.h":
                       long long max_steps, double *work, cp_stats *stats) noexcept nogil
 
 cdef extern from "dynamics.h":
-    int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT
+    int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT, CP_PSIZE
     int CP_NSTAT, CP_STAT_N_RHS, CP_STAT_N_STEPS, CP_STAT_N_REJECTED
     const char *CP_STATE_NAMES
     const char *CP_PARAMETER_NAMES
@@ -114,8 +114,9 @@ cdef extern from "<time.h>" nogil:
 
 NDOF = CP_NDOF
 NSTATE = CP_NSTATE
-NPARAM = CP_NPARAM  # parameters, then inputs: everything in p
+NPARAM = CP_NPARAM  # parameters, then inputs: the p every function here takes
 NINPUT = CP_NINPUT
+NROPE = CP_PSIZE - CP_NPARAM  # the ropes: the accelerations hoist_acc takes, their l''
 NOUTPUT = CP_NOUTPUT
 STATISTICS_SLOTS = {"n_rhs": CP_STAT_N_RHS, "n_steps": CP_STAT_N_STEPS, "n_rejected": CP_STAT_N_REJECTED}
 SINGULAR_RATIO = CP_SINGULAR_RATIO
@@ -206,10 +207,21 @@ cdef const double[::1] _vector(object a, int size, str what):
     return v
 
 
-def rhs(x_in, p_in):
-    """x' = f(x, p) as a new array; raises CoreError where M is singular."""
+cdef const double[::1] _core_p(object p_in, object hoist_acc):
+    """The core's p (dynamics.h): the parameters and inputs p, then each rope's l'' (the
+    rates of its v_hoist, Scene.ropes' order; None: 0, the winches at constant speed)."""
+    p = np.zeros(CP_PSIZE)
+    p[:CP_NPARAM] = _vector(p_in, CP_NPARAM, "parameters")
+    if hoist_acc is not None:
+        p[CP_NPARAM:] = _vector(hoist_acc, CP_PSIZE - CP_NPARAM, "hoist_acc")
+    return p
+
+
+def rhs(x_in, p_in, hoist_acc=None):
+    """x' = f(x, p) as a new array, the ropes' lengths accelerating at hoist_acc (_core_p);
+    raises CoreError where M is singular."""
     cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
-    cdef const double[::1] p = _vector(p_in, CP_NPARAM, "parameters")
+    cdef const double[::1] p = _core_p(p_in, hoist_acc)
     out = np.empty(CP_NSTATE)
     cdef double[::1] dx = out
     cdef cp_model model
@@ -224,10 +236,10 @@ def rhs(x_in, p_in):
     return out
 
 
-def mass_forcing(x_in, p_in):
-    """(M, F) with M u' = F at state x."""
+def mass_forcing(x_in, p_in, hoist_acc=None):
+    """(M, F) with M u' = F at state x (hoist_acc: as rhs's)."""
     cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
-    cdef const double[::1] p = _vector(p_in, CP_NPARAM, "parameters")
+    cdef const double[::1] p = _core_p(p_in, hoist_acc)
     M = np.empty((CP_NDOF, CP_NDOF))
     F = np.empty(CP_NDOF)
     cdef double[:, ::1] m = M
@@ -237,10 +249,10 @@ def mass_forcing(x_in, p_in):
     return M, F
 
 
-def outputs(x_in, p_in):
-    """The scene's calculated outputs at state x."""
+def outputs(x_in, p_in, hoist_acc=None):
+    """The scene's calculated outputs at state x (hoist_acc: as rhs's)."""
     cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
-    cdef const double[::1] p = _vector(p_in, CP_NPARAM, "parameters")
+    cdef const double[::1] p = _core_p(p_in, hoist_acc)
     out = np.empty(CP_NOUTPUT)
     cdef double[::1] y = out
     if CP_NOUTPUT:
@@ -260,7 +272,7 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     if method not in ("rk45", "dop853"):
         raise ValueError(f"method: 'rk45' or 'dop853', not {method!r}")
     cdef int solver = METHODS[method]
-    cdef const double[::1] p = _vector(p_in, CP_NPARAM, "parameters")
+    cdef const double[::1] p = _core_p(p_in, None)
     cdef const double[::1] times = np.ascontiguousarray(times_in, dtype=float)
     if times.shape[0] < 1 or np.any(np.diff(times) < 0):
         raise ValueError("times: expected a non-empty, non-decreasing sequence")
@@ -287,7 +299,7 @@ def seconds_per_call(str what, x_in, p_in, long calls):
     """Seconds per call of the C right-hand side (what="rhs") or outputs ("outputs"),
     timed in a C loop."""
     cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
-    cdef const double[::1] p = _vector(p_in, CP_NPARAM, "parameters")
+    cdef const double[::1] p = _core_p(p_in, None)
     if what not in ("rhs", "outputs"):
         raise ValueError(f"what: 'rhs' or 'outputs', not {what!r}")
     cdef bint outputs = what == "outputs"
@@ -356,9 +368,10 @@ cdef class Stepper:
     def update_outputs(self):
         """Recompute the outputs after the state or the parameters were changed in place."""
         self._fsal = 0
+        cdef const double[::1] p = _core_p(self._params, None)
         if CP_NOUTPUT:
             with nogil:
-                cp_eval_outputs(&self._values[0], &self._params[0], &self._values[CP_NSTATE])
+                cp_eval_outputs(&self._values[0], &p[0], &self._values[CP_NSTATE])
 
     def configure(self, int method, double rtol, double atol, double max_step,
                   long long max_steps):

@@ -14,6 +14,12 @@ void cp_input_at(const double *p, const double (*rates)[2], double tau, double *
         const int i = INPUT0 + k;
         p_at[i] = p[i] + tau * (rates[k][0] + 0.5 * tau * rates[k][1]);
     }
+#ifdef CP_NROPE
+    for (int k = 0; k < CP_NROPE; k++) {  /* l'' = v_hoist' */
+        const int i = cp_rope_hoist[k] - INPUT0;
+        p_at[CP_NPARAM + k] = rates[i][0] + tau * rates[i][1];
+    }
+#endif
 }
 
 /* The model's right-hand side with interpolated inputs: the inputs at the stage's time. */
@@ -22,7 +28,7 @@ typedef struct {
     const double *p;              /* the parameters and the inputs at t0 */
     const double (*rates)[2];
     double t0;
-    double p_at[CP_NPARAM];
+    double p_at[CP_PSIZE];
 } interpolated;
 
 int cp_held_rhs(void *ctx, double t, const double *x, double *dx)
@@ -39,23 +45,33 @@ static int interpolated_rhs(void *ctx, double t, const double *x, double *dx)
 }
 
 /* The polynomials' start: p with the inputs where the flight's integration started, and
- * their rates there. Whether any input moves. */
+ * their rates there; p0 the core's p there (cp_input_at). Whether any input moves. */
 static int polynomials(const cp_flight *f, const double *p, double *p0, double (*rates)[2])
 {
     int moving = 0;
-    memcpy(p0, p, CP_NPARAM * sizeof(double));
+    double start[CP_NPARAM];
+    memcpy(start, p, sizeof start);
     for (int k = 0; k < CP_NINPUT; k++) {
-        p0[INPUT0 + k] = f->inputs[k][0];
+        start[INPUT0 + k] = f->inputs[k][0];
         rates[k][0] = f->inputs[k][1];
         rates[k][1] = f->inputs[k][2];
         moving |= rates[k][0] != 0.0 || rates[k][1] != 0.0;
     }
+    cp_input_at(start, (const double(*)[2])rates, 0.0, p0);
     return moving;
+}
+
+/* The core's p at t on the flight's polynomials (p: the parameters). */
+static void core_p_at(const cp_flight *f, double t, const double *p, double *p_at)
+{
+    double p0[CP_PSIZE], rates0[CP_NINPUT + 1][2];
+    polynomials(f, p, p0, rates0);
+    cp_input_at(p0, (const double(*)[2])rates0, t - f->t_inputs, p_at);
 }
 
 void cp_flight_inputs(const cp_flight *f, double t, double *p, double (*rates)[2])
 {
-    double p0[CP_NPARAM], p_at[CP_NPARAM], rates0[CP_NINPUT + 1][2];
+    double p0[CP_PSIZE], p_at[CP_PSIZE], rates0[CP_NINPUT + 1][2];
     const double tau = t - f->t_inputs;
     polynomials(f, p, p0, rates0);
     cp_input_at(p0, (const double(*)[2])rates0, tau, p_at);
@@ -162,7 +178,7 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
     cp_flight trial = *flight;  /* taken only where the step gets somewhere */
     const int why = continues(&trial, s, p, input_rates, t);
     if (why != CONTINUE) restart(&trial, p, input_rates, t, x);
-    double p0[CP_NPARAM], rates0[CP_NINPUT + 1][2];
+    double p0[CP_PSIZE], rates0[CP_NINPUT + 1][2];
     const int moving = polynomials(&trial, p, p0, rates0);
     interpolated in = {{p0, 1.0, -1}, p0, (const double(*)[2])rates0, trial.t_inputs, {0}};
     if (moving) in.model.p = in.p_at;
@@ -170,7 +186,7 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
                         moving ? (void *)&in : (void *)&in.model};
     cp_stats counts = {0, 0, 0};
     double *x_new = work + CP_WORK_SIZE(CP_NSTATE), *y_new = x_new + CP_NSTATE;
-    double t_reached = t, p_at[CP_NPARAM], rates_at[CP_NINPUT + 1][2];
+    double t_reached = t, p_at[CP_PSIZE];
     cp_failure rope_failure = {0};
     int status = CP_BAD_STEP;
     if (dt >= 0 && dt < INFINITY)
@@ -180,8 +196,7 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
     stats[CP_STAT_N_STEPS] += (double)counts.naccept;
     stats[CP_STAT_N_REJECTED] += (double)counts.nreject;
     if (t_reached > t || status == CP_OK) {  /* the outputs where the state got to */
-        memcpy(p_at, p, CP_NPARAM * sizeof(double));
-        cp_flight_inputs(&trial, t_reached, p_at, rates_at);
+        core_p_at(&trial, t_reached, p, p_at);
         cp_model model_at = {p_at, 1.0, -1};
         if (CP_NOUTPUT) cp_eval_outputs(x_new, p_at, y_new);
         int rope_status = cp_ropes_hold(x_new, y_new, t_reached, &rope_failure);

@@ -86,9 +86,10 @@ int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failur
  * has them, whatever t. */
 int cp_held_rhs(void *ctx, double t, const double *x, double *dx);
 
-/* The inputs of p (its last CP_NINPUT values) tau after the point where they are p's, each
- * on its Taylor polynomial u + u' tau + u'' tau^2 / 2 (rates[k] = {u', u''}), into p_at (all
- * CP_NPARAM values: the parameters copied). */
+/* The inputs of p (CP_NPARAM values, the inputs last) tau after the point where they are p's,
+ * each on its Taylor polynomial u + u' tau + u'' tau^2 / 2 (rates[k] = {u', u''}), into p_at,
+ * the core's p (dynamics.h: CP_PSIZE values, the parameters copied, each rope's l'' the rate
+ * of its v_hoist there, u' + u'' tau). */
 void cp_input_at(const double *p, const double (*rates)[2], double tau, double *p_at);
 
 #endif

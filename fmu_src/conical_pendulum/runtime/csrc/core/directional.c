@@ -29,11 +29,11 @@ int cp_directional(const double *x, const double *p, const double *dx_seed,
 {
     double scale = 0.0;  /* the seed's largest component: the step is h along seed / scale */
     for (int k = 0; k < CP_NSTATE; k++) scale = fmax(scale, fabs(dx_seed[k]));
-    for (int k = 0; k < CP_NPARAM; k++) scale = fmax(scale, fabs(dp_seed[k]));
+    for (int k = 0; k < CP_PSIZE; k++) scale = fmax(scale, fabs(dp_seed[k]));
     const double h = CP_COMPLEX_STEP_SIZE, step = scale > 0 ? h / scale : 0.0;
-    cp_real xc[CP_NSTATE], pc[CP_NPARAM], dx[CP_NSTATE];
+    cp_real xc[CP_NSTATE], pc[CP_PSIZE], dx[CP_NSTATE];
     for (int k = 0; k < CP_NSTATE; k++) xc[k] = complex_of(x[k], step * dx_seed[k]);
-    for (int k = 0; k < CP_NPARAM; k++) pc[k] = complex_of(p[k], step * dp_seed[k]);
+    for (int k = 0; k < CP_PSIZE; k++) pc[k] = complex_of(p[k], step * dp_seed[k]);
     const double back = scale / h;  /* Im(.) / step */
     cp_model model = {pc, 1.0, -1};
     *pivot_ratio = 1.0;

@@ -3,8 +3,9 @@
 #define CP_DIRECTIONAL_H
 
 /* The derivatives of x' = f(x, p) and of the outputs y(x, p) at (x, p) along the direction
- * (dx_seed, dp_seed): d_derivatives = (df/dx) dx_seed + (df/dp) dp_seed (CP_NSTATE values)
- * and d_outputs likewise (CP_NOUTPUT values); either may be NULL when not wanted. Exact to
+ * (dx_seed, dp_seed), p and dp_seed of the core's size (CP_PSIZE, dynamics.h's cp_model):
+ * d_derivatives = (df/dx) dx_seed + (df/dp) dp_seed (CP_NSTATE values) and d_outputs
+ * likewise (CP_NOUTPUT values); either may be NULL when not wanted. Exact to
  * rounding: the model's own C evaluated at (x + i h dx_seed, p + i h dp_seed), over h.
  * Returns CP_OK, or the right-hand side's status (status.h) with *pivot_ratio and *bad_dof
  * set as cp_rhs sets them in its cp_model, where the mass matrix is singular there. */
@@ -13,7 +14,8 @@ int cp_directional(const double *x, const double *p, const double *dx_seed,
                    double *pivot_ratio, int *bad_dof);
 
 /* The second derivative in s of the outputs along the curve (x, p) + s v + s^2 w / 2 at
- * s = 0, y''[v, v] + y' w (CP_NOUTPUT values into d2_outputs): with v = (x', u') and
+ * s = 0, y''[v, v] + y' w (CP_NOUTPUT values into d2_outputs; p, vp and wp of the core's
+ * size, CP_PSIZE): with v = (x', u') and
  * w = (x'', u'') the outputs' second time derivative. Computed in second_directional.c from
  * two evaluations of the model's C in long double complex arithmetic at s = +-h e^(i pi / 4),
  * (Im y(s) + Im y(-s)) / h^2 = y'' + O(h^4): the first-order terms, equal and opposite,

@@ -142,7 +142,7 @@ static int rates_and_apparent_mass(cp_model *model, const cp_real *x, cp_real *d
  * mass matrix is singular. */
 static void free_force_and_apparent_mass(const cp_real *x, const cp_real *p, cp_real *out)
 {
-    cp_real q[CP_NPARAM], dx[CP_NSTATE], y[CP_NOUTPUT], M[9];
+    cp_real q[CP_PSIZE], dx[CP_NSTATE], y[CP_NOUTPUT], M[9];
     memcpy(q, p, sizeof q);
     for (int j = 0; j < 3; j++) q[CP_NPARAM - CP_NINPUT + j] = 0.0;
     cp_model model = {q, 1.0, -1};

@@ -14,7 +14,8 @@
 /* Every value computed from x and p is a cp_real (real.h, included by model.h): double
  * here, double complex in directional.c's complex-step copy of this code. */
 typedef struct {
-    const cp_real *p;      /* parameters, in the order of the scene's parameter names */
+    const cp_real *p;      /* the core's p (CP_PSIZE values): the parameters and inputs, in the
+                              order of the scene's core parameter names, then each rope's l'' */
     double pivot_ratio;    /* smallest over largest |pivot| of the LUs since the caller set it
                               to 1: a cheap inverse condition estimate */
     int bad_dof;           /* generalized speed (column of M) of that smallest pivot, or of a
@@ -35,7 +36,7 @@ int cp_chain_rates_and_apparent_mass(cp_model *model, const cp_real *x, cp_real 
 #endif
 #endif
 
-/* The scene's outputs at x. Those needing accelerations (the pivot force) get them from
+/* The scene's outputs at x, p the core's p (cp_model). Those needing accelerations (the pivot force) get them from
    cp_rhs, and are NaN where the mass matrix is singular. */
 void cp_eval_outputs(const cp_real *x, const cp_real *p, cp_real *y);
 

@@ -25,7 +25,7 @@ int cp_second_directional(const double *x, const double *p, const double *vx, co
 #if CP_NOUTPUT
     double rate = 0.0;  /* the curve's rate: 1 / its time scale */
     for (int k = 0; k < CP_NSTATE; k++) rate = fmax(rate, fmax(fabs(vx[k]), sqrt(fabs(wx[k]))));
-    for (int k = 0; k < CP_NPARAM; k++) rate = fmax(rate, fmax(fabs(vp[k]), sqrt(fabs(wp[k]))));
+    for (int k = 0; k < CP_PSIZE; k++) rate = fmax(rate, fmax(fabs(vp[k]), sqrt(fabs(wp[k]))));
     if (!(rate > 0)) {  /* a point, not a curve: the outputs do not move */
         for (int k = 0; k < CP_NOUTPUT; k++) d2_outputs[k] = 0.0;
         return CP_OK;
@@ -36,9 +36,9 @@ int cp_second_directional(const double *x, const double *p, const double *vx, co
     long double sum[CP_NOUTPUT] = {0};
     for (int sign = -1; sign <= 1; sign += 2) {
         const cp_real s = sign * s1;
-        cp_real xc[CP_NSTATE], pc[CP_NPARAM], y[CP_NOUTPUT];
+        cp_real xc[CP_NSTATE], pc[CP_PSIZE], y[CP_NOUTPUT];
         for (int k = 0; k < CP_NSTATE; k++) xc[k] = x[k] + s * vx[k] + half_s2 * wx[k];
-        for (int k = 0; k < CP_NPARAM; k++) pc[k] = p[k] + s * vp[k] + half_s2 * wp[k];
+        for (int k = 0; k < CP_PSIZE; k++) pc[k] = p[k] + s * vp[k] + half_s2 * wp[k];
         cp_eval_outputs_cs2(xc, pc, y);
         for (int k = 0; k < CP_NOUTPUT; k++)
             if (!CP_FINITE(y[k])) {  /* the rates cannot be had there: cp_rhs says why */

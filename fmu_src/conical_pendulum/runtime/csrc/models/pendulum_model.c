@@ -105,9 +105,35 @@ static void invalidate(ModelData *m)
     m->flight.live = 0;
 }
 
+/* The core's p at the model's values (dynamics.h's cp_model) into p, returned: the parameters
+ * and inputs that begin m->r, then each rope's l'', its v_hoist's first derivative as the
+ * master set it (0: held; Model Exchange has none). */
+static double *core_p(const ModelData *m, double p[CP_PSIZE])
+{
+    memcpy(p, m->r, CP_NPARAM * sizeof p[0]);
+#ifdef CP_NROPE
+    for (int k = 0; k < CP_NROPE; k++)
+        p[CP_NPARAM + k] = m->input_rates[cp_rope_hoist[k] - CP_VR_INPUT][0];
+#endif
+    return p;
+}
+
+/* Whether the input vr is a rope's winch speed, whose derivative is its l''. */
+static int is_hoist(unsigned vr)
+{
+#ifdef CP_NROPE
+    for (int k = 0; k < CP_NROPE; k++)
+        if ((int)vr == cp_rope_hoist[k]) return 1;
+#else
+    (void)vr;
+#endif
+    return 0;
+}
+
 static void update_outputs(ModelData *m)
 {
-    if (!m->outputs_valid && CP_NOUTPUT) cp_eval_outputs(X(m), m->r, Y(m));
+    double p[CP_PSIZE];
+    if (!m->outputs_valid && CP_NOUTPUT) cp_eval_outputs(X(m), core_p(m, p), Y(m));
     m->outputs_valid = 1;
 }
 
@@ -125,7 +151,8 @@ static ModelStatus no_derivatives(double time, int status, int bad_dof, double p
 static ModelStatus derivatives(ModelData *m, double time, char *message, size_t size)
 {
     if (m->dx_valid) return MODEL_OK;
-    cp_model model = {m->r, 1.0, -1};
+    double p[CP_PSIZE];
+    cp_model model = {core_p(m, p), 1.0, -1};
     int status = cp_rhs(&model, X(m), m->dx);
     if (status != CP_OK)
         return no_derivatives(time, status, model.bad_dof, model.pivot_ratio, message, size);
@@ -232,9 +259,8 @@ static void book_jump(ModelData *m, unsigned k, double value)
 {
     const int book = jump_book(k);
     if (book < 0) return;
-    double p[CP_NPARAM], before, after;
-    memcpy(p, m->r, sizeof p);  /* the parameters, then the inputs: the core's p */
-    cp_energy(X(m), p, &before);
+    double p[CP_PSIZE], before, after;
+    cp_energy(X(m), core_p(m, p), &before);
     p[k] = value;
     cp_energy(X(m), p, &after);
     X(m)[book] += after - before;
@@ -336,9 +362,9 @@ static ModelStatus column(ModelData *m, const double *dx_seed, const double *dp_
                           size_t size)
 {
     if (!d_derivatives && !d_outputs) return MODEL_OK;
-    double pivot_ratio;
+    double pivot_ratio, p[CP_PSIZE];
     int bad_dof;
-    int status = cp_directional(X(m), m->r, dx_seed, dp_seed, d_derivatives, d_outputs,
+    int status = cp_directional(X(m), core_p(m, p), dx_seed, dp_seed, d_derivatives, d_outputs,
                                 &pivot_ratio, &bad_dof);
     return status == CP_OK ? MODEL_OK
                            : no_derivatives(time, status, bad_dof, pivot_ratio, message, size);
@@ -368,7 +394,7 @@ ModelStatus model_directional_derivative(ModelData *m, const unsigned unknowns[]
                                          const double seed[], double sensitivity[], double time,
                                          char *message, size_t size)
 {
-    double dx_seed[CP_NSTATE] = {0}, dp_seed[CP_NPARAM] = {0};
+    double dx_seed[CP_NSTATE] = {0}, dp_seed[CP_PSIZE] = {0};
     for (size_t k = 0; k < n_known; k++) {
         const unsigned vr = knowns[k];
         if (cp_known_refusal(vr, message, size)) return MODEL_REFUSED;
@@ -412,7 +438,7 @@ ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], si
     }
     double d_derivatives[CP_NSTATE], d_outputs[CP_NOUTPUT + 1];
     for (size_t j = 0; j < n_known; j++) {
-        double dx_seed[CP_NSTATE] = {0}, dp_seed[CP_NPARAM] = {0};
+        double dx_seed[CP_NSTATE] = {0}, dp_seed[CP_PSIZE] = {0};
         add_seed(knowns[j], 1.0, dx_seed, dp_seed);
         ModelStatus status = column(m, dx_seed, dp_seed, want_derivatives ? d_derivatives : NULL,
                                     want_outputs ? d_outputs : NULL, time, message, size);
@@ -431,29 +457,19 @@ ModelStatus model_adjoint_derivative(ModelData *m, const unsigned unknowns[], si
 ModelStatus model_check_input_derivative(const ModelData *m, unsigned vr, int order, double value,
                                          char *message, size_t size)
 {
-    (void)m;
-    if (!is_input(vr)) return MODEL_NO_VARIABLE;
-#ifdef CP_NROPE
-    /* a rope's winch speed is held over each step: its equations take l'' = 0 */
-    for (int k = 0; k < CP_NROPE; k++)
-        if (value != 0.0 && (int)(vr - CP_VR_INPUT) + CP_NPARAM - CP_NINPUT == cp_rope_hoist[k]) {
-            snprintf(message, size, "derivative %d of %s = %g: a rope's winch speed is held over "
-                     "each communication step (the rope's equations take its length's "
-                     "acceleration l%d'' as 0), so its derivatives must be 0; set v_hoist%d anew "
-                     "at each point instead", order, cp_variable_name(vr), value, cp_rope_link[k],
-                     cp_rope_link[k]);
-            return MODEL_REFUSED;
-        }
-#else
-    (void)order, (void)value, (void)message, (void)size;
-#endif
-    return MODEL_OK;
+    (void)m, (void)order, (void)value, (void)message, (void)size;
+    return is_input(vr) ? MODEL_OK : MODEL_NO_VARIABLE;
 }
 
 void model_set_input_derivative(ModelData *m, unsigned vr, int order, double value)
 {
     double *rate = &m->input_rates[vr - CP_VR_INPUT][order - 1];
-    if (*rate != value) m->rates_valid = 0;  /* x' at x depends on the inputs' values only */
+    if (*rate != value) {
+        /* x' and the outputs at x depend on the inputs' values, and on a winch speed's rate
+           (its rope's l'') */
+        if (order == 1 && is_hoist(vr)) forget_values(m);
+        m->rates_valid = 0;
+    }
     *rate = value;
 }
 
@@ -466,15 +482,21 @@ static ModelStatus time_rates(ModelData *m, int order, double time, char *messag
     if (m->rates_valid >= order) return MODEL_OK;
     ModelStatus status = derivatives(m, time, message, size);
     if (status != MODEL_OK) return status;
-    double vp[CP_NPARAM] = {0}, wp[CP_NPARAM] = {0}, x2[CP_NSTATE], y[CP_NOUTPUT + 1],
-           pivot_ratio;
+    double vp[CP_PSIZE] = {0}, wp[CP_PSIZE] = {0}, x2[CP_NSTATE], y[CP_NOUTPUT + 1],
+           pivot_ratio, p[CP_PSIZE];
     for (int k = 0; k < CP_NINPUT; k++) {
         vp[CP_VR_INPUT + k] = m->input_rates[k][0];  /* the inputs end p (fmu_config.h) */
         wp[CP_VR_INPUT + k] = m->input_rates[k][1];
     }
+#ifdef CP_NROPE
+    /* a rope's l'' = v_hoist' moves at v_hoist'' (and no faster: the inputs are quadratic) */
+    for (int k = 0; k < CP_NROPE; k++)
+        vp[CP_NPARAM + k] = m->input_rates[cp_rope_hoist[k] - CP_VR_INPUT][1];
+#endif
+    core_p(m, p);
     int bad_dof, found = CP_OK;
     if (m->rates_valid < 1) {
-        found = cp_directional(X(m), m->r, m->dx, vp, x2, y, &pivot_ratio, &bad_dof);
+        found = cp_directional(X(m), p, m->dx, vp, x2, y, &pivot_ratio, &bad_dof);
         for (int k = 0; found == CP_OK && k < CP_NSTATE; k++) {
             m->rates[k][0] = m->dx[k];
             m->rates[k][1] = x2[k];
@@ -483,7 +505,7 @@ static ModelStatus time_rates(ModelData *m, int order, double time, char *messag
     }
     if (found == CP_OK && order >= 2) {
         for (int k = 0; k < CP_NSTATE; k++) x2[k] = m->rates[k][1];
-        found = cp_second_directional(X(m), m->r, m->dx, vp, x2, wp, y, &pivot_ratio, &bad_dof);
+        found = cp_second_directional(X(m), p, m->dx, vp, x2, wp, y, &pivot_ratio, &bad_dof);
         for (int k = 0; found == CP_OK && k < CP_NOUTPUT; k++) m->rates[CP_NSTATE + k][1] = y[k];
     }
     if (found != CP_OK) return no_derivatives(time, found, bad_dof, pivot_ratio, message, size);
