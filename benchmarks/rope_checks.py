@@ -5,11 +5,13 @@
 The checks of tests/test_ropes.py (which hold them to their bounds), measured: the lengthening
 pendulum's closed form in Bessel functions (LeCornu 1895; Boas, "The lengthening pendulum"),
 sympy's own KanesMethod with the rope's length a function of time, the adiabatic invariant
-(amplitude ~ l^(-3/4)) under slow hoisting, and energy less the books. Prints one line per
-check and writes benchmarks/results/rope_checks.csv.
+(amplitude ~ l^(-3/4)) under slow hoisting, energy less the books, and the native FMI 2.0 FMU's
+step with the winch's speed given as derivatives against scipy with l'' their rate. Prints one
+line per check and writes benchmarks/results/rope_checks.csv.
 """
 
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +19,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 import test_ropes as checks
 from conical_pendulum.analysis.simulate import simulate
+from conical_pendulum.builder.fmu import build_fmu
 from results_csv import write_rows
 
 
@@ -34,21 +37,6 @@ def bessel(l0, v):
     return float(np.abs(run["beta0"] - closed).max())
 
 
-def kane(scene):
-    (mass, forcing), (kane_mass, kane_forcing) = checks.sympy_functions(scene)
-    rng = np.random.default_rng(41)
-    worst = 0.0
-    for _ in range(20):
-        x = rng.uniform(-1.5, 1.5, 4 * scene.n + len(scene.ropes()))
-        x[4 * scene.n :] = rng.uniform(1.0, 20.0, len(scene.ropes()))
-        p = rng.uniform(0.5, 4.0, len(scene.core_parameter_names()))
-        p[len(scene.parameter_names()) :] = rng.uniform(-3.0, 3.0, len(scene.input_names()))
-        for ours, theirs in ((mass, kane_mass), (forcing, kane_forcing)):
-            a, b = np.asarray(ours(x, p), float), np.asarray(theirs(x, p), float)
-            worst = max(worst, float(np.abs(a - b).max() / np.abs(a).max()))
-    return worst
-
-
 def books():
     inputs = {"v_hoist0": -0.4, "a_pivot_x": 0.6, "v_pivot_x": 0.2, "wind_x": 3.0, "F_bob0_z": 40.0}
     run = simulate(
@@ -61,6 +49,35 @@ def books():
     )
     kept = run["energy"] - sum(run[name] for name in checks.SLUNG.work_names())
     return float(np.abs(kept - kept[0]).max() / np.abs(run["energy"]).max())
+
+
+def winch(path):
+    """The hoisted FMU's step of 1 s, v_hoist a line and a parabola as derivatives: the states'
+    largest error relative to max(|x|, 1) against scipy with l'' its rate, and with l'' left
+    out; then energy less the books over 3 s along the parabola, relative to the energy."""
+    states = checks.HOISTED.state_names()
+    errors = {}
+    for order in (1, 2):
+        inst = checks.winch_instance(lambda backend: path, order)
+        parameters = np.array(inst.get(*checks.HOISTED.parameter_names()))
+        start = np.array(inst.get(*states))
+        inst.step(1.0)
+        got = np.array(inst.get(*states))
+        for accelerating in (True, False):
+            _, expected, _ = checks.winch_reference(start, parameters, 1.0, order, accelerating)
+            error = float((np.abs(got - expected) / np.maximum(np.abs(expected), 1.0)).max())
+            errors[order, accelerating] = error
+        inst.close()
+    inst = checks.winch_instance(lambda backend: path, 2)
+    kept = []
+    for step in range(4):
+        if step:
+            inst.step(1.0)
+        energy, hoist, pivot = inst.get("energy", "W_hoist", "W_pivot")
+        kept.append(energy - hoist - pivot)
+    errors["books"] = float(np.ptp(kept) / abs(inst.get("energy")[0]))
+    inst.close()
+    return errors
 
 
 def main():
@@ -82,7 +99,7 @@ def main():
         ),
     }
     for case, scene in scenes.items():
-        report("sympy KanesMethod, M and F", case, kane(scene), "relative")
+        report("sympy KanesMethod, M and F", case, checks.kane_difference(scene), "relative")
     for l0, direction, what in ((5.0, 1.0, "lengthening"), (20.0, -1.0, "shortening")):
         for speed in (0.04, 0.02):
             amplitude, predicted = checks.swing_amplitude(l0, direction * speed, 15.0 / speed)
@@ -93,6 +110,19 @@ def main():
                 "relative",
             )
     report("energy less the books, 10 s", "slung, every force, hoisted", books(), "of the energy")
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "Hoisted.fmu"
+        build_fmu(checks.HOISTED, path, backend="native", fmi_version=2)
+        errors = winch(path)
+    for order, shape in ((1, "line"), (2, "parabola")):
+        for accelerating, what in ((True, "l'' its rate"), (False, "l'' left out")):
+            report(
+                "FMU step vs scipy, v_hoist moving, 1 s",
+                f"a {shape}, {what}",
+                errors[order, accelerating],
+                "relative",
+            )
+    report("energy less the books, winch accelerating", "3 s, 10 -> 7.6 m", errors["books"], "of the energy")
     write_rows("rope_checks", rows)
 
 

@@ -145,20 +145,26 @@ def sympy_functions(scene):
     ids=["load", "rope-below-a-link", "slung-forced-coupled"],
 )
 def test_it_is_sympys_kanes_method_with_the_ropes_length_a_function_of_time(scene):
-    """M and F at random states, lengths, hoist speeds and accelerations, inputs and
-    parameters."""
+    assert kane_difference(scene) < 1e-12
+
+
+def kane_difference(scene, draws=20):
+    """The largest difference of M and F from sympy's KanesMethod's, relative to their largest
+    entry, at random states, lengths, hoist speeds and accelerations, inputs and parameters."""
     (mass, forcing), (kane_mass, kane_forcing) = sympy_functions(scene)
     rng = np.random.default_rng(41)
-    for _ in range(20):
+    worst = 0.0
+    for _ in range(draws):
         x = rng.uniform(-1.5, 1.5, 4 * scene.n + len(scene.ropes()))  # as Equations.states
         x[4 * scene.n :] = rng.uniform(1.0, 20.0, len(scene.ropes()))
         # as Equations.params: the parameters, then the inputs and the lengths' accelerations
         p = rng.uniform(0.5, 4.0, len(scene.core_parameter_names()) + len(scene.ropes()))
         inputs = len(scene.parameter_names())
         p[inputs:] = rng.uniform(-3.0, 3.0, len(p) - inputs)
-        m, f = mass(x, p), forcing(x, p)
-        np.testing.assert_allclose(kane_mass(x, p), m, rtol=0, atol=1e-12 * np.abs(m).max())
-        np.testing.assert_allclose(kane_forcing(x, p), f, rtol=0, atol=1e-12 * np.abs(f).max())
+        for ours, theirs in ((mass, kane_mass), (forcing, kane_forcing)):
+            a, b = np.asarray(ours(x, p), float), np.asarray(theirs(x, p), float)
+            worst = max(worst, float(np.abs(a - b).max() / np.abs(a).max()))
+    return worst
 
 
 @pytest.mark.parametrize(
@@ -473,7 +479,9 @@ def winch_reference(start, parameters, dt, order, accelerating=True):
 def winch_instance(hoisted_fmu, order):
     """The native FMI 2.0 FMU at a swinging state, its winch's speed and the support's
     acceleration set with their derivatives to order."""
-    inst = Instance(hoisted_fmu("native"), start_values={"rtol": 1e-13, "atol": 1e-13, "beta0": 0.2, "alpha1": 0.3})
+    inst = Instance(
+        hoisted_fmu("native"), start_values={"rtol": 1e-13, "atol": 1e-13, "beta0": 0.2, "alpha1": 0.3}
+    )
     inst.fmu.setReal([inst.vr[n] for n in WINCH_INPUTS], list(WINCH[0]))
     vr = [inst.vr[n] for n in WINCH_INPUTS]
     second = WINCH[2] if order == 2 else (0.0, 0.0)

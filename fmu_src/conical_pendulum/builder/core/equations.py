@@ -337,7 +337,10 @@ def _link_points(b: _Builder, sym: _Symbols, i: int, parent: _Parent, frame: _Fr
     # and accelerates along it at -l'' e_y
     acc_rel = b.name(
         f"ar{i}",
-        frame.wb.cross(r) + w.cross(w.cross(r)) + 2 * w.cross(slide) - sym.hoist_acc(i) * frame.rotation[:, 1],
+        frame.wb.cross(r)
+        + w.cross(w.cross(r))
+        + 2 * w.cross(slide)
+        - sym.hoist_acc(i) * frame.rotation[:, 1],
     )
     partial_rel = [
         b.name(f"vr{i}_{s}", frame.partial_w[s].cross(r)) if frame.partial_w[s] != ZERO else ZERO

@@ -6,8 +6,8 @@ derives depends on the frames it happens to express vectors in, so the only fait
 reproduction is to run the same derivation. Its expressions grow exponentially with n.
 With kinematics="consistent" it is the reference the fast derivation is tested against,
 with a moving pivot, ropes (a length that is a function of time, its end sliding along the
-rope; then l'' = 0 and l' = v_hoist) and the scene's forces too (joint damping, the air's drag from each
-bob's inertial velocity, applied forces: sympy's loads on frames and points); the coupled
+rope; then l' = v_hoist and l'' = a_hoist) and the scene's forces too (joint damping, the air's drag
+from each bob's inertial velocity, applied forces: sympy's loads on frames and points); the coupled
 demo's monolithic model builds on `chain`.
 """
 
