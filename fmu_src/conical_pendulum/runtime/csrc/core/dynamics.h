@@ -11,6 +11,14 @@
  * (expanded), or of a joint's 2x2 articulated inertia (recursive). */
 #define CP_SINGULAR_RATIO 1e-13
 
+/* The core's p: the parameters and inputs (CP_NPARAM, the FMU's first variables), then each
+ * rope's l'' (Scene.ropes' order), which no variable holds. */
+#ifdef CP_NROPE
+#define CP_PSIZE (CP_NPARAM + CP_NROPE)
+#else
+#define CP_PSIZE CP_NPARAM
+#endif
+
 /* Every value computed from x and p is a cp_real (real.h, included by model.h): double
  * here, double complex in directional.c's complex-step copy of this code. */
 typedef struct {
