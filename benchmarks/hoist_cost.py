@@ -6,7 +6,7 @@ same chain with that link's length fixed.
 Chains of massless links with bobs (the crane's: a rope, then slings): 1 and 3 links in the
 expanded equations, 10 in the recursive formulation, each with the top link fixed and with it
 a rope (its length a state, the input
-v_hoist, the Coriolis term of its sliding end, and the book W_hoist, whose power -T v_hoist
+v_hoist, the Coriolis term of its sliding end and the winch's acceleration l'', and the book W_hoist, whose power -T v_hoist
 needs the rope's tension, so the accelerations); with and without a moving support (coupling).
 The right-hand side (x', the books' rates included) is timed in a C loop
 (core.seconds_per_call), medians of 15 repeats taken in turn, at a state off equilibrium with
