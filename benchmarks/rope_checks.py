@@ -6,7 +6,8 @@ The checks of tests/test_ropes.py (which hold them to their bounds), measured: t
 pendulum's closed form in Bessel functions (LeCornu 1895; Boas, "The lengthening pendulum"),
 sympy's own KanesMethod with the rope's length a function of time, the adiabatic invariant
 (amplitude ~ l^(-3/4)) under slow hoisting, energy less the books, and the native FMI 2.0 FMU's
-step with the winch's speed given as derivatives against scipy with l'' their rate. Prints one
+step with the winch's speed given as derivatives against scipy with l'' their rate, and the
+crane's load lifted from rest by a winch ramping up, whose rope holds m (g + a). Prints one
 line per check and writes benchmarks/results/rope_checks.csv.
 """
 
@@ -114,6 +115,11 @@ def main():
         path = Path(folder) / "Hoisted.fmu"
         build_fmu(checks.HOISTED, path, backend="native", fmi_version=2)
         errors = winch(path)
+        crane = Path(folder) / "Crane.fmu"
+        build_fmu(checks.CRANE, crane, backend="native", fmi_version=2)
+        ramp, after, _ = checks.winch_ramp(crane)
+    lifting = checks.CRANE_MASS * (checks.G + checks.RAMP)
+    ramp_error = max(float(np.abs(ramp / lifting - 1).max()), abs(after / (checks.CRANE_MASS * checks.G) - 1))
     for order, shape in ((1, "line"), (2, "parabola")):
         for accelerating, what in ((True, "l'' its rate"), (False, "l'' left out")):
             report(
@@ -123,6 +129,7 @@ def main():
                 "relative",
             )
     report("energy less the books, winch accelerating", "3 s, 10 -> 7.6 m", errors["books"], "of the energy")
+    report("tension m (g + a), winch ramping up", "crane, 0 to 0.5 m/s in 1 s", ramp_error, "relative")
     write_rows("rope_checks", rows)
 
 

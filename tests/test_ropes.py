@@ -597,6 +597,41 @@ def test_the_winchs_starts_and_stops_are_booked_in_w_hoist(built_fmu, backend, f
     assert books_drift(run) < 1e-11
 
 
+# the crane's hook and load, and the winch's acceleration over its ramp from rest
+CRANE_MASS, RAMP = 2150.0, 0.5
+
+
+def winch_ramp(path):
+    """The crane's native FMI 2.0 FMU, hook and load hanging straight at rest, the winch ramped
+    from 0 to RAMP m/s in 1 s by v_hoist0's derivative set once, then held at that speed: the
+    rope's tension at the ten points of the ramp and at 0.1 s after it, and (v_hoist0, l0,
+    W_hoist) at the ramp's end."""
+    fmu = Instance(path, start_values=CRANE_START)
+    vr = fmu.vr["v_hoist0"]
+    fmu.fmu.setRealInputDerivatives([vr], [1], [-RAMP])
+    ramp = []
+    for _ in range(10):
+        fmu.step(0.1)
+        ramp.append(fmu.get("T_rope0")[0])
+    end = fmu.get("v_hoist0", "l0", "W_hoist")
+    fmu.fmu.setRealInputDerivatives([vr], [1], [0.0])  # the ramp's end: at constant speed
+    fmu.step(0.1)
+    after = fmu.get("T_rope0")[0]
+    fmu.close()
+    return np.array(ramp), after, end
+
+
+def test_a_winch_ramping_up_lifts_the_crane_load_with_its_weight_and_mass_times_acceleration(built_fmu):
+    """Over the ramp the tension is (m_hook + m_load)(g + a), a the winch's acceleration upward,
+    and W_hoist its integral times the speed, with no impulse booked (the speed is continuous);
+    at constant speed after it, the weight alone."""
+    ramp, after, end = winch_ramp(built_fmu(CRANE, backend="native"))
+    np.testing.assert_allclose(ramp, CRANE_MASS * (G + RAMP), rtol=1e-12)
+    work = CRANE_MASS * (G + RAMP) * RAMP / 2
+    assert end == pytest.approx([-RAMP, 12.0 - RAMP / 2, work], rel=1e-12)
+    assert after == pytest.approx(CRANE_MASS * G, rel=1e-12)
+
+
 # a rope with six links below it: the recursive formulation (chain.c's cp_energy)
 LONG_HOISTED = Scene(
     links=(rope(length=6.0),) + (Link(length=2.0, mass=3.0, bob_mass=1.0),) * 6, coupling=True
