@@ -521,20 +521,28 @@ def test_a_winch_speed_given_with_its_derivatives_accelerates_the_rope(hoisted_f
     inst.close()
 
 
-def test_energy_less_the_books_stays_constant_while_the_winch_accelerates(hoisted_fmu):
+def accelerating_winch_books(path):
     """Three steps of 1 s along v_hoist0's parabola (the FMU steps its inputs along it, the rope
-    from 10 m to 7.6 m): W_hoist holds the winch's work, the acceleration's included."""
-    inst = winch_instance(hoisted_fmu, 2)
+    from 10 m to 7.6 m): the spread of energy less the books over the four points, relative to
+    the energy at the end, then the rope's length and W_hoist there."""
+    inst = winch_instance(lambda backend: path, 2)
     kept = []
     for step in range(4):
         if step:
             inst.step(1.0)
         energy, hoist, pivot = inst.get("energy", "W_hoist", "W_pivot")
         kept.append(energy - hoist - pivot)
-    assert inst.get("l0")[0] == pytest.approx(7.6, abs=1e-12)
-    assert abs(inst.get("W_hoist")[0]) > 1000.0
-    assert np.ptp(kept) < 1e-9 * abs(inst.get("energy")[0]), kept
+    length = inst.get("l0")[0]
     inst.close()
+    return float(np.ptp(kept) / abs(energy)), length, hoist
+
+
+def test_energy_less_the_books_stays_constant_while_the_winch_accelerates(hoisted_fmu):
+    """W_hoist holds the winch's work, the acceleration's included."""
+    drift, length, hoist = accelerating_winch_books(hoisted_fmu("native"))
+    assert length == pytest.approx(7.6, abs=1e-12)
+    assert abs(hoist) > 1000.0
+    assert drift < 1e-9
 
 
 @pytest.mark.parametrize("order", [1, 2])
