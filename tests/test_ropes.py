@@ -26,11 +26,12 @@ from conical_pendulum.builder.core.codegen import generate
 from conical_pendulum.builder.core.equations import derive
 from conical_pendulum.builder.core.kane import kanes_method
 from conical_pendulum.scene import load_scene, scene_from_dict
-from fmu_helpers import INSTANCES, Instance
+from fmu_helpers import INSTANCES, Instance, Instance3
 from test_directional import Model
 from test_interpolation import assert_derivatives_match_differences, continuous_outputs
 
 G = 9.8
+WARNING = 1  # fmi2Warning, fmi3Warning
 
 
 def rope(length=10.0, low=1.0, high=30.0, **fields):
@@ -688,20 +689,49 @@ def test_model_exchange_books_the_winchs_jumps_set_in_event_mode(built_fmu, fmi_
     assert books_drift(run) < 1e-9
 
 
-def test_a_winch_set_in_continuous_time_mode_jumps_no_state(hoisted_fmu):
+def test_a_winch_set_in_continuous_time_mode_jumps_no_state_and_is_warned_of(hoisted_fmu):
     """In continuous-time mode the host integrates the states, which cannot jump: a new v_hoist
     there is taken, W_hoist stays, and energy less the books jumps by the impulse's work (what
-    docs/model.md says a host that wants it booked does: set v_hoist in event mode)."""
+    docs/model.md says a host that wants it booked does: set v_hoist in event mode). A speed
+    that varies between events is integrated without its rate, the rope's l'' (Model Exchange
+    gives no input derivatives): fmi2SetReal says so once, with fmi2Warning, and takes it."""
     model = Model(hoisted_fmu("native"), HOISTED)
     x = np.array(HOISTED.initial_state({"beta0": 0.2, "omega1": 0.3}))
     inputs = np.zeros(len(HOISTED.input_names()))
     model.set(x, inputs)
+    assert model.messages == []  # the same values: nothing changed
     before = model.fmu.getReal([model.vr["energy"]])[0]
     inputs[HOISTED.input_names().index("v_hoist0")] = -0.5
     model.set(x, inputs)
-    assert model.fmu.getReal([model.vr["W_hoist"]]) == [0.0]
+    assert model.fmu.getReal([model.vr["v_hoist0"], model.vr["W_hoist"]]) == [-0.5, 0.0]
     assert abs(model.fmu.getReal([model.vr["energy"]])[0] - before) > 10.0  # 550 kg, 0.5 m/s
+    warning = (
+        "fmi2SetReal: v_hoist0 = -0.5 (was 0) set in continuous-time mode: a winch's speed that "
+        "varies between events is integrated with its rope's acceleration l'' taken as 0"
+    )
+    assert [status for status, _ in model.messages] == [WARNING]
+    assert model.messages[0][1].startswith(warning), model.messages
+    inputs[HOISTED.input_names().index("v_hoist0")] = -0.4
+    model.set(x, inputs)  # said once
+    assert len(model.messages) == 1
     model.close()
+
+
+def test_fmi3_model_exchange_warns_once_of_a_winch_speed_set_in_continuous_time_mode(hoisted_fmu):
+    """fmi3SetFloat64 as fmi2SetReal: fmi3Warning once, the value taken; at an event, none."""
+    inst = Instance3(hoisted_fmu("native", 3), interface="ModelExchange")
+    vr = inst.vr["v_hoist0"]
+    inst.fmu.setFloat64([vr], [-0.2])  # in event mode, where initialization ends: no warning
+    inst.fmu.enterContinuousTimeMode()
+    assert inst.messages == []
+    inst.fmu.setFloat64([vr], [-0.3])
+    inst.fmu.setFloat64([vr], [-0.4])
+    assert [status for status, _ in inst.messages] == [WARNING]
+    assert inst.messages[0][1].startswith(
+        "fmi3SetFloat64: v_hoist0 = -0.3 (was -0.2) set in continuous-time mode"
+    )
+    assert inst.get("v_hoist0") == [-0.4]
+    inst.close()
 
 
 @pytest.mark.parametrize("backend, fmi_version", [("pythonfmu", 2), ("native", 2), ("native", 3)])

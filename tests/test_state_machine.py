@@ -500,8 +500,8 @@ def test_the_log_categories_are_written_once_and_the_glue_logs_in_no_other(nativ
     with zipfile.ZipFile(native) as archive:
         config = archive.read("sources/fmu_config.h").decode()
         glue = archive.read("sources/fmi2_glue.c").decode()
-    assert "enum { CP_LOG_STATUS_ERROR, CP_LOG_STATUS_DISCARD, CP_NLOG };" in config
-    assert '{"logStatusError", "logStatusDiscard"}' in config
+    assert "enum { CP_LOG_STATUS_ERROR, CP_LOG_STATUS_DISCARD, CP_LOG_STATUS_WARNING, CP_NLOG };" in config
+    assert '{"logStatusError", "logStatusDiscard", "logStatusWarning"}' in config
     assert "logStatus" not in glue  # categories by their constants only: a new one must be declared
 
 
@@ -521,7 +521,7 @@ def test_set_debug_logging_honours_the_declared_categories(native):
         "logStatusError",
         "fmi2SetDebugLogging: log category "
         '"logEverything" is not this FMU\'s (its model description declares '
-        "logStatusError, logStatusDiscard)",
+        "logStatusError, logStatusDiscard, logStatusWarning)",
     )
     assert fmu.logged() == both  # unchanged: logStatusDiscard alone is still on
     assert fmu.set(False, ["logStatusDiscard"]) == errors  # off: those listed

@@ -53,6 +53,7 @@ MAX_DERIVATIVE_ORDER = 2
 LOG_CATEGORIES = {
     "logStatusError": "refused values and calls",
     "logStatusDiscard": "steps that could not complete, with a diagnosis",
+    "logStatusWarning": "values taken but not honoured in full, and what is lost",
 }
 
 

@@ -73,7 +73,7 @@ cdef extern from "fmu_model.h":
     ctypedef struct ModelData:
         pass
     ctypedef enum ModelStatus:
-        MODEL_OK, MODEL_DISCARD, MODEL_REFUSED, MODEL_NO_VARIABLE
+        MODEL_OK, MODEL_DISCARD, MODEL_REFUSED, MODEL_WARNING, MODEL_NO_VARIABLE
     ctypedef struct ModelSizes:
         size_t data_size
         int n_real, n_integer, n_state

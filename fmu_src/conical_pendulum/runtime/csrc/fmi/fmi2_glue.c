@@ -128,6 +128,7 @@ static const FmiStandard standard = {
     .n_log_categories = CP_NLOG,
     .log_error = CP_LOG_STATUS_ERROR,
     .log_discard = CP_LOG_STATUS_DISCARD,
+    .log_warning = CP_LOG_STATUS_WARNING,
     .variable_name = cp_variable_name,
     .emit = emit,
 };
@@ -244,10 +245,14 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     FmiInstance *inst = CHECKED(c, fmi2SetReal);
     if (!inst) return fmi2Error;
     if (nvr && (!vr || !value)) return REFUSE(inst, "fmi2SetReal: vr or value is NULL");
-    for (size_t k = 0; k < nvr; k++)  /* all checked before any is taken */
-        if (fmi_check_real(inst, "fmi2SetReal", "Real", vr[k], vr[k], value[k])) return fmi2Error;
+    FmiStatus status = FMI_OK;
+    for (size_t k = 0; k < nvr; k++) {  /* all checked before any is taken */
+        const FmiStatus checked = fmi_check_real(inst, "fmi2SetReal", "Real", vr[k], vr[k], value[k]);
+        if (checked == FMI_ERROR) return fmi2Error;
+        if (checked > status) status = checked;  /* a warning: taken, and said */
+    }
     for (size_t k = 0; k < nvr; k++) model_set_real(inst->model, vr[k], value[k], fmi_phase(inst));
-    return fmi2OK;
+    return (fmi2Status)status;
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,

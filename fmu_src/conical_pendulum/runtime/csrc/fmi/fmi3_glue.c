@@ -139,6 +139,7 @@ static const FmiStandard standard = {
     .n_log_categories = CP_NLOG,
     .log_error = CP_LOG_STATUS_ERROR,
     .log_discard = CP_LOG_STATUS_DISCARD,
+    .log_warning = CP_LOG_STATUS_WARNING,
     .variable_name = cp_variable_name,
     .emit = emit,
 };
@@ -358,16 +359,19 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
     FmiInstance *inst = CHECKED(c, fmi3SetFloat64);
     if (!inst) return fmi3Error;
     if (check_values(inst, "fmi3SetFloat64", vr, nvr, values, nValues)) return fmi3Error;
+    FmiStatus status = FMI_OK;
     for (size_t k = 0, j = 0; k < nvr; k++) {  /* all checked before any is taken */
         if (vr[k] == VR_TIME)
             return REFUSE(inst, "fmi3SetFloat64: time is the independent variable; it is set "
                           "by fmi3EnterInitializationMode, fmi3SetTime and fmi3DoStep");
         const unsigned *members;
         const size_t n = elements(vr[k], &members);
-        for (size_t e = 0; e < n; e++, j++)
-            if (fmi_check_real(inst, "fmi3SetFloat64", "Float64", ELEMENT(vr[k], members, e), vr[k],
-                               values[j]))
-                return fmi3Error;
+        for (size_t e = 0; e < n; e++, j++) {
+            const FmiStatus checked = fmi_check_real(inst, "fmi3SetFloat64", "Float64",
+                                                     ELEMENT(vr[k], members, e), vr[k], values[j]);
+            if (checked == FMI_ERROR) return fmi3Error;
+            if (checked > status) status = checked;  /* a warning: taken, and said */
+        }
     }
     for (size_t k = 0, j = 0; k < nvr; k++) {
         const unsigned *members;
@@ -375,7 +379,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
         for (size_t e = 0; e < n; e++, j++)
             model_set_real(inst->model, ELEMENT(vr[k], members, e), values[j], fmi_phase(inst));
     }
-    return fmi3OK;
+    return (fmi3Status)status;
 }
 
 /* Int32 and UInt64: no arrays (fmi3_arrays.h's are Float64). */

@@ -228,6 +228,9 @@ FmiStatus fmi_check_real(FmiInstance *inst, const char *function, const char *ty
     char message[MESSAGE_SIZE];
     switch (model_check_real(inst->model, vr, value, fmi_phase(inst), message, sizeof message)) {
     case MODEL_OK: return FMI_OK;
+    case MODEL_WARNING:
+        fmi_log(inst, FMI_WARNING, inst->standard->log_warning, "%s: %s", function, message);
+        return FMI_WARNING;
     case MODEL_NO_VARIABLE:
         return fmi_error(inst, "%s: value reference %u is not a %s variable", function, named, type);
     default: return fmi_error(inst, "%s", message);

@@ -65,7 +65,7 @@ typedef struct {
     const char *token_mismatch;           /* instantiation's refusal of another token */
     const char *const *log_categories;    /* cp_log_categories, CP_NLOG of them */
     int n_log_categories;
-    int log_error, log_discard;           /* CP_LOG_STATUS_ERROR, CP_LOG_STATUS_DISCARD */
+    int log_error, log_discard, log_warning;  /* CP_LOG_STATUS_ERROR, _DISCARD, _WARNING */
     const char *(*variable_name)(unsigned vr);  /* cp_variable_name: a scalar's name */
     /* A formatted message to the host's logger of inst (the layer's instance), if it has one. */
     void (*emit)(FmiInstance *inst, FmiStatus status, const char *category, const char *text);
@@ -165,7 +165,8 @@ FmiStatus fmi_get_reals(FmiInstance *inst, const char *function, const char *typ
                         const unsigned vr[], size_t nvr, double values[]);
 
 /* Whether value may be set into the Real variable vr (model_check_real, in fmi_phase), without
- * taking it: FMI_OK, or refused. */
+ * taking it: FMI_OK; FMI_WARNING, logged, where it is taken but not honoured in full; or
+ * refused (FMI_ERROR). */
 FmiStatus fmi_check_real(FmiInstance *inst, const char *function, const char *type, unsigned vr,
                          unsigned named, double value);
 

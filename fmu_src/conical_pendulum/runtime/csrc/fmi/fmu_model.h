@@ -63,6 +63,8 @@ typedef enum {
     MODEL_DISCARD,      /* cannot be computed here (a singular mass matrix, a failed step):
                            message says why; the data is as it was, or at the last step */
     MODEL_REFUSED,      /* a value or request refused: message says why; nothing taken */
+    MODEL_WARNING,      /* a value that may be taken but is not honoured in full: message
+                           says what is lost (the FMI layer logs it as a warning) */
     MODEL_NO_VARIABLE   /* the value reference is no variable of that type: no message */
 } ModelStatus;
 
@@ -141,8 +143,10 @@ typedef enum {
 /* Whether value may be set into the Real variable vr in phase (a ModelPhase), without taking
  * it: MODEL_OK, MODEL_REFUSED (message: a calculated variable; a fixed one once initialized,
  * that is after initialization mode; a tunable one in continuous-time mode; or the value
- * breaks the variable's rule), MODEL_NO_VARIABLE. An FMI layer checks every value of a call
- * before it sets any. */
+ * breaks the variable's rule), MODEL_WARNING (message: a rope's winch speed changed in
+ * continuous-time mode, where its rate, the rope's l'', is not known and taken as 0; said
+ * once per instance), MODEL_NO_VARIABLE. An FMI layer checks every value of a call before it
+ * sets any. */
 ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int phase,
                              char *message, size_t size);
 

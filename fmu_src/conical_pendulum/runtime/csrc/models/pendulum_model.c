@@ -38,6 +38,7 @@ struct ModelData {
     double rates[CP_NSTATE + CP_NOUTPUT][2];
     int rates_valid;
     int states_jumped;            /* a value set at an event jumped a book (model_states_jumped) */
+    int hoist_warned;             /* a winch speed changed in continuous-time mode was warned of */
 };
 
 const ModelSizes model_sizes = {sizeof(ModelData), CP_NREAL, CP_VR_DERIVATIVE - CP_NREAL,
@@ -227,10 +228,18 @@ ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time
 ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int phase,
                              char *message, size_t size)
 {
-    (void)m;
     if (vr >= CP_NREAL && !is_derivative(vr)) return MODEL_NO_VARIABLE;
     if (cp_not_settable(vr, phase, message, size) || real_rule_refusal(vr, value, message, size))
         return MODEL_REFUSED;
+    if (phase == MODEL_CONTINUOUS_TIME && is_hoist(vr) && value != m->r[vr] && !m->hoist_warned) {
+        snprintf(message, size, "%s = %g (was %g) set in continuous-time mode: a winch's speed "
+                 "that varies between events is integrated with its rope's acceleration l'' "
+                 "taken as 0 (Model Exchange gives no input derivatives), leaving out the force "
+                 "that accelerates what hangs below; set it only at events (its jump is then "
+                 "booked in W_hoist), or use Co-Simulation with its derivatives. Said once",
+                 cp_variable_name(vr), value, m->r[vr]);
+        return MODEL_WARNING;
+    }
     return MODEL_OK;
 }
 
@@ -275,8 +284,8 @@ void model_set_real(ModelData *m, unsigned vr, double value, int phase)
 #ifdef CP_ENERGY_JUMPS
         if (phase == MODEL_AT_EVENT && vr < CP_NPARAM) book_jump(m, vr, value);
 #endif
+        if (phase == MODEL_CONTINUOUS_TIME && is_hoist(vr)) m->hoist_warned = 1;
     }
-    (void)phase;
     /* an input: the step decides (cosim.h), an input of the same bits changing nothing (a
      * book it jumped is in the state the restart takes) */
     if (!is_input(vr)) m->flight.live = 0;
@@ -614,7 +623,8 @@ const char *model_invalid(const ModelData *m, char *message, size_t size)
     const struct { const char *name; int value; } flags[] = {
         {"rtol_set", m->rtol_set}, {"live", m->flight.live}, {"fsal", m->flight.step.fsal},
         {"dense", m->flight.step.dense}, {"dx_valid", m->dx_valid},
-        {"outputs_valid", m->outputs_valid}, {"states_jumped", m->states_jumped}};
+        {"outputs_valid", m->outputs_valid}, {"states_jumped", m->states_jumped},
+        {"hoist_warned", m->hoist_warned}};
     for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
         if (flags[k].value != 0 && flags[k].value != 1) {
             snprintf(message, size, "%s = %d: must be 0 or 1", flags[k].name, flags[k].value);
