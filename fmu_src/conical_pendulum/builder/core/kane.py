@@ -91,10 +91,11 @@ def kanes_method(scene):
     kane = me.KanesMethod(I, q_ind=q, u_ind=u, kd_eqs=kd)
     kane.kanes_equations(bodies, loads)
     plain = {s: sm.Symbol(name) for s, name in zip(q + u, scene.state_names())}
-    for i in scene.ropes():  # a rope's length, a function of time: l' = v_hoist, l'' = a_hoist
+    # a rope's length, a function of time: l' = v_hoist, l'' = a_hoist
+    for i, acceleration in zip(scene.ropes(), scene.hoist_acceleration_names()):
         length = me.dynamicsymbols(f"l{i}")
         plain.update(
-            {length.diff(me.dynamicsymbols._t, 2): sm.Symbol(f"a_hoist{i}"), length.diff(): p[f"v_hoist{i}"]}
+            {length.diff(me.dynamicsymbols._t, 2): sm.Symbol(acceleration), length.diff(): p[f"v_hoist{i}"]}
         )
         plain[length] = sm.Symbol(f"l{i}")
     if scene.coupling:  # the pivot's acceleration, and its velocity where the drag sees it

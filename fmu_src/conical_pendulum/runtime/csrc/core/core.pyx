@@ -209,9 +209,13 @@ cdef const double[::1] _vector(object a, int size, str what):
 
 cdef const double[::1] _core_p(object p_in, object hoist_acc):
     """The core's p (dynamics.h): the parameters and inputs p, then each rope's l'' (the
-    rates of its v_hoist, Scene.ropes' order; None: 0, the winches at constant speed)."""
+    rates of its v_hoist, Scene.ropes' order; None: 0, the winches at constant speed). Without
+    ropes, p itself."""
+    cdef const double[::1] parameters = _vector(p_in, CP_NPARAM, "parameters")
+    if CP_PSIZE == CP_NPARAM and hoist_acc is None:
+        return parameters
     p = np.zeros(CP_PSIZE)
-    p[:CP_NPARAM] = _vector(p_in, CP_NPARAM, "parameters")
+    p[:CP_NPARAM] = parameters
     if hoist_acc is not None:
         p[CP_NPARAM:] = _vector(hoist_acc, CP_PSIZE - CP_NPARAM, "hoist_acc")
     return p

@@ -44,8 +44,8 @@ int cp_chain_rates_and_apparent_mass(cp_model *model, const cp_real *x, cp_real 
 #endif
 #endif
 
-/* The scene's outputs at x, p the core's p (cp_model). Those needing accelerations (the pivot force) get them from
-   cp_rhs, and are NaN where the mass matrix is singular. */
+/* The scene's outputs at x, p the core's p (cp_model). Those needing accelerations (the pivot
+   force) get them from cp_rhs, and are NaN where the mass matrix is singular. */
 void cp_eval_outputs(const cp_real *x, const cp_real *p, cp_real *y);
 
 #endif

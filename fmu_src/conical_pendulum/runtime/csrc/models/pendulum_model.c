@@ -106,17 +106,19 @@ static void invalidate(ModelData *m)
     m->flight.live = 0;
 }
 
-/* The core's p at the model's values (dynamics.h's cp_model) into p, returned: the parameters
- * and inputs that begin m->r, then each rope's l'', its v_hoist's first derivative as the
- * master set it (0: held; Model Exchange has none). */
-static double *core_p(const ModelData *m, double p[CP_PSIZE])
+/* The core's p at the model's values (dynamics.h's cp_model): the parameters and inputs that
+ * begin m->r, then each rope's l'', its v_hoist's first derivative as the master set it (0:
+ * held; Model Exchange has none), as cp_input_at places it, into buffer; without ropes, m->r
+ * itself. */
+static const double *core_p(const ModelData *m, double buffer[CP_PSIZE])
 {
-    memcpy(p, m->r, CP_NPARAM * sizeof p[0]);
 #ifdef CP_NROPE
-    for (int k = 0; k < CP_NROPE; k++)
-        p[CP_NPARAM + k] = m->input_rates[cp_rope_hoist[k] - CP_VR_INPUT][0];
+    cp_input_at(m->r, (const double(*)[2])m->input_rates, 0.0, buffer);
+    return buffer;
+#else
+    (void)buffer;
+    return m->r;
 #endif
-    return p;
 }
 
 /* Whether the input vr is a rope's winch speed, whose derivative is its l''. */
@@ -249,8 +251,7 @@ ModelStatus model_check_real(const ModelData *m, unsigned vr, double value, int 
 static int jump_book(unsigned k)
 {
 #ifdef CP_NROPE
-    for (int r = 0; r < CP_NROPE; r++)
-        if ((int)k == cp_rope_hoist[r]) return 2 * CP_NDOF + CP_WORK_HOIST;
+    if (is_hoist(k)) return 2 * CP_NDOF + CP_WORK_HOIST;
 #endif
 #ifdef CP_NLOAD
     for (int j = 0; j < CP_NLOAD; j++)
@@ -268,8 +269,9 @@ static void book_jump(ModelData *m, unsigned k, double value)
 {
     const int book = jump_book(k);
     if (book < 0) return;
-    double p[CP_PSIZE], before, after;
-    cp_energy(X(m), core_p(m, p), &before);
+    double buffer[CP_PSIZE], p[CP_PSIZE], before, after;
+    memcpy(p, core_p(m, buffer), sizeof p);
+    cp_energy(X(m), p, &before);
     p[k] = value;
     cp_energy(X(m), p, &after);
     X(m)[book] += after - before;
@@ -492,7 +494,7 @@ static ModelStatus time_rates(ModelData *m, int order, double time, char *messag
     ModelStatus status = derivatives(m, time, message, size);
     if (status != MODEL_OK) return status;
     double vp[CP_PSIZE] = {0}, wp[CP_PSIZE] = {0}, x2[CP_NSTATE], y[CP_NOUTPUT + 1],
-           pivot_ratio, p[CP_PSIZE];
+           pivot_ratio, buffer[CP_PSIZE];
     for (int k = 0; k < CP_NINPUT; k++) {
         vp[CP_VR_INPUT + k] = m->input_rates[k][0];  /* the inputs end p (fmu_config.h) */
         wp[CP_VR_INPUT + k] = m->input_rates[k][1];
@@ -502,7 +504,7 @@ static ModelStatus time_rates(ModelData *m, int order, double time, char *messag
     for (int k = 0; k < CP_NROPE; k++)
         vp[CP_NPARAM + k] = m->input_rates[cp_rope_hoist[k] - CP_VR_INPUT][1];
 #endif
-    core_p(m, p);
+    const double *p = core_p(m, buffer);
     int bad_dof, found = CP_OK;
     if (m->rates_valid < 1) {
         found = cp_directional(X(m), p, m->dx, vp, x2, y, &pivot_ratio, &bad_dof);
