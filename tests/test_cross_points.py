@@ -27,7 +27,7 @@ from fmu_helpers import Instance, Instance3
 SEED = Scene.uniform(3)
 COUPLED = Scene.uniform(3, coupling=True)  # a_pivot inputs
 START = {"alpha0": 0.6, "delta1": 0.4}
-METHODS = {1: "rk45", 2: "dop853"}  # the FMU's solver values
+METHODS = {1: "rk45", 2: "dop853", 3: "radau", 4: "auto"}  # the FMU's solver values
 FMUS = [
     pytest.param(("native", 2), id="native-fmi2"),
     pytest.param(("native", 3), id="native-fmi3"),
@@ -105,7 +105,7 @@ def test_the_interpolants_are_scipys_dense_output_on_the_same_steps(core, method
 
 
 @pytest.mark.parametrize("kind", FMUS)
-@pytest.mark.parametrize("solver", [1, 2])
+@pytest.mark.parametrize("solver", [1, 2, 3, 4])
 @pytest.mark.parametrize("interval, steps", [(1 / 60, 300), (1e-3, 2000)])
 def test_the_states_at_the_points_are_the_uninterrupted_runs(built_fmu, core, kind, solver, interval, steps):
     """Bit for bit, and at the same cost: the same steps, the points from their dense output."""
@@ -118,7 +118,8 @@ def test_the_states_at_the_points_are_the_uninterrupted_runs(built_fmu, core, ki
     grid, nfev = core.integrate_grid(x0, p, times, tol, tol, method=METHODS[solver])
     np.testing.assert_array_equal(states, grid)
     assert rhs[-1] == nfev
-    assert np.count_nonzero(np.diff(rhs) == 0) > steps / 2  # most points cost nothing
+    if METHODS[solver] != "radau":  # Radau's order-5 steps on the seed at 1e-8: about 1/60 s
+        assert np.count_nonzero(np.diff(rhs) == 0) > steps / 2  # most points cost nothing
 
 
 @pytest.mark.parametrize("kind", [("native", 2), ("native", 3)], ids=["native-fmi2", "native-fmi3"])
@@ -252,7 +253,7 @@ print(json.dumps(seen))
 
 
 @pytest.mark.parametrize("kind", EVERY_FMU)
-@pytest.mark.parametrize("solver", [0, 1, 2])
+@pytest.mark.parametrize("solver", [0, 1, 2, 3, 4])
 def test_a_state_saved_inside_a_step_continues_bit_for_bit_in_another_process(
     built_fmu, core, kind, solver, tmp_path
 ):
@@ -281,6 +282,49 @@ def test_a_state_saved_inside_a_step_continues_bit_for_bit_in_another_process(
     )
     replayed = np.array([[float.fromhex(v) for v in row] for row in json.loads(replay.stdout)])
     np.testing.assert_array_equal(replayed, straight[1:])
+
+
+@pytest.mark.parametrize("kind", EVERY_FMU)
+def test_a_master_counting_its_points_as_k_h_continues_the_integration(built_fmu, core, kind):
+    """Points k h differ from the FMU's t + h in the last bits at some k: within
+    CP_SAME_POINT_ULPS units in the last place they are the same point, so the run costs
+    what one of t + h points costs (issue 46 measured 2.4 times as much before) and answers
+    the uninterrupted run at the master's times."""
+    interval, steps, tol = 1 / 60, 600, 1e-10
+    times = interval * np.arange(steps + 1)
+    assert np.count_nonzero(times != points(interval, steps)) > steps / 10  # the two differ
+    fmu = open_fmu(built_fmu, kind, SEED, {**START, **settings(2, tol)}, times[-1])
+    seen = [fmu.get(*core.STATE_NAMES)]
+    for t in times[:-1]:
+        fmu.fmu.doStep(t, interval)
+        seen.append(fmu.get(*core.STATE_NAMES))
+    (rhs,) = fmu.get("n_rhs")
+    fmu.close()
+    x0, p = SEED.initial_state(START), np.array(SEED.parameters())
+    grid, nfev = core.integrate_grid(x0, p, times, tol, tol, method="dop853")
+    assert rhs == nfev
+    np.testing.assert_allclose(seen, grid, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("kind", EVERY_FMU)
+def test_a_state_restored_a_few_bits_off_the_masters_point_replays_the_same(built_fmu, core, kind):
+    """Saved at t = 0.1 + 0.2 (0.30000000000000004) and stepped again from 0.3, as a master
+    that counts its own time says it: the same integration as the step taken from the saved
+    time (the same right-hand sides), answered at the master's time, a unit in the last place
+    from the other's."""
+    fmu = open_fmu(built_fmu, kind, SEED, {**START, **settings(2, 1e-10)}, 10.0)
+    fmu.fmu.doStep(0.0, 0.1)
+    fmu.fmu.doStep(0.1, 0.2)
+    state = fmu.get_state()
+    fmu.fmu.doStep(0.1 + 0.2, 0.25)
+    straight = fmu.get(*core.STATE_NAMES, "n_rhs")
+    fmu.set_state(state)
+    fmu.fmu.doStep(0.3, 0.25)
+    again = fmu.get(*core.STATE_NAMES, "n_rhs")
+    fmu.free_state(state)
+    fmu.close()
+    assert again[-1] == straight[-1]
+    np.testing.assert_allclose(again[:-1], straight[:-1], rtol=0, atol=1e-15)
 
 
 @pytest.mark.parametrize("backend", ["native", "pythonfmu"])

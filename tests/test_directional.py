@@ -13,6 +13,7 @@ from conftest import HOISTED_LINKS
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.runtime.rules import STATISTICS
 from differences import bad_reference_cases, richardson, ridders
 from fmu_helpers import Instance
 
@@ -214,7 +215,7 @@ def test_it_agrees_with_differences_of_the_compiled_core(models, scene):
     # the FMU's unknowns: derivatives, then states (their own values), the calculated outputs
     # and the statistics; the core gives the derivatives and the calculated outputs
     rows = list(range(n)) + list(range(2 * n, 2 * n + core.NOUTPUT))
-    assert len(rows) == len(FD) and n_unknown == 2 * n + core.NOUTPUT + 3
+    assert len(rows) == len(FD) and n_unknown == 2 * n + core.NOUTPUT + len(STATISTICS)
     scale = np.abs(J).max(axis=0)
     assert (np.abs(J[rows] - FD) / scale).max() < 1e-8
 

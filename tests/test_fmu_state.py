@@ -93,6 +93,7 @@ class NativeState:
         self.data = bytes(data)
         after_r = self.MODEL + 8 * len(reals)
         flight = after_r + 32  # cosim.h's cp_flight, its cp_step after live, reserved, t_point
+        matrices = flight + 88 + 8 * (10 * n_state + 1 + 3 * (n_input + 1))  # cosim.h's cp_matrices
         tail = size - 8 * n_state - 8
         self.offsets = {name: at for name, at, _ in self.OWN} | {
             "solver": after_r,
@@ -107,8 +108,15 @@ class NativeState:
             "h": flight + 32,
             "fsal": flight + 40,
             "dense": flight + 44,
-            "rows": flight + 48,
-            "work": flight + 48 + 8 * (10 * n_state + 1 + 3 * (n_input + 1)),
+            "method": flight + 48,
+            "next": flight + 52,
+            "stiff_steps": flight + 56,
+            "h_old": flight + 64,
+            "rows": flight + 88,
+            "jac_valid": matrices,
+            "lu_valid": matrices + 8,
+            "rho": matrices + 16,
+            "work": matrices + 24 + 8 * (4 * n_state**2 + 2 * n_state),
             "dx": tail,
             "dx_valid": tail + 8 * n_state,
             "outputs_valid": tail + 8 * n_state + 4,
@@ -122,6 +130,11 @@ class NativeState:
             "h": "d",
             "fsal": "i",
             "dense": "i",
+            "method": "i",
+            "next": "i",
+            "stiff_steps": "i",
+            "jac_valid": "i",
+            "lu_valid": "i",
             "dx_valid": "i",
             "outputs_valid": "i",
         }
@@ -163,12 +176,12 @@ class NativeState:
 
 
 class PythonState(NativeState):
-    """The pythonfmu FMU's serialized state: the slave's mode and Radau's carried step
-    (runtime/slave.py's OWN), then the same ModelData, no header."""
+    """The pythonfmu FMU's serialized state: the slave's mode (runtime/slave.py's OWN), then
+    the same ModelData, no header."""
 
     refused_status = FATAL
-    MODEL = 16
-    OWN = (("mode", 0, "i"), ("radau_h", 8, "d"))
+    MODEL = 8
+    OWN = (("mode", 0, "i"),)
     STEPPING = 2  # the slave's MODES.index("step")
 
     def __init__(self, instance, data):
@@ -259,7 +272,26 @@ CASES = [
     ("negative step", "h", -1.0, None, "h = -1.0: the solver's carried step cannot be negative"),
     ("NaN step", "h", math.nan, None, "h = nan: must be finite"),
     ("no FMI state", "mode", 6, None, "{}"),
-    ("unknown solver", "solver", 4, 3, "solver = {}: choose 0 to"),
+    ("unknown solver", "solver", 5, None, "solver = {}: choose 0 to"),
+    ("unknown step method", "method", 7, None, "step in flight: method = 7: must be from 1 to 3"),
+    ("unknown next method", "next", 0, None, "step in flight: next = 0: must be from 2 to 3"),
+    ("negative stiffness count", "stiff_steps", -1, None, "step in flight: stiff_steps = -1: must be from 0"),
+    ("NaN old step", "h_old", math.nan, None, "step in flight: h_old = nan: must be finite"),
+    ("Jacobian flag 2", "jac_valid", 2, None, "Jacobian: jac_valid = 2: must be 0 or 1"),
+    (
+        "factors without a Jacobian",
+        "lu_valid",
+        1,
+        None,
+        "Jacobian: reserved = 0, lu_valid = 1 with jac_valid = 0",
+    ),
+    (
+        "NaN spectral radius",
+        "rho",
+        math.nan,
+        None,
+        "Jacobian: reserved = 0, lu_valid = 0 with jac_valid = 0, rho = nan",
+    ),
     ("rtol 0", "rtol", 0.0, None, None),
     ("max_steps 0", "max_steps", 0, None, "max_steps = 0: must be at least 1"),
     ("fsal 2", "fsal", 2, None, "fsal = 2: must be 0 or 1"),

@@ -92,9 +92,11 @@ def test_model_description_matches_the_pythonfmu_fmu_and_is_complete(fmus):
     native, python = fmus("coupled")
     ours, theirs = (read_model_description(str(path)) for path in (native, python))
     by_name = {v.name: v for v in ours.modelVariables}
-    # the native solver has no Radau (it is in scipy), and says so
-    assert by_name["solver"].description == "0 = RK4 (fixed step), 1 = RK45 (Dormand-Prince 5(4)), 2 = DOP853"
-    by_name["solver"].description = next(v.description for v in theirs.modelVariables if v.name == "solver")
+    # every solver in both, the implicit one and the automatic choice included
+    assert (
+        "3 = Radau IIA order 5" in by_name["solver"].description
+        and "4 = automatic" in by_name["solver"].description
+    )
     for v in theirs.modelVariables:
         mine = by_name[v.name]
         assert (
@@ -395,7 +397,7 @@ def test_fmu_state_get_set_and_serialize_replay_bit_for_bit_and_corrupt_bytes_ar
     "name, value, message",
     BAD_VALUES
     + [
-        ("solver", 3, "solver = 3: choose 0 to 2 (0 = rk4, 1 = rk45, 2 = dop853); Radau needs"),
+        ("solver", 5, "solver = 5: choose 0 to 4 (0 = rk4, 1 = rk45, 2 = dop853, 3 = radau, 4 = auto)"),
     ],
 )
 def test_a_bad_value_is_an_error_and_the_instance_goes_on(built_fmu, fmi_version, name, value, message):

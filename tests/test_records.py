@@ -26,9 +26,7 @@ def test_names_are_made_from_quantity_and_link(scene):
             assert v.name == v.quantity or v.group in ("statistics", "real_settings", "integer_settings")
         else:  # the link's number stands where the quantity's stem ends: bob2_x, der(alpha1)
             assert re.sub(str(v.link), "", v.name, count=1) == v.quantity, v
-        # the native FMU's solver: only the solvers in C
-        wanted = ("native-solver", "") if v.name == "solver" else rule_of(v.quantity)
-        assert (v.rule, v.what) == wanted
+        assert (v.rule, v.what) == rule_of(v.quantity)
 
 
 @pytest.mark.parametrize("scene", SCENES, ids=["seed", "one link", "mixed"])

@@ -22,7 +22,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2Discard
 from conical_pendulum import Scene
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
 from conical_pendulum.builder.compiler import load_core
-from conical_pendulum.runtime.rules import NATIVE_SOLVERS, SOLVERS
+from conical_pendulum.runtime.rules import SOLVERS
 
 SEED = Scene.uniform(3)
 STEPS = (1e-9, 1e-6, 0.01, 1.0, 100.0)  # communication steps [s]
@@ -156,9 +156,8 @@ def check_case(case, outcome, message, attempts, max_steps):
 def test_every_setting_is_honoured_or_the_step_discarded(request, core, backend):
     path = request.getfixturevalue("seed_fmu" if backend == "pythonfmu" else "native_seed_fmu")
     lattice = Lattice(path)
-    solvers = range(len(SOLVERS) if backend == "pythonfmu" else len(NATIVE_SOLVERS))
     counts, slowest = Counter(), (0.0, None)
-    for solver, max_step, max_steps, h in (c for c in CASES if c[0] in solvers):
+    for solver, max_step, max_steps, h in CASES:
         case = (SOLVERS[solver], max_step, max_steps, h)
         started = time.perf_counter()
         outcome, state, t, message, attempts = lattice.run(solver, max_step, max_steps, h)
@@ -187,11 +186,7 @@ def test_every_tolerance_is_met_or_the_step_discarded(request, core, backend):
     to 10: the adaptive solvers meet them, or discard the step with the diagnosis."""
     path = request.getfixturevalue("seed_fmu" if backend == "pythonfmu" else "native_seed_fmu")
     lattice = Lattice(path)
-    adaptive = [
-        k
-        for k, name in enumerate(SOLVERS)
-        if name != "rk4" and (backend == "pythonfmu" or name in NATIVE_SOLVERS)
-    ]
+    adaptive = [k for k, name in enumerate(SOLVERS) if name != "rk4"]
     counts = Counter()
     for solver in adaptive:
         for rtol in (2.3e-14, 1e-9, 1e-3, 10.0):

@@ -33,13 +33,13 @@ from .models.pendulum import DEFAULT_SETTINGS, core_config, core_config_key
 HERE = Path(__file__).parent  # builder/
 CORE_CSRC = CSRC / "core"  # the model's numerics: the compiled core's C, and the native FMU's
 # The C compiled into the core: its numerics, then the model behind fmu_model.h.
-CORE_SOURCES = ("model.c", "dynamics.c", "solvers.c", "diagnosis.c", "cosim.c", "chain.c")
+CORE_SOURCES = ("model.c", "dynamics.c", "solvers.c", "radau.c", "diagnosis.c", "cosim.c", "chain.c")
 MODEL_SOURCES = ("rules.c", "variable_table.c", "pendulum_model.c")
 MODEL_FILES = ("fmu_model.h", "variable_table.h", "variable_table.c", "pendulum_model.c")  # not in core/
 # The model compiled again in complex arithmetic (directional and output derivatives), which
-# pendulum_model.c links to and the pythonfmu slave never calls (its FMU declares neither):
-# compiled without optimization, a tenth of the time at -O2 (about 0.7 s against 8.6 s for
-# the seed; the native FMU compiles its own at -O2).
+# pendulum_model.c links to and the pythonfmu slave calls only for the implicit solver's
+# Jacobians (its FMU declares no derivatives): compiled without optimization, a tenth of the
+# time at -O2 (about 0.7 s against 8.6 s for the seed; the native FMU compiles its own at -O2).
 UNOPTIMIZED_SOURCES = ("directional.c", "second_directional.c")
 GENERATOR_SOURCES = [
     *(HERE / "core" / name for name in ("kane.py", "equations.py", "codegen.py", "cache.py")),

@@ -99,8 +99,6 @@ def build_fmu(
         raise ValueError(f"backend: {backend!r} is not one of {BACKENDS}")
     start = time.perf_counter()
     output, settings = checked_output(output), checked_settings(settings)
-    if backend == "native":
-        pendulum.check_settings(settings)  # before the core's build
     # the pythonfmu slave's model is the core's, with these settings' start values; the
     # native FMU compiles its own from the core's generated C
     core = build_core(scene, cache, settings if backend == "pythonfmu" else None)

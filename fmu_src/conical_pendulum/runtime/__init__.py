@@ -3,6 +3,6 @@ the build and the slave share, and the C (csrc/: the core's numerics, the FMI la
 models behind the contract) with pythonfmu's export library sources.
 
 Imports nothing from build time and nothing outside the standard library, numpy and
-pythonfmu (scipy only for the Radau fallback), because it runs in the host's process
+pythonfmu, because it runs in the host's process
 under a package name unique to its FMU.
 """

@@ -14,12 +14,14 @@ import numbers
 import sys
 from dataclasses import dataclass
 
-# The FMU's `solver`, an enumeration: its item's value is its index; RK4..DOP853 are in C.
+# The FMU's `solver`, an enumeration: its item's value is its index, solvers.h's CP_RK4..CP_AUTO;
+# every FMU has all of them, in the compiled core.
 SOLVER_TEXTS = {
     "rk4": "RK4 (fixed step)",
     "rk45": "RK45 (Dormand-Prince 5(4))",
     "dop853": "DOP853",
-    "radau": "Radau (scipy, stiff)",
+    "radau": "Radau IIA order 5 (implicit, for stiff scenes)",
+    "auto": "automatic: DOP853, Radau while the scene is stiff",
 }
 SOLVERS = tuple(SOLVER_TEXTS)
 
@@ -43,9 +45,6 @@ class Rule:
             and value < self.high
             and (not self.whole or float(value).is_integer())
         )
-
-
-NATIVE_SOLVERS = SOLVERS[:3]  # the C solvers; Radau runs on scipy, in the pythonfmu FMU only
 
 
 def solver_description(solvers) -> str:
@@ -79,14 +78,6 @@ RULES = {
         low=0.0,
         high=len(SOLVERS),
         items=tuple(SOLVER_TEXTS.items()),
-        type_name="Solver",
-    ),
-    "native-solver": Rule(
-        _choose(NATIVE_SOLVERS) + "; Radau needs the pythonfmu FMU",
-        f"a whole number from 0 to {len(NATIVE_SOLVERS) - 1}",
-        low=0.0,
-        high=len(NATIVE_SOLVERS),
-        items=tuple(SOLVER_TEXTS.items())[: len(NATIVE_SOLVERS)],
         type_name="Solver",
     ),
     "switch": Rule("choose 0 (off) or 1 (on)", "0 or 1", low=0.0, high=2.0),
@@ -166,14 +157,15 @@ SETTINGS = {
         "step into steps of at most this (0: no limit)",
         "s",
     ),
-    "solver": Setting(2, True, solver_description(SOLVERS)),
+    "solver": Setting(SOLVERS.index("auto"), True, solver_description(SOLVERS)),
     "max_steps": Setting(100_000, True, "most internal steps per do_step: a step needing more is discarded"),
     "across_points": Setting(
         1,
         True,
-        "1: RK45 and DOP853 step across communication points with their own step size and answer "
-        "each point from the step's dense output, restarting there only when an input, state or "
-        "setting changes; 0: every do_step ends its integration on the point. RK4 always does",
+        "1: the adaptive solvers step across communication points with their own step size and "
+        "answer each point from the step's dense output, restarting there only when an input, "
+        "state or setting changes; 0: every do_step ends its integration on the point. RK4 "
+        "always does",
     ),
 }
 
@@ -181,6 +173,10 @@ STATISTICS = {
     "n_rhs": "right-hand side evaluations so far",
     "n_steps": "accepted internal steps so far",
     "n_rejected": "rejected internal steps so far",
+    "n_jacobians": "Jacobians the implicit solver evaluated so far (each one complex-step "
+    "right-hand side per state)",
+    "n_factorizations": "LU factorizations the implicit solver made so far (one real and one "
+    "complex a step size)",
 }
 QUANTITIES.update(dict.fromkeys(STATISTICS, ("statistic", "a count")))  # restored states
 

@@ -3,20 +3,18 @@
 One class for every scene: it registers the variables MODEL_FILE in the FMU's resources
 describes (conical_pendulum.builder.fmu) and hands every value, setting, step and FMU state
 to the compiled core's Model, pendulum_model.c behind fmu_model.h, whose C checks them and
-words every refusal and diagnosis. Only the FMI mode (pythonfmu keeps none) and Radau (scipy)
-stay here. Shipped under a package name unique to the runtime's sources, imported through its
+words every refusal and diagnosis; every solver, the implicit one too, is the core's. Only
+the FMI mode (pythonfmu keeps none) stays here. Shipped under a package name unique to the runtime's sources, imported through its
 entry module (runtime/entry.py); needs numpy and the core.
 """
 
 import functools
 import importlib.util
 import json
-import math
 import os
 import struct
 import sys
 
-import numpy as np
 from pythonfmu import Fmi2Slave, Integer, Real
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
@@ -27,9 +25,9 @@ KINDS = {"Real": Real, "Integer": Integer}
 NAMED = {Real: "a Real", Integer: "an Integer"}
 MODES = ("instantiated", "initialization", "step")  # where an instance is in FMI's state machine
 STEPPING = MODES.index("step")  # past initialization: only inputs may still be set
-# An FMU state: the mode (an index of MODES) and Radau's carried step, what only this FMU has,
-# then the model's data (its ModelData, the bytes a native FMU's state holds of it).
-OWN = struct.Struct("<i4xd")
+# An FMU state: the mode (an index of MODES), what only this FMU has, then the model's data (its
+# ModelData, the bytes a native FMU's state holds of it).
+OWN = struct.Struct("<i4x")
 THE_STATE = "fmi2SetFMUstate: the state's "  # what a refusal of a restored state begins with
 
 
@@ -87,7 +85,7 @@ class ConicalPendulum(Fmi2Slave):
         self.description = model["description"]  # the scene's: no class attribute, or it would win
         self._model = self._core.Model()  # every variable at its start value
         self._vr = {v["name"]: v["value_reference"] for v in model["variables"]}
-        self._mode, self._radau_h = 0, 0.0
+        self._mode = 0
         self._of = {Real: set(), Integer: set()}  # the value references of each type
         for v in model["variables"]:  # in value-reference order: pythonfmu numbers them
             fmi = {
@@ -115,11 +113,7 @@ class ConicalPendulum(Fmi2Slave):
 
     @_fmi_call
     def do_step(self, current_time, step_size):
-        (solver,) = self._model.get_integers([self._vr["solver"]])
-        if solver in self._core.METHODS.values():
-            failure = self._model.do_step(current_time, step_size)
-        else:  # the one solver the model's rule allows that is not in C
-            failure = self._radau_step(solver, current_time, step_size)
+        failure = self._model.do_step(current_time, step_size)
         if failure:
             self.log(failure, Fmi2Status.discard)
             return False
@@ -146,86 +140,23 @@ class ConicalPendulum(Fmi2Slave):
 
     @_fmi_call
     def _get_fmu_state(self):
-        return OWN.pack(self._mode, self._radau_h) + self._model.data
+        return OWN.pack(self._mode) + self._model.data
 
     @_fmi_call
     def _set_fmu_state(self, state):
-        """Taken only whole: the mode and Radau's step checked here, the model's data by
-        model_invalid (Model.data), before any of it is taken."""
+        """Taken only whole: the mode checked here, the model's data by model_invalid
+        (Model.data), before any of it is taken."""
         if len(state) != OWN.size + len(self._model.data):
             self._fail(f"fmi2SetFMUstate: {len(state)} bytes are not a state of this FMU")
-        mode, radau_h = OWN.unpack_from(state)
+        (mode,) = OWN.unpack_from(state)
         if not 0 <= mode < len(MODES):
             modes = ", ".join(f"{k} ({name})" for k, name in enumerate(MODES))
             self._fail(f"{THE_STATE}mode = {mode}: choose one of {modes}")
-        if not (math.isfinite(radau_h) and radau_h >= 0):
-            self._fail(f"{THE_STATE}radau_h = {radau_h!r}: must be finite and >= 0")
         self._refusing(setattr, self._model, "data", state[OWN.size :], prefix=THE_STATE)
-        self._mode, self._radau_h = mode, radau_h
+        self._mode = mode
 
     # bytes as they are: fmi2SetFMUstate checks them, naming what is wrong (these have no logger)
     _fmu_state_to_bytes = _fmu_state_from_bytes = staticmethod(bytes)
-
-    def _radau_step(self, solver, t, dt):
-        """The stiff fallback: scipy's Radau IIA on the compiled right-hand side, with the
-        model's settings, state and statistics. None, or the diagnosis of a failed step (the
-        core's, as in every FMU)."""
-        core, vr = self._core, self._vr
-        settings = (
-            *self._model.get_reals([vr["rtol"], vr["atol"], vr["max_step"]]),
-            *self._model.get_integers([vr["max_steps"]]),
-        )
-
-        def failure(status, bad_dof=-1, pivot_ratio=1.0):
-            return core.diagnose(status, t, dt, bad_dof, pivot_ratio, *settings)
-
-        if not (dt >= 0 and math.isfinite(dt)):
-            return failure(core.BAD_STEP)
-        unworkable = core.unworkable(solver, t, dt, *settings[2:])
-        if unworkable:
-            return failure(unworkable)
-        if dt == 0:
-            return None
-        params = np.array(self._model.get_reals(range(core.NPARAM)))
-        try:
-            radau = self._radau(params, t, dt, settings)
-            if radau.status != "finished":
-                return failure(core.STEP_UNDERFLOW if radau.status == "failed" else core.TOO_MANY_STEPS)
-            if not (np.all(np.isfinite(radau.y)) and np.all(np.isfinite(core.outputs(radau.y, params)))):
-                core.rhs(radau.y, params)  # the pivot force where M is singular: CoreError says where
-                return failure(core.NONFINITE)
-        except core.CoreError as exc:
-            return failure(exc.status, exc.dof, exc.pivot_ratio)
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:  # no finite step
-            return f"{failure(core.STEP_UNDERFLOW)} (scipy: {exc})"
-        rope = core.rope_diagnosis(radau.y, core.outputs(radau.y, params), t, dt, *settings)
-        if rope:  # a rope out of its range, or slack: the step discarded as cosim.c does
-            return rope
-        self._model.set_states(radau.y)
-        self._radau_h = radau.h_abs
-        return None
-
-    def _radau(self, params, t, dt, settings):
-        """scipy's Radau (imported only when chosen) from the model's state over [t, t + dt],
-        at most max_steps steps; what it cost counted in the model's statistics."""
-        from scipy.integrate import Radau
-
-        rtol, atol, max_step, max_steps = settings
-        options = {"first_step": min(self._radau_h, dt)} if self._radau_h > 0 else {}
-        steps, radau = 0, None
-        options |= {"rtol": rtol, "atol": atol, "max_step": max_step or np.inf}
-        try:  # scipy's overflows and non-finite matrices end in a diagnosis, not on stderr
-            with np.errstate(all="ignore"):
-                radau = Radau(
-                    lambda _, x: self._core.rhs(x, params), t, self._model.states, t + dt, **options
-                )
-                while radau.status == "running" and steps < max_steps:
-                    radau.step()  # "failed" only where the step size underflows
-                    steps += 1
-            return radau
-        finally:
-            self._model.count(self._vr["n_rhs"], radau.nfev if radau else 0)
-            self._model.count(self._vr["n_steps"], steps)
 
     def _fail(self, message):
         """Report a bad input through the FMI logger and stop the call (pythonfmu: fmi2Fatal)."""

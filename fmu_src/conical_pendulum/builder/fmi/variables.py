@@ -23,7 +23,7 @@ import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields, replace
 
-from ...runtime.rules import NATIVE_SOLVERS, RULES, SETTINGS, STATISTICS, rule_of, solver_description
+from ...runtime.rules import RULES, SETTINGS, STATISTICS, rule_of
 from ...scene import WORKS, Scalar, Scene
 from ..core.dependencies import dependencies
 
@@ -464,13 +464,8 @@ def groups(backend: str = "pythonfmu") -> list[Group]:
 def variables(scene: Scene, settings: dict, backend: str = "pythonfmu") -> list[Variable]:
     """Every variable of the scene's FMU for `backend`, in value-reference order.
 
-    settings: every solver setting's start value (builder.fmu.checked_settings). The native
-    FMU's solver takes only the solvers in C (its rule "native-solver")."""
-    found = variables_of(groups(backend), scene, settings)
-    if backend == "native":
-        native = {"rule": "native-solver", "description": solver_description(NATIVE_SOLVERS)}
-        found = [replace(v, **native) if v.rule == "solver" else v for v in found]
-    return found
+    settings: every solver setting's start value (builder.fmu.checked_settings)."""
+    return variables_of(groups(backend), scene, settings)
 
 
 def variables_of(in_order, scene: Scene | None = None, settings: dict | None = None) -> list[Variable]:

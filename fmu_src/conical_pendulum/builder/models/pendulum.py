@@ -9,7 +9,7 @@ import json
 from pathlib import Path
 
 from ...runtime.files import MODEL_NAME
-from ...runtime.rules import RULES, SETTINGS, rule_of
+from ...runtime.rules import SETTINGS, rule_of
 from ...scene import Scene
 from .. import c_literals as c
 from ..fmi.contract import Dimension, NativeModel
@@ -53,6 +53,7 @@ PENDULUM = NativeModel(
         "dynamics.c",
         "chain.c",
         "solvers.c",
+        "radau.c",
         "diagnosis.c",
         "cosim.c",
         "directional.c",
@@ -60,7 +61,8 @@ PENDULUM = NativeModel(
         "rules.c",
     )
     + ("variable_table.c", "pendulum_model.c"),
-    ("model.h", "real.h", "dynamics.h", "chain.h", "solvers.h", "tableaus.h", "status.h", "diagnosis.h")
+    ("model.h", "real.h", "dynamics.h", "chain.h", "solvers.h", "solver_common.h", "tableaus.h")
+    + ("status.h", "diagnosis.h")
     + ("cosim.h", "directional.h", "model_copy.h", "rules.h", "variable_table.h"),
     lambda: groups("native"),
     _config,
@@ -74,17 +76,10 @@ PENDULUM = NativeModel(
 )
 
 
-def check_settings(settings: dict) -> None:
-    """What the native FMU refuses of settings the pythonfmu FMU takes (its solvers)."""
-    if settings["solver"] >= RULES["native-solver"].high:
-        raise ValueError(f"solver = {settings['solver']}: {RULES['native-solver'].refusal}")
-
-
 def core_config(scene: Scene, settings: dict) -> str:
     """fmu_config.h of the model the pythonfmu slave holds through the compiled core
     (builder.compiler): the native FMU's variable table (its value references, the state
-    derivatives' too), but every solver allowed, Radau among them, which the slave runs
-    itself; no GUID, which only the FMI glue checks."""
+    derivatives' too); no GUID, which only the FMI glue checks."""
     found = variables_of(groups("native"), scene, settings)
     return config_header(PENDULUM, {"settings": settings}, found, guid="")
 

@@ -9,7 +9,7 @@ Copied to a module name unique to the scene and compiled against the limited API
 import numpy as np
 
 cdef extern from "status.h":
-    int CP_OK, CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_BAD_STEP, CP_MAX_STEP_UNRESOLVED
+    int CP_OK, CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_BAD_STEP, CP_MAX_STEP_UNRESOLVED, CP_STIFF
     int CP_SINGULAR, CP_NONFINITE
     const int cp_status_codes[]
     int CP_NSTATUS
@@ -17,22 +17,30 @@ cdef extern from "status.h":
 
 cdef extern from "solvers.h":
     ctypedef int (*cp_rhs_fn)(void *ctx, double t, const double *x, double *dx) noexcept nogil
+    ctypedef int (*cp_jac_fn)(void *ctx, double t, const double *x, double *J) noexcept nogil
     ctypedef struct cp_system:
         int dim
         cp_rhs_fn rhs
         void *ctx
+        cp_jac_fn jac
     ctypedef struct cp_stats:
-        long long nfev, naccept, nreject
-    int CP_RK4, CP_RK45, CP_DOP853
+        long long nfev, naccept, nreject, njev, nlu, nswitch
+    ctypedef struct cp_newton:
+        int jac_valid, current_jac, lu_valid, reserved
+        double rho
+    int CP_RK4, CP_RK45, CP_DOP853, CP_RADAU, CP_AUTO
     int CP_WORK_SIZE(int dim)
+    int CP_NEWTON_SIZE(int dim)
     int cp_unworkable(int method, double t, double dt, double max_step, long long max_steps)
     int cp_dense_grid(int method, const cp_system *sys, const double *times, int ntimes,
                       double *out, double rtol, double atol, double max_step,
-                      long long max_steps, double *work, cp_stats *stats) noexcept nogil
+                      long long max_steps, double *work, cp_newton *newton, double *matrices,
+                      cp_stats *stats) noexcept nogil
 
 cdef extern from "dynamics.h":
     int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT, CP_PSIZE
-    int CP_NSTAT, CP_STAT_N_RHS, CP_STAT_N_STEPS, CP_STAT_N_REJECTED
+    int CP_NSTAT, CP_STAT_N_RHS, CP_STAT_N_STEPS, CP_STAT_N_REJECTED, CP_STAT_N_JACOBIANS
+    int CP_STAT_N_FACTORIZATIONS
     const char *CP_STATE_NAMES
     const char *CP_PARAMETER_NAMES
     const char *CP_OUTPUT_NAMES
@@ -62,11 +70,14 @@ cdef extern from "cosim.h":
         int method
         double rtol, atol, max_step
         long long max_steps
+    ctypedef struct cp_matrices:
+        cp_newton newton
     int CP_STEP_WORK_SIZE
     int cp_cosim_step(const cp_settings *settings, const double *p, double *x, double *y,
-                      double t, double dt, double *h, double *work, int *fsal, double *stats,
-                      cp_failure *failure) noexcept nogil
+                      double t, double dt, double *h, double *work, int *fsal,
+                      cp_matrices *matrices, double *stats, cp_failure *failure) noexcept nogil
     int cp_held_rhs(void *ctx, double t, const double *x, double *dx) noexcept nogil
+    int cp_held_jac(void *ctx, double t, const double *x, double *J) noexcept nogil
     int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failure) noexcept nogil
 
 cdef extern from "fmu_model.h":
@@ -118,15 +129,16 @@ NPARAM = CP_NPARAM  # parameters, then inputs: the p every function here takes
 NINPUT = CP_NINPUT
 NROPE = CP_PSIZE - CP_NPARAM  # the ropes: the accelerations hoist_acc takes, their l''
 NOUTPUT = CP_NOUTPUT
-STATISTICS_SLOTS = {"n_rhs": CP_STAT_N_RHS, "n_steps": CP_STAT_N_STEPS, "n_rejected": CP_STAT_N_REJECTED}
+STATISTICS_SLOTS = {"n_rhs": CP_STAT_N_RHS, "n_steps": CP_STAT_N_STEPS, "n_rejected": CP_STAT_N_REJECTED,
+                    "n_jacobians": CP_STAT_N_JACOBIANS, "n_factorizations": CP_STAT_N_FACTORIZATIONS}
 SINGULAR_RATIO = CP_SINGULAR_RATIO
 STATE_NAMES = tuple(CP_STATE_NAMES.decode().split())
 PARAMETER_NAMES = tuple(CP_PARAMETER_NAMES.decode().split())
 OUTPUT_NAMES = tuple(CP_OUTPUT_NAMES.decode().split())
 TOO_MANY_STEPS, STEP_UNDERFLOW, BAD_STEP = CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_BAD_STEP
-MAX_STEP_UNRESOLVED = CP_MAX_STEP_UNRESOLVED
+MAX_STEP_UNRESOLVED, STIFF = CP_MAX_STEP_UNRESOLVED, CP_STIFF
 SINGULAR, NONFINITE = CP_SINGULAR, CP_NONFINITE
-METHODS = {"rk4": CP_RK4, "rk45": CP_RK45, "dop853": CP_DOP853}
+METHODS = {"rk4": CP_RK4, "rk45": CP_RK45, "dop853": CP_DOP853, "radau": CP_RADAU, "auto": CP_AUTO}
 STATUS = {cp_status_codes[k]: cp_status_message(cp_status_codes[k]).decode()  # status.h's list
           for k in range(CP_NSTATUS)}
 
@@ -140,46 +152,6 @@ class CoreError(RuntimeError):
                          f"(pivot ratio {pivot_ratio:.3g})")
 
 
-def unworkable(int method, double t, double dt, double max_step, long long max_steps):
-    """0, or the status of a step that these settings cannot take whatever the state
-    (solvers.h); any method but RK4's index counts as adaptive."""
-    return cp_unworkable(method, t, dt, max_step, max_steps)
-
-
-cdef str _diagnosis(int status, const cp_failure *failure):
-    cdef char text[2048]
-    cp_diagnose(text, sizeof(text), status, failure)
-    return text.decode()
-
-
-def diagnose(int status, double t, double dt, int bad_dof, double pivot_ratio, double rtol,
-             double atol, double max_step, long long max_steps):
-    """What a user reads when a step fails (diagnosis.c, the same text in every FMU)."""
-    cdef cp_failure failure
-    failure.t, failure.dt, failure.bad_dof, failure.pivot_ratio = t, dt, bad_dof, pivot_ratio
-    failure.rtol, failure.atol, failure.max_step, failure.max_steps = rtol, atol, max_step, max_steps
-    failure.kept = t
-    failure.rope, failure.at, failure.value, failure.low, failure.high = -1, t, 0.0, 0.0, 0.0
-    return _diagnosis(status, &failure)
-
-
-def rope_diagnosis(x_in, y_in, double t, double dt, double rtol, double atol, double max_step,
-                   long long max_steps):
-    """None if the ropes hold in the state x with outputs y that a step from t by dt reached
-    (cp_ropes_hold: each length in its range, each tension not negative), else the diagnosis
-    of that step's failure, the state kept at t (for a solver outside the C, the slave's Radau)."""
-    cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
-    cdef const double[::1] y = _vector(y_in, CP_NOUTPUT, "outputs") if CP_NOUTPUT else np.zeros(1)
-    cdef cp_failure failure
-    cdef int status = cp_ropes_hold(&x[0], &y[0], t + dt, &failure)
-    if status == 0:
-        return None
-    failure.t, failure.dt, failure.bad_dof, failure.pivot_ratio = t, dt, -1, 1.0
-    failure.rtol, failure.atol, failure.max_step, failure.max_steps = rtol, atol, max_step, max_steps
-    failure.kept = t
-    return _diagnosis(status, &failure)
-
-
 cdef void _system(cp_system *system, cp_model *model, const double *p, cp_stats *stats) noexcept nogil:
     """The model's right-hand side as a solver's system, with fresh diagnostics and counters."""
     model.p = p
@@ -188,7 +160,8 @@ cdef void _system(cp_system *system, cp_model *model, const double *p, cp_stats 
     system.dim = CP_NSTATE
     system.rhs = cp_held_rhs
     system.ctx = model
-    stats.nfev = stats.naccept = stats.nreject = 0
+    system.jac = cp_held_jac
+    stats.nfev = stats.naccept = stats.nreject = stats.njev = stats.nlu = stats.nswitch = 0
 
 
 cdef void _check(const double[::1] a, int size, str what) except *:
@@ -265,16 +238,37 @@ def outputs(x_in, p_in, hoist_acc=None):
     return out
 
 
+def jacobian(x_in, p_in, hoist_acc=None):
+    """J = df/dx at state x as a new (NSTATE, NSTATE) array, exact (complex step, the
+    implicit solver's own); raises CoreError where M is singular."""
+    cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
+    cdef const double[::1] p = _core_p(p_in, hoist_acc)
+    out = np.empty((CP_NSTATE, CP_NSTATE))
+    cdef double[:, ::1] J = out
+    cdef cp_model model
+    model.p = &p[0]
+    model.pivot_ratio = 1.0
+    model.bad_dof = -1
+    cdef int status
+    with nogil:
+        status = cp_held_jac(&model, 0.0, &x[0], &J[0, 0])
+    if status:
+        raise CoreError(status, model.bad_dof, model.pivot_ratio)
+    return out
+
+
 def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
-                   double max_step=0.0, long long max_steps=10**7, str method="dop853"):
-    """States at every time, by the core's DOP853 (or method="rk45") with dense output:
-    (array, nfev).
+                   double max_step=0.0, long long max_steps=10**7, str method="dop853",
+                   dict counts=None):
+    """States at every time, by the core's DOP853 (or method="rk45", "radau", "auto") with
+    dense output: (array, nfev).
 
     One integration over the whole grid, as solve_ivp(method="DOP853", t_eval=times)
-    does, with no Python per step. Raises CoreError or RuntimeError on failure.
+    does, with no Python per step; counts (a dict), when given, receives every count
+    (nfev, naccept, nreject, njev, nlu, nswitch: the automatic choice's switches). Raises CoreError or RuntimeError on failure.
     """
-    if method not in ("rk45", "dop853"):
-        raise ValueError(f"method: 'rk45' or 'dop853', not {method!r}")
+    if method not in ("rk45", "dop853", "radau", "auto"):
+        raise ValueError(f"method: 'rk45', 'dop853', 'radau' or 'auto', not {method!r}")
     cdef int solver = METHODS[method]
     cdef const double[::1] p = _core_p(p_in, None)
     cdef const double[::1] times = np.ascontiguousarray(times_in, dtype=float)
@@ -284,6 +278,10 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     result[0] = _vector(x0, CP_NSTATE, "state")
     cdef double[:, ::1] out = result
     cdef double[::1] work = np.zeros(CP_WORK_SIZE(CP_NSTATE))
+    cdef double[::1] matrices = np.zeros(CP_NEWTON_SIZE(CP_NSTATE))
+    cdef cp_newton newton
+    newton.jac_valid = newton.current_jac = newton.lu_valid = newton.reserved = 0
+    newton.rho = 0.0
     cdef cp_model model
     cdef cp_system system
     cdef cp_stats stats
@@ -291,7 +289,10 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     cdef int status
     with nogil:
         status = cp_dense_grid(solver, &system, &times[0], times.shape[0], &out[0, 0], rtol,
-                               atol, max_step, max_steps, &work[0], &stats)
+                               atol, max_step, max_steps, &work[0], &newton, &matrices[0], &stats)
+    if counts is not None:
+        counts.update(nfev=stats.nfev, naccept=stats.naccept, nreject=stats.nreject,
+                      njev=stats.njev, nlu=stats.nlu, nswitch=stats.nswitch)
     if status >= CP_SINGULAR:
         raise CoreError(status, model.bad_dof, model.pivot_ratio)
     if status:
@@ -338,7 +339,7 @@ cdef class Stepper:
     accepted and rejected steps, in runtime.rules.STATISTICS's order), used in place, so whoever owns them sees every step.
     """
     cdef public object values, params, stats
-    cdef double[::1] _values, _params, _stats, _work
+    cdef double[::1] _values, _params, _stats, _work, _matrices
     cdef int _fsal
     cdef cp_settings _settings
     cdef cp_failure _failure
@@ -354,6 +355,8 @@ cdef class Stepper:
         _check(self._values, CP_NSTATE + CP_NOUTPUT, "state and outputs")
         _check(self._stats, CP_NSTAT, "statistics")
         self._work = np.zeros(CP_STEP_WORK_SIZE)
+        # the implicit solver's cp_matrices, zeroed (no Jacobian yet), aligned as a double
+        self._matrices = np.zeros((sizeof(cp_matrices) + sizeof(double) - 1) // sizeof(double))
         self.h = 0.0
         self._fsal = 0
 
@@ -390,7 +393,8 @@ cdef class Stepper:
         with nogil:
             status = cp_cosim_step(&self._settings, &self._params[0], &self._values[0],
                                    &self._values[CP_NSTATE], t, dt, &self.h, &self._work[0],
-                                   &self._fsal, &self._stats[0], &self._failure)
+                                   &self._fsal, <cp_matrices *>&self._matrices[0],
+                                   &self._stats[0], &self._failure)
         return status
 
     def step(self, int method, double t, double dt, double rtol, double atol, double max_step,
@@ -492,13 +496,6 @@ cdef class Model:
         if model_do_step(self.m, t, dt, self.message, sizeof(self.message)) == MODEL_OK:
             return None
         return self.message.decode()
-
-    def count(self, unsigned vr, double cost):
-        """Adds cost to the statistic vr (n_rhs, n_steps): what a solver outside the model,
-        the slave's Radau, spent on it."""
-        cdef double value
-        self._refused(model_get_real(self.m, vr, &value, 0.0, self.message, sizeof(self.message)), vr)
-        model_set_real(self.m, vr, value + cost, MODEL_BEFORE_INIT)  # a count: nothing jumps
 
     @property
     def states(self):

@@ -3,6 +3,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "directional.h"
 #include "dynamics.h"
 
 #define INPUT0 (CP_NPARAM - CP_NINPUT)  /* the inputs end p (model.h) */
@@ -44,6 +45,36 @@ static int interpolated_rhs(void *ctx, double t, const double *x, double *dx)
     return cp_rhs(&in->model, x, dx);
 }
 
+/* J = df/dx of the model at (x, its p), exact: a column per state by complex step
+ * (directional.h); a singular mass matrix is reported as cp_rhs reports it. */
+static int model_jacobian(cp_model *model, const double *x, double *J)
+{
+    static const double no_dp[CP_PSIZE + 1];
+    double seed[CP_NSTATE] = {0}, column[CP_NSTATE];
+    for (int j = 0; j < CP_NSTATE; j++) {
+        seed[j] = 1.0;
+        int status = cp_directional(x, model->p, seed, no_dp, column, NULL, &model->pivot_ratio,
+                                    &model->bad_dof);
+        seed[j] = 0.0;
+        if (status) return status;
+        for (int i = 0; i < CP_NSTATE; i++) J[i * CP_NSTATE + j] = column[i];
+    }
+    return CP_OK;
+}
+
+int cp_held_jac(void *ctx, double t, const double *x, double *J)
+{
+    (void)t;
+    return model_jacobian(ctx, x, J);
+}
+
+static int interpolated_jac(void *ctx, double t, const double *x, double *J)
+{
+    interpolated *in = ctx;
+    cp_input_at(in->p, in->rates, t - in->t0, in->p_at);
+    return model_jacobian(&in->model, x, J);
+}
+
 /* The polynomials' start: p with the inputs where the flight's integration started, and
  * their rates there; p0 the core's p there (cp_input_at). Whether any input moves. */
 static int polynomials(const cp_flight *f, const double *p, double *p0, double (*rates)[2])
@@ -82,18 +113,24 @@ void cp_flight_inputs(const cp_flight *f, double t, double *p, double (*rates)[2
     }
 }
 
-/* Whether the step in flight may go on from t: live, at the point it left (else RESTART),
- * with the inputs and their rates bit for bit those its polynomials give there (else
- * NEW_INPUTS). */
+int cp_same_point(double t, double point)
+{
+    const double larger = fmax(fabs(t), fabs(point));
+    return fabs(t - point) <= CP_SAME_POINT_ULPS * (nextafter(larger, INFINITY) - larger);
+}
+
+/* Whether the step in flight may go on from t: live, at the point it left (cp_same_point;
+ * else RESTART), with the inputs and their rates bit for bit those its polynomials give there
+ * (else NEW_INPUTS). */
 enum { CONTINUE, RESTART, NEW_INPUTS };
 
 static int continues(const cp_flight *f, const cp_settings *s, const double *p,
                      const double (*rates)[2], double t)
 {
-    if (!f->live || s->method == CP_RK4 || t != f->t_point) return RESTART;
+    if (!f->live || s->method == CP_RK4 || !cp_same_point(t, f->t_point)) return RESTART;
     double p_at[CP_NPARAM], rates_at[CP_NINPUT + 1][2];
     memcpy(p_at, p, CP_NPARAM * sizeof(double));
-    cp_flight_inputs(f, t, p_at, rates_at);
+    cp_flight_inputs(f, f->t_point, p_at, rates_at);
     return memcmp(p_at + INPUT0, p + INPUT0, CP_NINPUT * sizeof(double)) == 0
                    && memcmp(rates_at, rates, CP_NINPUT * sizeof rates_at[0]) == 0
                ? CONTINUE
@@ -101,14 +138,23 @@ static int continues(const cp_flight *f, const cp_settings *s, const double *p,
 }
 
 /* A new integration from (t, x), the inputs' polynomials starting there, the proposed step
- * size kept. */
-static void restart(cp_flight *f, const double *p, const double (*rates)[2], double t,
-                    const double *x)
+ * size kept, and, where the flight was live (new inputs), the automatic choice's method and
+ * its counts: new inputs do not make a scene more or less stiff. The Jacobian is kept, no
+ * longer current. */
+static void restart(cp_flight *f, cp_newton *newton, const double *p, const double (*rates)[2],
+                    double t, const double *x)
 {
+    const cp_step was = f->step;
+    cp_step_begin(&f->step, &f->rows[0][0], CP_NSTATE, t, x, was.h);
+    if (f->live) {
+        f->step.next = was.next;
+        f->step.stiff_steps = was.stiff_steps;
+        f->step.calm_steps = was.calm_steps;
+    }
+    newton->current_jac = 0;
     f->live = 1;
     f->reserved = 0;
     f->t_point = f->t_inputs = t;
-    cp_step_begin(&f->step, &f->rows[0][0], CP_NSTATE, t, x, f->step.h);
     for (int k = 0; k < CP_NINPUT; k++) {
         f->inputs[k][0] = p[INPUT0 + k];
         f->inputs[k][1] = rates[k][0];
@@ -140,9 +186,10 @@ int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failur
 /* The integration of trial from the point t to t + dt: x_new at the time *t_reached it got to
  * (t + dt on success; on failure with early return, the last accepted step or substep). With
  * on_point (or without across_points) it ends on t + dt. */
-static int integrate(const cp_settings *s, cp_flight *trial, const cp_system *system,
-                     const double *x, double t, double dt, double t_stop, int on_point,
-                     double *work, cp_stats *counts, double *x_new, double *t_reached, int early)
+static int integrate(const cp_settings *s, cp_flight *trial, cp_newton *newton, double *matrices,
+                     const cp_system *system, const double *x, double t, double dt,
+                     double t_stop, int on_point, double *work, cp_stats *counts, double *x_new,
+                     double *t_reached, int early)
 {
     int status = cp_unworkable(s->method, t, dt, s->max_step, s->max_steps);
     *t_reached = t;
@@ -157,10 +204,11 @@ static int integrate(const cp_settings *s, cp_flight *trial, const cp_system *sy
     const double t_target = t + dt;
     const double t_limit = s->across_points && !on_point ? fmax(t_stop, t_target) : t_target;
     long long attempts = 0;
-    status = cp_cover(s->method, system, &trial->step, &trial->rows[0][0], t_target, t_limit,
-                      s->rtol, s->atol, s->max_step, s->max_steps, &attempts, work, counts);
+    status = cp_cover(s->method, system, &trial->step, &trial->rows[0][0], newton, matrices,
+                      t_target, t_limit, s->rtol, s->atol, s->max_step, s->max_steps, &attempts,
+                      work, counts);
     if (status == CP_OK) {
-        cp_step_state(s->method, &trial->step, &trial->rows[0][0], CP_NSTATE, t_target, x_new);
+        cp_step_state(&trial->step, &trial->rows[0][0], CP_NSTATE, t_target, x_new);
         *t_reached = t_target;
         return cp_all_finite(CP_NSTATE, x_new) ? CP_OK : CP_NONFINITE;
     }
@@ -173,28 +221,33 @@ static int integrate(const cp_settings *s, cp_flight *trial, const cp_system *sy
 
 int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input_rates)[2],
                      double *x, double *y, double t, double dt, double t_stop, cp_flight *flight,
-                     double *work, double stats[CP_NSTAT], cp_failure *failure, double *reached)
+                     cp_matrices *matrices, double *work, double stats[CP_NSTAT],
+                     cp_failure *failure, double *reached)
 {
     cp_flight trial = *flight;  /* taken only where the step gets somewhere */
     const int why = continues(&trial, s, p, input_rates, t);
-    if (why != CONTINUE) restart(&trial, p, input_rates, t, x);
+    if (why != CONTINUE) restart(&trial, &matrices->newton, p, input_rates, t, x);
     double p0[CP_PSIZE], rates0[CP_NINPUT + 1][2];
     const int moving = polynomials(&trial, p, p0, rates0);
     interpolated in = {{p0, 1.0, -1}, p0, (const double(*)[2])rates0, trial.t_inputs, {0}};
     if (moving) in.model.p = in.p_at;
     cp_system system = {CP_NSTATE, moving ? interpolated_rhs : cp_held_rhs,
-                        moving ? (void *)&in : (void *)&in.model};
-    cp_stats counts = {0, 0, 0};
+                        moving ? (void *)&in : (void *)&in.model,
+                        moving ? interpolated_jac : cp_held_jac};
+    cp_stats counts = {0, 0, 0, 0, 0, 0};
     double *x_new = work + CP_WORK_SIZE(CP_NSTATE), *y_new = x_new + CP_NSTATE;
     double t_reached = t, p_at[CP_PSIZE];
     cp_failure rope_failure = {0};
     int status = CP_BAD_STEP;
     if (dt >= 0 && dt < INFINITY)
-        status = integrate(s, &trial, &system, x, t, dt, t_stop, why == NEW_INPUTS, work, &counts,
-                           x_new, &t_reached, reached != NULL);
+        status = integrate(s, &trial, &matrices->newton, matrices->block, &system, x, t, dt,
+                           t_stop, why == NEW_INPUTS, work, &counts, x_new, &t_reached,
+                           reached != NULL);
     stats[CP_STAT_N_RHS] += (double)counts.nfev;
     stats[CP_STAT_N_STEPS] += (double)counts.naccept;
     stats[CP_STAT_N_REJECTED] += (double)counts.nreject;
+    stats[CP_STAT_N_JACOBIANS] += (double)counts.njev;
+    stats[CP_STAT_N_FACTORIZATIONS] += (double)counts.nlu;
     if (t_reached > t || status == CP_OK) {  /* the outputs where the state got to */
         core_p_at(&trial, t_reached, p, p_at);
         cp_model model_at = {p_at, 1.0, -1};
@@ -224,28 +277,32 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
         f.t = t, f.dt = dt, f.bad_dof = in.model.bad_dof, f.pivot_ratio = in.model.pivot_ratio;
         f.rtol = s->rtol, f.atol = s->atol, f.max_step = s->max_step, f.max_steps = s->max_steps;
         f.kept = t_reached;
+        f.method = trial.step.method;  /* the stiffness of the last step (CP_STIFF) */
+        f.stiffness = trial.step.t1 > trial.step.t0
+                          ? trial.step.stiffness / (trial.step.t1 - trial.step.t0)
+                          : 0.0;
         *failure = f;
     }
     return status;
 }
 
 int cp_cosim_step(const cp_settings *s, const double *p, double *x, double *y, double t,
-                  double dt, double *h, double *work, int *fsal, double stats[CP_NSTAT],
-                  cp_failure *failure)
+                  double dt, double *h, double *work, int *fsal, cp_matrices *matrices,
+                  double stats[CP_NSTAT], cp_failure *failure)
 {
     static const double held[CP_NINPUT + 1][2];
     cp_settings on_points = *s;
     cp_flight flight;
     memset(&flight, 0, sizeof flight);
     on_points.across_points = 0;
-    restart(&flight, p, held, t, x);
+    restart(&flight, &matrices->newton, p, held, t, x);
     flight.step.h = *h;
     if (*fsal) {  /* work starts with x' at x */
         memcpy(flight.rows[CP_ROW_F1], work, CP_NSTATE * sizeof(double));
         flight.step.fsal = 1;
     }
-    int status = cp_cosim_advance(&on_points, p, held, x, y, t, dt, INFINITY, &flight, work, stats,
-                                  failure, NULL);
+    int status = cp_cosim_advance(&on_points, p, held, x, y, t, dt, INFINITY, &flight, matrices,
+                                  work, stats, failure, NULL);
     *h = flight.step.h;
     *fsal = s->method != CP_RK4 && flight.step.fsal;
     if (*fsal) memcpy(work, flight.rows[CP_ROW_F1], CP_NSTATE * sizeof(double));

@@ -10,25 +10,41 @@
 #include "solvers.h"
 
 typedef struct {
-    int method;           /* CP_RK4, CP_RK45 or CP_DOP853 */
+    int method;           /* CP_RK4, CP_RK45, CP_DOP853, CP_RADAU or CP_AUTO (solvers.h) */
     double rtol, atol, max_step;
     long long max_steps;
-    int across_points;    /* RK45 and DOP853 step across the communication points (cp_flight) */
+    int across_points;    /* all but RK4 step across the communication points (cp_flight) */
 } cp_settings;
+
+/* A communication point within this many units in the last place of the point the step in
+ * flight left is that point: a master that computes its points as k h, or restores a state
+ * saved at t + h, continues the integration rather than restarting it. */
+#define CP_SAME_POINT_ULPS 4
+
+/* Whether t is the point (cp_same_point's rule, CP_SAME_POINT_ULPS). */
+int cp_same_point(double t, double point);
+
+/* The implicit solver's Jacobian and factors (solvers.h's cp_newton and its block), kept
+ * beside the flight: any Jacobian serves the Newton iteration (it evaluates a new one where
+ * the kept one fails), so a failed step that leaves them changed loses nothing. */
+typedef struct {
+    cp_newton newton;
+    double block[CP_NEWTON_SIZE(CP_NSTATE)];
+} cp_matrices;
 
 /* Doubles of work a step needs: the solvers', then the state at t and the new outputs. */
 #define CP_STEP_WORK_SIZE (CP_WORK_SIZE(CP_NSTATE) + CP_NSTATE + CP_NOUTPUT)
 
 /* The integration a co-simulation carries from one communication point to the next: plain
- * data, which an FMU state copies and serializes byte for byte. With across_points, RK45 and
- * DOP853 take their own steps whatever the points: a point inside the step in flight is
+ * data, which an FMU state copies and serializes byte for byte. With across_points, the
+ * adaptive solvers take their own steps whatever the points: a point inside the step in flight is
  * answered from the step's dense output, and the next communication step continues from the
  * step's end, never from the interpolated state. Without it, each communication step ends
  * its integration on the point (the step in flight ends there), and the next continues from
  * there with the step size and x' it carried. The integration restarts (from the caller's x,
  * at the point, keeping the proposed step size) when what it assumed no longer holds: the
  * inputs at the point, or their derivatives, are not bit for bit those of the polynomials it
- * integrated with (cp_flight_inputs), the point is another, or the caller dropped it (live
+ * integrated with (cp_flight_inputs), the point is another (cp_same_point), or the caller dropped it (live
  * 0: a parameter, state or setting set, an early return). A restart for new inputs ends its
  * first integration on the next point, so that inputs set anew at every point (a coupled
  * co-simulation) cost what ending every integration on the point costs, with no interpolant
@@ -60,7 +76,8 @@ typedef struct {
  * work: CP_STEP_WORK_SIZE doubles of scratch. */
 int cp_cosim_advance(const cp_settings *settings, const double *p, const double (*input_rates)[2],
                      double *x, double *y, double t, double dt, double t_stop, cp_flight *flight,
-                     double *work, double stats[CP_NSTAT], cp_failure *failure, double *reached);
+                     cp_matrices *matrices, double *work, double stats[CP_NSTAT],
+                     cp_failure *failure, double *reached);
 
 /* The inputs as the flight's integration has them at t: their values into p's input entries
  * (p: CP_NPARAM values, the parameters untouched) and their first and second derivatives into
@@ -72,8 +89,8 @@ void cp_flight_inputs(const cp_flight *flight, double t, double *p, double (*rat
  * solver's memory between steps (the proposed step size; whether work starts with x' at x),
  * no stop time, no early return. */
 int cp_cosim_step(const cp_settings *settings, const double *p, double *x, double *y, double t,
-                  double dt, double *h, double *work, int *fsal, double stats[CP_NSTAT],
-                  cp_failure *failure);
+                  double dt, double *h, double *work, int *fsal, cp_matrices *matrices,
+                  double stats[CP_NSTAT], cp_failure *failure);
 
 /* Whether the ropes (if any) hold at time t in the state x with outputs y: each length in its
  * range (else CP_ROPE_RANGE), each tension not negative (else CP_ROPE_SLACK: a rope cannot
@@ -85,6 +102,9 @@ int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failur
 /* cp_rhs as a solver's system's right-hand side (ctx a cp_model): the inputs held as its p
  * has them, whatever t. */
 int cp_held_rhs(void *ctx, double t, const double *x, double *dx);
+
+/* Its exact Jacobian (cp_jac_fn), a column per state by complex step (directional.h). */
+int cp_held_jac(void *ctx, double t, const double *x, double *J);
 
 /* The inputs of p (CP_NPARAM values, the inputs last) tau after the point where they are p's,
  * each on its Taylor polynomial u + u' tau + u'' tau^2 / 2 (rates[k] = {u', u''}), into p_at,

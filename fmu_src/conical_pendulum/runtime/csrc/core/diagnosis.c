@@ -45,6 +45,15 @@ int cp_diagnose(char *buf, size_t size, int status, const cp_failure *f)
     case CP_ROPE_SLACK:
         cp_rope_hint(hint, sizeof hint, status, f);
         break;
+    case CP_STIFF:
+        snprintf(hint, sizeof hint, "more than max_steps = %lld internal steps were needed, each "
+                 "held short by stability, not by accuracy: the scene is stiff (a mode at |lambda| "
+                 "= %.3g 1/s, which keeps %s's steps below %.3g s whatever the tolerance); choose "
+                 "solver = %d (radau) or %d (auto), whose steps follow accuracy alone",
+                 f->max_steps, f->stiffness, f->method == CP_RK45 ? "RK45" : "DOP853",
+                 f->stiffness > 0 ? cp_stiffness_bound(f->method) / f->stiffness : INFINITY,
+                 CP_RADAU, CP_AUTO);
+        break;
     case CP_MAX_STEP_UNRESOLVED:
         snprintf(hint, sizeof hint, "max_step = %g s is shorter than what time t = %.9g s can "
                  "resolve (%g s): raise max_step, or set it to 0 (no limit)", f->max_step,

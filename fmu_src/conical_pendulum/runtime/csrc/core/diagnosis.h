@@ -19,6 +19,8 @@ typedef struct {
     int rope;             /* CP_ROPE_RANGE, CP_ROPE_SLACK: the rope's link */
     double at, value;     /* ... the time it was found at and its length [m] or tension [N] */
     double low, high;     /* ... its length's range [m] */
+    int method;           /* CP_STIFF: the solver whose steps stability bounded */
+    double stiffness;     /* ... |lambda| [1/s] its stiffness test estimated */
 } cp_failure;
 
 /* What is wrong with a rope (status CP_ROPE_RANGE or CP_ROPE_SLACK, failure's rope fields):

@@ -3,6 +3,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "solver_common.h"
 #include "tableaus.h"
 
 #define SAFETY 0.9
@@ -14,26 +15,29 @@ typedef struct {
     const double *c, *a, *b;    /* a: stages x a_stride, row s uses entries 0..s-1 */
     int a_stride;
     const double *e, *e3;       /* e (or e5 with e3 for DOP853): stages + 1 weights */
+    double stiff_bound;         /* h |lambda| past which the steps are bounded by stability */
 } tableau;
 
-static const tableau RK45_TABLEAU = {6, 4, RK45_C, &RK45_A[0][0], RK45_B, 5, RK45_E, 0};
+/* The stiffness bounds are Hairer's (dopri5 3.25, dop853 6.1): where each method's stability
+ * region ends along the estimate h |lambda| his codes test. */
+static const tableau RK45_TABLEAU = {6, 4, RK45_C, &RK45_A[0][0], RK45_B, 5, RK45_E, 0, 3.25};
 static const tableau DOP853_TABLEAU = {DOP853_STAGES, 7, DOP853_C, &DOP853_A[0][0], DOP853_B,
-                                       DOP853_STAGES, DOP853_E5, DOP853_E3};
+                                       DOP853_STAGES, DOP853_E5, DOP853_E3, CP_STIFF_BOUND};
 
-static int eval(const cp_system *sys, double t, const double *x, double *dx, cp_stats *stats)
+double cp_stiffness_bound(int method)
 {
-    stats->nfev++;
-    return sys->rhs(sys->ctx, t, x, dx);
+    return method == CP_RK45 ? RK45_TABLEAU.stiff_bound : DOP853_TABLEAU.stiff_bound;
 }
 
-static double rms(int n, const double *v, const double *scale)
+#define eval cp_eval
+#define rms cp_rms
+
+/* A trial stage's failure that rejects the step rather than ending the integration: a
+ * non-finite acceleration there says the step was too long for the scene, not that the
+ * scene is wrong. */
+static int trial_rejects(int status)
 {
-    double s = 0.0;
-    for (int i = 0; i < n; i++) {
-        double r = v[i] / scale[i];
-        s += r * r;
-    }
-    return sqrt(s / n);
+    return status == CP_NONFINITE;
 }
 
 /* cp_rk4 has checked that ceil(dt / max_step) <= max_steps. On failure, good holds the
@@ -79,8 +83,13 @@ static int initial_step(const cp_system *sys, double t, const double *y, const d
     double d0 = rms(n, y, scale), d1 = rms(n, f, scale);
     double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
     if (h0 > interval) h0 = interval;
-    for (int i = 0; i < n; i++) tmp[i] = y[i] + h0 * f[i];
-    if ((status = eval(sys, t + h0, tmp, f1, stats))) return status;
+    for (;;) {  /* the Euler step's guess shrunk until the scene can be evaluated there */
+        for (int i = 0; i < n; i++) tmp[i] = y[i] + h0 * f[i];
+        status = eval(sys, t + h0, tmp, f1, stats);
+        if (!(trial_rejects(status) || (status == CP_OK && !cp_all_finite(n, f1)))) break;
+        if ((h0 *= 0.01) < cp_min_step(t, t + interval)) return status ? status : CP_NONFINITE;
+    }
+    if (status) return status;
     for (int i = 0; i < n; i++) tmp[i] = f1[i] - f[i];
     double d2 = rms(n, tmp, scale) / h0;
     double h1 = (d1 <= 1e-15 && d2 <= 1e-15) ? fmax(1e-6, h0 * 1e-3)
@@ -122,7 +131,7 @@ typedef struct {
     double *K, *y, *y_new, *tmp, *scale, *err;
 } rk_memory;
 
-#define CARVED_ROWS 21  /* the rows carve() takes: K's 16 and five vectors */
+/* carve() takes K's 16 rows and five vectors: within CP_CARVED_ROWS */
 
 static rk_memory carve(int n, double *work)
 {
@@ -137,47 +146,68 @@ static rk_memory carve(int n, double *work)
 }
 
 /* One accepted step from (t, m->y) towards t_end, rejecting as often as needed, as
- * scipy's RungeKutta._step_impl does. On return *t_new and m->y_new hold the new point
- * and K[stages] holds x' there; m->y and K[0] are left for dense output. */
+ * scipy's RungeKutta._step_impl does; a trial stage that is not finite (trial_rejects) is a
+ * rejection too, shrinking the step as a NaN error norm does, and the integration fails only
+ * where no step down to the shortest one avoids it (then with that stage's status). On
+ * return *t_new and m->y_new hold the new point and K[stages] holds x' there; m->y and K[0]
+ * are left for dense output; *stiffness is the accepted step's h |lambda| (Hairer's estimate
+ * from the last stage, which both pairs take at the step's end). */
 static int one_step(const tableau *tb, const cp_system *sys, double t, double t_end,
                     rk_memory *m, double rtol, double atol, double max_step, long long max_steps,
                     long long *attempts, double *h_abs_io, double *t_new_out, double *h_out,
-                    cp_stats *stats)
+                    double *stiffness, cp_stats *stats)
 {
-    int n = sys->dim, status;
+    int n = sys->dim, status, last_failure = CP_OK;  /* the last trial stage's, if it rejected */
     double *K = m->K, exponent = -1.0 / (tb->order + 1), h_abs = *h_abs_io;
     double min_step = 10 * fabs(nextafter(t, INFINITY) - t);
     if (h_abs > max_step) h_abs = max_step;
     else if (h_abs < min_step) h_abs = min_step;
     int rejected = 0;
     for (;;) {
-        if (h_abs < min_step) return CP_STEP_UNDERFLOW;
+        if (h_abs < min_step) return last_failure ? last_failure : CP_STEP_UNDERFLOW;
         if (++*attempts > max_steps) return CP_TOO_MANY_STEPS;
         double t_new = t + h_abs;
         if (t_new > t_end) t_new = t_end;
         double h = t_new - t;
         h_abs = fabs(h);
-        for (int s = 1; s < tb->stages; s++) {
+        double norm = NAN;
+        int trial_failure = CP_OK;
+        for (int s = 1; s < tb->stages && !trial_failure; s++) {
             const double *a = tb->a + s * tb->a_stride;
             for (int i = 0; i < n; i++) {
                 double dy = 0.0;
                 for (int j = 0; j < s; j++) dy += K[j * n + i] * a[j];
                 m->tmp[i] = m->y[i] + dy * h;
             }
-            if ((status = eval(sys, t + tb->c[s] * h, m->tmp, K + s * n, stats))) return status;
+            status = eval(sys, t + tb->c[s] * h, m->tmp, K + s * n, stats);
+            if (trial_rejects(status)) trial_failure = status;
+            else if (status) return status;
         }
-        for (int i = 0; i < n; i++) {
-            double dy = 0.0;
-            for (int j = 0; j < tb->stages; j++) dy += K[j * n + i] * tb->b[j];
-            m->y_new[i] = m->y[i] + h * dy;
+        if (!trial_failure) {
+            for (int i = 0; i < n; i++) {
+                double dy = 0.0;
+                for (int j = 0; j < tb->stages; j++) dy += K[j * n + i] * tb->b[j];
+                m->y_new[i] = m->y[i] + h * dy;
+            }
+            status = eval(sys, t_new, m->y_new, K + tb->stages * n, stats);
+            if (trial_rejects(status)) trial_failure = status;
+            else if (status) return status;
         }
-        if ((status = eval(sys, t_new, m->y_new, K + tb->stages * n, stats))) return status;
-        for (int i = 0; i < n; i++)
-            m->scale[i] = atol + fmax(fabs(m->y[i]), fabs(m->y_new[i])) * rtol;
-        double norm = error_norm(tb, n, K, h, m->scale, m->err);
+        if (!trial_failure) {
+            for (int i = 0; i < n; i++)
+                m->scale[i] = atol + fmax(fabs(m->y[i]), fabs(m->y_new[i])) * rtol;
+            norm = error_norm(tb, n, K, h, m->scale, m->err);
+        }
         if (norm < 1) {
             double factor = norm == 0 ? MAX_FACTOR : fmin(MAX_FACTOR, SAFETY * pow(norm, exponent));
             if (rejected && factor > 1) factor = 1;
+            double num = 0.0, den = 0.0;  /* the last stage and the new point, both at t_new */
+            const double *k_last = K + (tb->stages - 1) * n, *k_new = K + tb->stages * n;
+            for (int i = 0; i < n; i++) {
+                num += (k_new[i] - k_last[i]) * (k_new[i] - k_last[i]);
+                den += (m->y_new[i] - m->tmp[i]) * (m->y_new[i] - m->tmp[i]);
+            }
+            *stiffness = den > 0 ? h_abs * sqrt(num / den) : 0.0;
             *h_abs_io = h_abs * factor;
             *t_new_out = t_new;
             *h_out = h;
@@ -188,6 +218,7 @@ static int one_step(const tableau *tb, const cp_system *sys, double t, double t_
         h_abs *= isnan(norm) ? MIN_FACTOR : fmax(MIN_FACTOR, SAFETY * pow(norm, exponent));
         rejected = 1;
         stats->nreject++;
+        last_failure = trial_failure;
     }
 }
 
@@ -237,19 +268,87 @@ void cp_step_begin(cp_step *step, double *rows, int dim, double t, const double 
     step->t0 = step->t1 = t;
     step->h = h;
     step->fsal = step->dense = 0;
+    step->method = step->next = CP_DOP853;
+    step->stiff_steps = step->calm_steps = 0;
+    step->h_old = step->err_old = step->stiffness = 0.0;
     memcpy(rows + CP_ROW_X1 * dim, x, dim * sizeof(double));
 }
 
-int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, double t_target,
-             double t_limit, double rtol, double atol, double max_step, long long max_steps,
-             long long *attempts, double *work, cp_stats *stats)
+/* The order of a method's error estimator, which its first step's choice assumes. */
+static int estimator_order(int method)
+{
+    return method == CP_RK45 ? 4 : method == CP_RADAU ? 3 : 7;
+}
+
+/* explicit_step's answer for a step that would answer t_target from an interpolant it cannot
+ * trust: not taken, to be taken again ending on t_target. */
+#define RETAKE_ON_POINT (-1)
+
+/* One accepted step of RK45 or DOP853 from the end of the step in flight, with its interpolant
+ * when it crosses t_target; *stiffness as one_step's. A step that crosses t_target with h
+ * |lambda| past trust_bound is not taken (RETAKE_ON_POINT, counted as a rejection): DOP853's
+ * interpolant near its stability bound is off by up to a hundred tolerances where the step's
+ * end is not (measured on the damped light chain: 7e-5 inside its steps, 3e-6 at their ends,
+ * at rtol 1e-6). */
+static int explicit_step(int method, const cp_system *sys, cp_step *step, double *rows,
+                         double t_target, double t_limit, double trust_bound, double rtol,
+                         double atol, double max_step, long long max_steps, long long *attempts,
+                         double *work, double *stiffness, cp_stats *stats)
 {
     const tableau *tb = method == CP_RK45 ? &RK45_TABLEAU : &DOP853_TABLEAU;
     int n = sys->dim, status;
     size_t size = n * sizeof(double);
     rk_memory m = carve(n, work);
     double *x0 = rows + CP_ROW_X0 * n, *x1 = rows + CP_ROW_X1 * n, *f1 = rows + CP_ROW_F1 * n;
-    double *dense = rows + CP_ROW_DENSE * n;
+    double h_abs = step->h, t_new, h;
+    memcpy(m.y, x1, size);
+    memcpy(m.K, f1, size);
+    status = one_step(tb, sys, step->t1, t_limit, &m, rtol, atol, max_step, max_steps, attempts,
+                      &h_abs, &t_new, &h, stiffness, stats);
+    if (status) return status;
+    if (!cp_all_finite(n, m.y_new)) return CP_NONFINITE;
+    int crosses = t_new > t_target;  /* the target is answered from this step's interpolant */
+    if (crosses && *stiffness > trust_bound) {
+        stats->naccept--;
+        stats->nreject++;
+        return RETAKE_ON_POINT;
+    }
+    if (crosses) {
+        double *dense = rows + CP_ROW_DENSE * n;
+        if (method == CP_RK45) rk45_interpolant(n, &m, dense);
+        else if ((status = dop853_interpolant(sys, step->t1, h, &m, dense, stats))) return status;
+    }
+    memcpy(x0, m.y, size);
+    memcpy(x1, m.y_new, size);
+    memcpy(f1, m.K + tb->stages * n, size);
+    step->t0 = step->t1;
+    step->t1 = t_new;
+    step->h = h_abs;
+    step->dense = crosses;
+    step->method = method;
+    return CP_OK;
+}
+
+/* Hairer's count of an explicit pair's accepted steps past its stiffness bound: 15 of them
+ * with never 6 in a row inside it between make the scene stiff. */
+static int looks_stiff(cp_step *step, int past)
+{
+    if (past) {
+        step->stiff_steps++;
+        step->calm_steps = 0;
+    } else if (++step->calm_steps >= CP_CALM_RESET) {
+        step->stiff_steps = 0;
+    }
+    return step->stiff_steps >= CP_STIFF_STEPS;
+}
+
+int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, cp_newton *newton,
+             double *matrices, double t_target, double t_limit, double rtol, double atol,
+             double max_step, long long max_steps, long long *attempts, double *work,
+             cp_stats *stats)
+{
+    int n = sys->dim, status;
+    double *x1 = rows + CP_ROW_X1 * n, *f1 = rows + CP_ROW_F1 * n;
     if (!(max_step > 0)) max_step = INFINITY;
     if (step->t1 >= t_target) return CP_OK;
     if (!step->fsal) {
@@ -257,36 +356,54 @@ int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, doub
         step->fsal = 1;
     }
     if (!(step->h > 0) || !isfinite(step->h)) {
+        rk_memory m = carve(n, work);
+        int first = method == CP_AUTO ? step->next : method;
         status = initial_step(sys, step->t1, x1, f1, t_limit - step->t1, rtol, atol, max_step,
-                              tb->order, m.tmp, m.err, m.scale, stats, &step->h);
+                              estimator_order(first), m.tmp, m.err, m.scale, stats, &step->h);
         if (status) return status;
     }
     while (step->t1 < t_target) {
-        double h_abs = step->h, t_new, h;
-        memcpy(m.y, x1, size);
-        memcpy(m.K, f1, size);
-        status = one_step(tb, sys, step->t1, t_limit, &m, rtol, atol, max_step, max_steps,
-                          attempts, &h_abs, &t_new, &h, stats);
-        if (status) return status;
-        if (!cp_all_finite(n, m.y_new)) return CP_NONFINITE;
-        int crosses = t_new > t_target;  /* the target is answered from this step's interpolant */
-        if (crosses) {
-            if (method == CP_RK45) rk45_interpolant(n, &m, dense);
-            else if ((status = dop853_interpolant(sys, step->t1, h, &m, dense, stats))) return status;
+        const int use = method == CP_AUTO ? step->next : method;
+        if (use == CP_RADAU) {
+            status = cp_radau_step(sys, step, rows, newton, matrices, t_limit, rtol, atol,
+                                   max_step, max_steps, attempts, work, stats);
+            if (status) return status;
+            if (!cp_all_finite(n, x1)) return CP_NONFINITE;
+            step->stiffness = (step->t1 - step->t0) * newton->rho;
+            step->calm_steps = step->stiffness < CP_CALM_BOUND ? step->calm_steps + 1 : 0;
+            if (method == CP_AUTO && step->calm_steps >= CP_STIFF_STEPS) {
+                step->next = CP_DOP853;  /* the scene calmed: back to the explicit pair */
+                step->calm_steps = step->stiff_steps = 0;
+                stats->nswitch++;
+            }
+            continue;
         }
-        memcpy(x0, m.y, size);
-        memcpy(x1, m.y_new, size);
-        memcpy(f1, m.K + tb->stages * n, size);
-        step->t0 = step->t1;
-        step->t1 = t_new;
-        step->h = h_abs;
-        step->dense = crosses;
+        double stiffness = 0.0;
+        const double trust = method == CP_AUTO ? CP_AUTO_BOUND : INFINITY;
+        status = explicit_step(use, sys, step, rows, t_target, t_limit, trust, rtol, atol,
+                               max_step, max_steps, attempts, work, &stiffness, stats);
+        if (status == RETAKE_ON_POINT) {  /* the stiffness test counts the step not taken */
+            double shortened;
+            status = explicit_step(use, sys, step, rows, t_target, t_target, INFINITY, rtol, atol,
+                                   max_step, max_steps, attempts, work, &shortened, stats);
+        }
+        if (status == CP_TOO_MANY_STEPS && step->stiff_steps >= CP_STIFF_STEPS)
+            return CP_STIFF;  /* the steps were bounded by stability, not accuracy */
+        if (status) return status;
+        step->stiffness = stiffness;
+        const tableau *tb = use == CP_RK45 ? &RK45_TABLEAU : &DOP853_TABLEAU;
+        const double bound = method == CP_AUTO ? CP_AUTO_BOUND : tb->stiff_bound;
+        if (looks_stiff(step, stiffness > bound) && method == CP_AUTO) {
+            step->next = CP_RADAU;  /* stiff: the implicit solver from here */
+            step->calm_steps = step->stiff_steps = 0;
+            newton->current_jac = 0;
+            stats->nswitch++;
+        }
     }
     return CP_OK;
 }
 
-void cp_step_state(int method, const cp_step *step, const double *rows, int dim, double t,
-                   double *x)
+void cp_step_state(const cp_step *step, const double *rows, int dim, double t, double *x)
 {
     const double *x0 = rows + CP_ROW_X0 * dim, *dense = rows + CP_ROW_DENSE * dim;
     if (t == step->t1) {
@@ -296,10 +413,14 @@ void cp_step_state(int method, const cp_step *step, const double *rows, int dim,
     double h = step->t1 - step->t0, s = (t - step->t0) / h;
     for (int i = 0; i < dim; i++) {
         double y = 0.0;
-        if (method == CP_RK45) {  /* RkDenseOutput._call_impl: x0 + h Q (s, s^2, s^3, s^4) */
+        if (step->method == CP_RK45) {  /* RkDenseOutput._call_impl: x0 + h Q (s, s^2, s^3, s^4) */
             double power = s;
             for (int r = 0; r < 4; r++, power *= s) y += dense[r * dim + i] * power;
             x[i] = h * y + x0[i];
+        } else if (step->method == CP_RADAU) {  /* RadauDenseOutput._call_impl: x0 + Q (s, s^2, s^3) */
+            const double p1 = s, p2 = p1 * s, p3 = p2 * s;
+            y = dense[i] * p1 + dense[dim + i] * p2 + dense[2 * dim + i] * p3;
+            x[i] = y + x0[i];
         } else {  /* Dop853DenseOutput._call_impl */
             for (int k = 6, odd = 0; k >= 0; k--, odd ^= 1) {
                 y += dense[k * dim + i];
@@ -312,19 +433,19 @@ void cp_step_state(int method, const cp_step *step, const double *rows, int dim,
 
 int cp_dense_grid(int method, const cp_system *sys, const double *times, int ntimes, double *out,
                   double rtol, double atol, double max_step, long long max_steps, double *work,
-                  cp_stats *stats)
+                  cp_newton *newton, double *matrices, cp_stats *stats)
 {
     int n = sys->dim, status;
-    double *rows = work + CARVED_ROWS * n;  /* the step in flight after the solver's memory */
+    double *rows = work + CP_CARVED_ROWS * n;  /* the step in flight after the solver's memory */
     cp_step step;
     long long attempts = 0;
     if (ntimes < 2) return CP_OK;
     cp_step_begin(&step, rows, n, times[0], out, 0.0);
     for (int k = 1; k < ntimes; k++) {
-        status = cp_cover(method, sys, &step, rows, times[k], times[ntimes - 1], rtol, atol,
-                          max_step, max_steps, &attempts, work, stats);
+        status = cp_cover(method, sys, &step, rows, newton, matrices, times[k], times[ntimes - 1],
+                          rtol, atol, max_step, max_steps, &attempts, work, stats);
         if (status) return status;
-        cp_step_state(method, &step, rows, n, times[k], out + k * n);
+        cp_step_state(&step, rows, n, times[k], out + k * n);
     }
     return CP_OK;
 }

@@ -1,4 +1,6 @@
-/* Generic explicit ODE solvers over one communication step: no model knowledge, no Python. */
+/* Generic ODE solvers over one communication step, explicit (RK4, RK45, DOP853) and implicit
+ * (Radau IIA, radau.c), and the automatic choice between DOP853 and Radau: no model knowledge,
+ * no Python. */
 #ifndef CP_SOLVERS_H
 #define CP_SOLVERS_H
 
@@ -10,18 +12,55 @@
  * (cosim.c's interpolated inputs) is evaluated where the stage is. */
 typedef int (*cp_rhs_fn)(void *ctx, double t, const double *x, double *dx);
 
+/* J = df/dx at (t, x), row-major (J[i * dim + j] = df_i / dx_j); returns as the right-hand
+ * side does. The implicit solver's only use of it. */
+typedef int (*cp_jac_fn)(void *ctx, double t, const double *x, double *J);
+
 typedef struct {
     int dim;
-    cp_rhs_fn rhs;   /* returns CP_OK, or a status >= 10 that stops the integration */
+    cp_rhs_fn rhs;   /* returns CP_OK, or a status >= 10 that stops the integration; a trial
+                        stage's CP_NONFINITE rejects the step instead (the step shrinks) */
     void *ctx;
+    cp_jac_fn jac;   /* for CP_RADAU and CP_AUTO */
 } cp_system;
 
 /* Counts of one call; 64 bits everywhere (long is 32 bits on Windows). */
 typedef struct {
-    long long nfev, naccept, nreject;
+    long long nfev, naccept, nreject, njev, nlu;
+    long long nswitch;  /* CP_AUTO's switches between DOP853 and Radau */
 } cp_stats;
 
-enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2 };
+/* The methods, in the order of the FMUs' `solver` (runtime/rules.py's SOLVERS). CP_AUTO starts
+ * with DOP853 and counts its steps as Hairer's stiffness test does (looks_stiff: CP_STIFF_STEPS
+ * accepted steps past a bound, never CP_CALM_RESET in a row below it between), but past
+ * CP_AUTO_BOUND, a third of DOP853's stability bound: DOP853's interpolant, which no error
+ * test controls, is off by 20 tolerances already at h |lambda| = 2.3 (measured on the damped
+ * light chain at c = 1, rtol 1e-6, where the steps' ends are within the tolerance). It
+ * switches to Radau there, and back when Radau's steps stay below CP_CALM_BOUND (h rho(J), on
+ * CP_STIFF_STEPS accepted steps in a row). Until it switches, a DOP853 step past CP_AUTO_BOUND
+ * that would answer a point from its interpolant is taken again to end on the point. */
+enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2, CP_RADAU = 3, CP_AUTO = 4 };
+#define CP_STIFF_BOUND 6.1  /* Hairer's dop853: its stability region ends near 6 */
+#define CP_AUTO_BOUND 2.0   /* a third of that (the seed at rtol 1e-6 stays below 1.4) */
+#define CP_CALM_BOUND 1.0   /* half again: Radau hands back only what DOP853 takes with room */
+#define CP_STIFF_STEPS 15
+#define CP_CALM_RESET 6
+
+/* h |lambda| past which an explicit method's steps are bounded by stability (CP_RK45 or
+ * CP_DOP853: the bound its stiffness test uses). */
+double cp_stiffness_bound(int method);
+
+/* The implicit solver's matrices, kept between steps and across communication points (in an
+ * FMU's state): flags here, the numbers in a block of CP_NEWTON_SIZE(dim) doubles beside it
+ * (J, the real and complex factors, their pivots as whole numbers). */
+typedef struct {
+    int jac_valid;    /* the block's J is a Jacobian of the system */
+    int current_jac;  /* ... evaluated at the start of the step in flight */
+    int lu_valid;     /* the factors are J's, for the step size they were made for */
+    int reserved;     /* 0 (the padding, named so that a state's bytes are all defined) */
+    double rho;       /* J's spectral radius, estimated when J was evaluated */
+} cp_newton;
+#define CP_NEWTON_SIZE(dim) (4 * (dim) * (dim) + 2 * (dim))
 
 static inline int cp_all_finite(int n, const double *v)
 {
@@ -77,39 +116,46 @@ typedef struct {
     double t0, t1;  /* the step's start and end (equal: no step yet, the integration starts at t1) */
     double h;       /* the step size proposed after it (<= 0: chosen as scipy does) */
     int fsal;       /* the CP_ROW_F1 row holds x' at t1 */
-    int dense;      /* the CP_ROW_DENSE rows hold the step's interpolant (needed inside it only) */
+    int dense;      /* the CP_ROW_DENSE rows hold the step's interpolant (needed inside it only;
+                       Radau keeps it always: the next step's Newton starts from it) */
+    int method;     /* the method that made the step, whose interpolant the rows hold */
+    int next;       /* CP_AUTO: the method of the next step (CP_DOP853 or CP_RADAU) */
+    int stiff_steps, calm_steps;  /* the stiffness test's counts (looks_stiff; Radau: calm steps) */
+    double h_old, err_old;  /* Radau: the step size proposed before the last step and its
+                               error norm (0: none) */
+    double stiffness;  /* the last step's h |lambda| (explicit: Hairer's estimate; Radau: h rho(J)) */
 } cp_step;
 
 /* The rows: x at t0 and t1, x' at t1, then the interpolant's coefficients (DOP853's 7 rows of
- * F, RK45's 4 rows of Q, as scipy's dense outputs hold them). */
+ * F, RK45's 4 rows of Q, Radau's 3 rows of Q, as scipy's dense outputs hold them). */
 enum { CP_ROW_X0, CP_ROW_X1, CP_ROW_F1, CP_ROW_DENSE, CP_FLIGHT_ROWS = CP_ROW_DENSE + 7 };
 
 /* An integration that starts at (t, x), with the step size h proposed (<= 0: to be chosen). */
 void cp_step_begin(cp_step *step, double *rows, int dim, double t, const double *x, double h);
 
-/* Steps of method (CP_RK45 or CP_DOP853) from the end of the step in flight until it reaches
+/* Steps of method (CP_RK45, CP_DOP853, CP_RADAU or CP_AUTO) from the end of the step in flight until it reaches
  * t_target, none ending after t_limit (>= t_target): the error controlled as scipy's solvers
  * control it (RMS norm of the error over atol + rtol * max(|x|, |x_new|), same safety factor
  * and limits). A last step that ends after t_target comes with its interpolant. Nothing to do
  * when the step in flight already reaches t_target. *attempts counts the steps attempted
  * (accepted or rejected) against max_steps (CP_TOO_MANY_STEPS). On failure the step in flight
  * is the last one accepted; on success it holds t_target (cp_step_state). */
-int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, double t_target,
-             double t_limit, double rtol, double atol, double max_step, long long max_steps,
-             long long *attempts, double *work, cp_stats *stats);
+int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, cp_newton *newton,
+             double *matrices, double t_target, double t_limit, double rtol, double atol,
+             double max_step, long long max_steps, long long *attempts, double *work,
+             cp_stats *stats);
 
 /* The state at t, step->t0 <= t <= step->t1, into x: the step's end at t1, else its dense
  * output (DOP853's 7th-order interpolant, the Dormand-Prince continuous extension of order 4
- * for RK45), which step->dense says the rows hold. */
-void cp_step_state(int method, const cp_step *step, const double *rows, int dim, double t,
-                   double *x);
+ * for RK45, Radau's collocation polynomial), which step->dense says the rows hold. */
+void cp_step_state(const cp_step *step, const double *rows, int dim, double t, double *x);
 
-/* method (CP_RK45 or CP_DOP853) from times[0] (state in out[0..dim)) through times[ntimes - 1],
+/* method (CP_RK45, CP_DOP853, CP_RADAU or CP_AUTO) from times[0] (state in out[0..dim)) through times[ntimes - 1],
  * writing the state at every time into out (row-major, ntimes x dim) from the method's dense
  * output, as scipy's solve_ivp(method=..., t_eval=times) does: one integration, cp_cover to
  * each time. */
 int cp_dense_grid(int method, const cp_system *sys, const double *times, int ntimes, double *out,
                   double rtol, double atol, double max_step, long long max_steps, double *work,
-                  cp_stats *stats);
+                  cp_newton *newton, double *matrices, cp_stats *stats);
 
 #endif

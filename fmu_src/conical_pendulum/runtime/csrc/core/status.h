@@ -10,6 +10,7 @@
     X(CP_STEP_UNDERFLOW, 2, "step size underflow") \
     X(CP_BAD_STEP, 3, "invalid communication step") \
     X(CP_MAX_STEP_UNRESOLVED, 4, "max_step below the resolution of time") \
+    X(CP_STIFF, 5, "too many steps: the scene is stiff") \
     X(CP_SINGULAR, 10, "singular mass matrix") \
     X(CP_NONFINITE, 11, "non-finite acceleration") \
     X(CP_ROPE_RANGE, 12, "a rope's length left its range") \

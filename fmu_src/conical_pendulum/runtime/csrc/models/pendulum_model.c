@@ -5,6 +5,7 @@
  * Nothing here knows FMI: an FMI layer calls these functions and says the messages. */
 #include "fmu_model.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -25,6 +26,7 @@ struct ModelData {
     double tolerance;             /* the experiment's; replaces rtol's start value when > 0 */
     double stop_time;             /* the experiment's (INFINITY: none): no step goes beyond */
     cp_flight flight;             /* the integration carried across communication points */
+    cp_matrices matrices;         /* the implicit solver's Jacobian and factors */
     double work[CP_STEP_WORK_SIZE];  /* scratch of a step */
     double dx[CP_NSTATE];         /* Model Exchange: x' at x when dx_valid */
     int dx_valid, outputs_valid;
@@ -548,7 +550,7 @@ ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_ret
     cp_failure failure;
     double reached = t;
     int status = cp_cosim_advance(&settings, m->r, (const double(*)[2])m->input_rates, X(m), Y(m),
-                                  t, dt, m->stop_time, &m->flight, m->work, STATS(m), &failure,
+                                  t, dt, m->stop_time, &m->flight, &m->matrices, m->work, STATS(m), &failure,
                                   early_return_allowed ? &reached : NULL);
     if (last_successful_time) *last_successful_time = status == CP_OK ? t + dt : reached;
     /* valid where the state moved (cosim.c computed them there); at t, computed again */
@@ -593,17 +595,34 @@ static const char *flight_invalid(const ModelData *m, char *message, size_t size
                  f->t_inputs, step->t0, f->t_point, step->t1, step->dense);
         return message;
     }
-    const int used[CP_FLIGHT_ROWS] = {1, 1, step->fsal, step->dense, step->dense, step->dense,
-                                      step->dense, m->solver == CP_DOP853 && step->dense,
-                                      m->solver == CP_DOP853 && step->dense,
-                                      m->solver == CP_DOP853 && step->dense};
+    const struct { const char *name; int value, low, high; } counts[] = {
+        {"method", step->method, CP_RK45, CP_RADAU}, {"next", step->next, CP_DOP853, CP_RADAU},
+        {"stiff_steps", step->stiff_steps, 0, INT_MAX}, {"calm_steps", step->calm_steps, 0, INT_MAX}};
+    for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++)
+        if (counts[k].value < counts[k].low || counts[k].value > counts[k].high) {
+            snprintf(message, size, "step in flight: %s = %d: must be from %d to %d",
+                     counts[k].name, counts[k].value, counts[k].low, counts[k].high);
+            return message;
+        }
+    const struct { const char *name; double value; } sizes[] = {
+        {"h_old", step->h_old}, {"err_old", step->err_old}, {"stiffness", step->stiffness}};
+    for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
+        char name[64];
+        snprintf(name, sizeof name, "step in flight: %s", sizes[k].name);
+        if (cp_real_refusal(name, sizes[k].value, &cp_rules[CP_STEP_RULE], "", message, size))
+            return message;
+    }
+    const int dense_rows = step->method == CP_DOP853 ? 7 : step->method == CP_RK45 ? 4 : 3;
     char name[64];
-    for (int row = 0; row < CP_FLIGHT_ROWS; row++)
-        for (int k = 0; used[row] && k < CP_NSTATE; k++) {
+    for (int row = 0; row < CP_FLIGHT_ROWS; row++) {
+        const int used = row < CP_ROW_F1 || (row == CP_ROW_F1 && step->fsal)
+                         || (step->dense && row - CP_ROW_DENSE < dense_rows);
+        for (int k = 0; used && k < CP_NSTATE; k++) {
             snprintf(name, sizeof name, "step in flight: row %d, entry %d", row, k);
             if (cp_real_refusal(name, f->rows[row][k], &cp_rules[CP_FINITE_RULE], "", message, size))
                 return message;
         }
+    }
     for (int k = 0; k < CP_NINPUT; k++)
         for (int order = 0; order < 3; order++) {
             snprintf(name, sizeof name, "step in flight: input %d, derivative %d", k, order);
@@ -611,6 +630,45 @@ static const char *flight_invalid(const ModelData *m, char *message, size_t size
                                 size))
                 return message;
         }
+    return NULL;
+}
+
+/* NULL if the implicit solver's matrices can be used (cosim.h's cp_matrices): the flags 0 or 1,
+ * the spectral radius a number >= 0, J finite where it is valid, the factors finite and their
+ * pivots rows at or below their own where they are valid (of a valid J); or the message. */
+static const char *matrices_invalid(const ModelData *m, char *message, size_t size)
+{
+    const cp_newton *nw = &m->matrices.newton;
+    const double *block = m->matrices.block;
+    const int n = CP_NSTATE;
+    const struct { const char *name; int value; } flags[] = {
+        {"jac_valid", nw->jac_valid}, {"current_jac", nw->current_jac}, {"lu_valid", nw->lu_valid}};
+    for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
+        if (flags[k].value != 0 && flags[k].value != 1) {
+            snprintf(message, size, "Jacobian: %s = %d: must be 0 or 1", flags[k].name, flags[k].value);
+            return message;
+        }
+    if (nw->reserved != 0 || (nw->lu_valid && !nw->jac_valid) || !(nw->rho >= 0)) {
+        snprintf(message, size, "Jacobian: reserved = %d, lu_valid = %d with jac_valid = %d, "
+                 "rho = %.17g: reserved must be 0, factors need a Jacobian, rho must be >= 0",
+                 nw->reserved, nw->lu_valid, nw->jac_valid, nw->rho);
+        return message;
+    }
+    const int checked = nw->lu_valid ? 4 * n * n : nw->jac_valid ? n * n : 0;
+    for (int k = 0; k < checked; k++)
+        if (!isfinite(block[k])) {
+            snprintf(message, size, "Jacobian: entry %d of its matrices is %.17g: must be finite",
+                     k, block[k]);
+            return message;
+        }
+    for (int k = 0; nw->lu_valid && k < 2 * n; k++) {
+        const double pivot = block[4 * n * n + k];
+        if (!(pivot >= k % n && pivot < n && pivot == floor(pivot))) {
+            snprintf(message, size, "Jacobian: pivot %d is %.17g: must be a row from %d to %d",
+                     k, pivot, k % n, n - 1);
+            return message;
+        }
+    }
     return NULL;
 }
 
@@ -649,7 +707,7 @@ const char *model_invalid(const ModelData *m, char *message, size_t size)
     if (m->stop_time != INFINITY
         && cp_real_refusal("stop_time", m->stop_time, &cp_rules[CP_FINITE_RULE], "", message, size))
         return message;
-    if (flight_invalid(m, message, size)) return message;
+    if (flight_invalid(m, message, size) || matrices_invalid(m, message, size)) return message;
     char name[160];
     for (int k = 0; k < CP_NSTATE; k++)
         if (m->dx_valid && cp_real_refusal(cp_variable_name(CP_VR_DERIVATIVE + k), m->dx[k],
