@@ -15,7 +15,7 @@ from scipy.special import jn_zeros, roots_laguerre
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
-from conical_pendulum.analysis.linearize import color_columns, describe_modes, linearize
+from conical_pendulum.analysis.linearize import LinearModel, color_columns, describe_modes, linearize
 from conical_pendulum.errors import UserError
 
 G, L, M_BOB = 9.8, 10.0, 5.0  # the scenes' defaults: gravity, link length, bob mass
@@ -182,6 +182,11 @@ def test_joint_damping_moves_the_eigenvalues_off_the_axis_as_it_says(built_fmu):
         assert model.modes()[0].components == (("W_damping", 1.0),)  # it moves no angle
         found = found[np.abs(found) > 1e-9]
         np.testing.assert_allclose(np.sort_complex(found), np.sort_complex(expected), rtol=1e-10)
+        # how stiff: the decaying modes' |Re lambda| from slowest to fastest (W_damping's 0 is
+        # no decaying mode), and the fastest |lambda|
+        stiffness = model.stiffness()
+        assert stiffness.ratio == pytest.approx(expected.real.min() / expected.real.max(), rel=1e-9)
+        assert abs(stiffness.fastest) == pytest.approx(np.abs(expected).max(), rel=1e-10)
         if c < 2 * M_BOB * L**2 * math.sqrt(G / L):
             mode = model.modes()[-1]
             assert mode.damping_ratio == pytest.approx(decay / math.sqrt(G / L), rel=1e-10)
@@ -404,6 +409,30 @@ def command(*args):
     )
 
 
+def test_stiffness_is_the_decaying_modes_spread_and_the_fastest_mode():
+    """A diagonal A with -1 and -1000 and an undamped pair +-10i: ratio 1000, the fastest
+    mode the pair's or the decay's, whichever is larger; no decaying mode: no ratio."""
+    A = np.zeros((4, 4))
+    A[0, 0], A[1, 1], A[2, 3], A[3, 2] = -1.0, -1000.0, 10.0, -10.0
+
+    def model(A):
+        return LinearModel(
+            A, np.zeros((4, 0)), np.zeros((0, 4)), np.zeros((0, 0)), list("abcd"), [], [],
+            np.zeros(4), np.zeros(0), np.zeros(0), np.zeros(4), 0.0, "directional", 0, "",
+        )  # fmt: skip
+
+    stiffness = model(A).stiffness()
+    assert stiffness.ratio == pytest.approx(1000.0) and stiffness.fastest == pytest.approx(-1000.0)
+    assert (
+        stiffness.time_scale == pytest.approx(1e-3)
+        and "stiff: choose solver radau or auto" in stiffness.describe()
+    )
+    A[0, 0] = A[1, 1] = 0.0
+    undamped = model(A).stiffness()
+    assert undamped.ratio is None and abs(undamped.fastest) == pytest.approx(10.0)
+    assert "no decaying mode, not stiff" in undamped.describe()
+
+
 def test_the_command(built_fmu, tmp_path):
     """`conical-pendulum linearize`: modes printed, files and the mode shapes written; a bad
     name, or mode shapes of an FMU that is no chain of this project's, is one line."""
@@ -413,6 +442,7 @@ def test_the_command(built_fmu, tmp_path):
     done = command(path, *hanging, "--out", out, "--out", tmp_path / "seed.npz", "--plot", picture)
     assert done.returncode == 0, done.stderr
     assert "0.666647" in done.stdout and "directional" in done.stdout
+    assert "fastest mode |lambda| = " in done.stdout and "no decaying mode, not stiff" in done.stdout
     assert out.exists() and (tmp_path / "seed.npz").exists() and picture.stat().st_size > 10000
     for args, said in (
         ([path, "--state", "gamma=1"], "state 'gamma'"),

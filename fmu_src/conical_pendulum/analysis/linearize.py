@@ -78,6 +78,32 @@ class Mode:
         return -self.eigenvalue.real / self.rad_per_s if self.rad_per_s else 0.0
 
 
+@dataclass(frozen=True)
+class Stiffness:
+    """How stiff A is, for choosing a solver. fastest: A's eigenvalue of largest |lambda|,
+    whose time scale 1 / |lambda| bounds an explicit solver's step (DOP853's stability ends
+    near h |lambda| = 6); ratio: the largest over the smallest |Re lambda| of the decaying
+    modes (Re lambda below -1e-9 |fastest|: slower ones count as undamped), None where there
+    is none. A ratio of 1e3 or more with a fast decaying mode is a stiff scene."""
+
+    fastest: complex
+    ratio: float | None
+
+    @property
+    def time_scale(self) -> float:
+        return 1.0 / abs(self.fastest) if self.fastest else math.inf
+
+    def describe(self) -> str:
+        fastest = (
+            f"fastest mode |lambda| = {abs(self.fastest):.3g} 1/s (time scale {self.time_scale:.3g} s; "
+            f"DOP853's steps stay below {6.1 * self.time_scale:.3g} s)"
+        )
+        if self.ratio is None:
+            return f"stiffness: {fastest}; no decaying mode, not stiff"
+        verdict = "stiff: choose solver radau or auto" if self.ratio >= 1e3 else "not stiff"
+        return f"stiffness: {fastest}; stiffness ratio {self.ratio:.3g} ({verdict})"
+
+
 @dataclass
 class LinearModel:
     """x' - dx0 = A (x - x0) + B (u - u0), y - y0 = C (x - x0) + D (u - u0), named.
@@ -164,6 +190,14 @@ class LinearModel:
                     Mode(complex(value), tuple((self.states[i], complex(scaled[i])) for i in shown_here))
                 )
         return found
+
+    def stiffness(self) -> Stiffness:
+        """A's fastest mode and stiffness ratio (Stiffness)."""
+        values = np.linalg.eigvals(self.A) if len(self.A) else np.zeros(1)
+        fastest = complex(values[np.argmax(np.abs(values))])
+        decaying = -values.real[values.real < -1e-9 * abs(fastest)]
+        ratio = float(decaying.max() / decaying.min()) if decaying.size else None
+        return Stiffness(fastest, ratio)
 
     def _positions(self) -> np.ndarray:
         """The states whose derivative is another state (their A row a unit vector)."""

@@ -21,8 +21,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "directional derivatives, grouped by its ModelStructure's sparsity, where it gives them;\n"
         "from extrapolated central differences with an error estimate where it does not. This\n"
         "project's FMUs start swinging at 10 degrees: --state 'alpha*=0' --state 'beta*=0' is the\n"
-        "chain hanging at rest. Prints the modes (frequency in rad/s and Hz, damping ratio, the\n"
-        "largest components) and writes the model with its names (docs/linear.md)."
+        "chain hanging at rest. Prints how stiff A is (its fastest mode and stiffness ratio), the\n"
+        "modes (frequency in rad/s and Hz, damping ratio, the largest components) and writes the\n"
+        "model with its names (docs/linear.md)."
     )
     parser.add_argument("fmu", type=Path, metavar="FMU", help="an FMI 2.0 or 3.0 FMU with Model Exchange")
     for option, what in (("state", "state"), ("input", "input"), ("parameter", "parameter or start value")):
@@ -87,6 +88,7 @@ def run(args) -> int:
     )
     if model.error is not None:
         print(f"differences' largest error estimate: {model.error.max():.2g} (per entry: the files' 'error')")
+    print(model.stiffness().describe())
     modes = model.modes()
     print("\n".join(linear.describe_modes(modes[: args.modes])))
     if len(modes) > args.modes:
