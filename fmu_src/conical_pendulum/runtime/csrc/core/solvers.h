@@ -32,17 +32,19 @@ typedef struct {
 
 /* The methods, in the order of the FMUs' `solver` (runtime/rules.py's SOLVERS). CP_AUTO starts
  * with DOP853 and counts its steps as Hairer's stiffness test does (looks_stiff: CP_STIFF_STEPS
- * accepted steps past a bound, never CP_CALM_RESET in a row below it between), but past
- * CP_AUTO_BOUND, a third of DOP853's stability bound: DOP853's interpolant, which no error
- * test controls, is off by 20 tolerances already at h |lambda| = 2.3 (measured on the damped
- * light chain at c = 1, rtol 1e-6, where the steps' ends are within the tolerance). It
- * switches to Radau there, and back when Radau's steps stay below CP_CALM_BOUND (h rho(J), on
- * CP_STIFF_STEPS accepted steps in a row). Until it switches, a DOP853 step past CP_AUTO_BOUND
- * that would answer a point from its interpolant is taken again to end on the point. */
+ * accepted steps past a bound, never CP_CALM_RESET in a row below it between), but on the
+ * dominant mode's decay -h Re(lambda) (a fast oscillation, which Radau would damp, is no
+ * stiffness) past CP_AUTO_BOUND, a quarter of DOP853's stability bound: DOP853's interpolant,
+ * which no error test controls, is off by 20 tolerances on a decay at h |lambda| = 2.3
+ * already (measured on the damped light chain at c = 1, rtol 1e-6, where the steps' ends are
+ * within the tolerance). It switches to Radau there, and back when Radau's steps stay below
+ * CP_CALM_BOUND (h rho(J), on CP_STIFF_STEPS accepted steps in a row). Until it switches, a
+ * DOP853 step past CP_AUTO_BOUND that would answer a point from its interpolant is taken
+ * again to end on the point. */
 enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2, CP_RADAU = 3, CP_AUTO = 4 };
 #define CP_STIFF_BOUND 6.1  /* Hairer's dop853: its stability region ends near 6 */
-#define CP_AUTO_BOUND 2.0   /* a third of that (the seed at rtol 1e-6 stays below 1.4) */
-#define CP_CALM_BOUND 1.0   /* half again: Radau hands back only what DOP853 takes with room */
+#define CP_AUTO_BOUND 1.5   /* a quarter of that */
+#define CP_CALM_BOUND 0.75  /* half again: Radau hands back only what DOP853 takes with room */
 #define CP_STIFF_STEPS 15
 #define CP_CALM_RESET 6
 
