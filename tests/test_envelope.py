@@ -12,7 +12,10 @@ from fmpy.fmi1 import FMICallException
 from conical_pendulum import Link, Scene
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
+from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.scene import load_scene
 from fmu_helpers import Instance
+from test_stiff import light_chain
 
 SEED = Scene.uniform(3)
 TIGHT = {"solver": 2, "rtol": 1e-11, "atol": 1e-11}
@@ -212,3 +215,48 @@ def test_an_invalid_communication_step_is_discarded(seed_fmu, dt):
     fmu.time = 0.0
     fmu.step(0.1)
     fmu.close()
+
+
+# Stiff scenes (issue 46): (scene, start values)
+STIFF = {
+    "damped light chain, c = 1e4": (light_chain(3), {f"c{i}": 1e4 for i in range(3)}),
+    "heavy damping, the seed's links, c = 1e5": (
+        Scene(links=(Link(damping=1e5),) * 3, joint_damping=True),
+        {"alpha0": 0.5},
+    ),
+    "20-link damped light chain, c = 1e2": (light_chain(20), {f"c{i}": 1e2 for i in range(20)}),
+}
+CRANE = load_scene(os.path.join(os.path.dirname(__file__), "..", "scenes", "crane.toml"))
+
+
+@pytest.mark.parametrize("case", STIFF, ids=list(STIFF))
+def test_stiff_scenes_finish_with_the_default_solver_at_their_tolerance(built_fmu, case):
+    """The default solver (auto) at rtol = atol = 1e-6, 2 s at 100 Hz: within 10 tolerances
+    of the core's Radau at 1e-12, every state scaled by its largest size."""
+    scene, start = STIFF[case]
+    path = built_fmu(scene, backend="native")
+    result = run_fmu(
+        path, stop_time=2.0, output_interval=0.01, start_values={**start, "rtol": 1e-6, "atol": 1e-6}
+    )
+    found = np.column_stack([result[n] for n in scene.state_names()])
+    parameters, states = scene.split_start(start)
+    p, x0 = np.array(scene.parameters(parameters)), np.array(scene.initial_state(states))
+    reference, _ = load_core(scene).integrate_grid(x0, p, result["time"], 1e-12, 1e-12, method="radau")
+    assert np.all(np.isfinite(found)) and result["time"][-1] == pytest.approx(2.0)
+    scale = np.maximum(1.0, np.abs(reference).max(axis=0))
+    assert (np.abs(found - reference) / scale).max() < 1e-5
+
+
+def test_a_light_hook_under_a_heavy_load_stays_with_dop853(built_fmu):
+    """The crane's 1 kg hook under a 20 t load oscillates at about 250 rad/s between rope and
+    sling: fast, but no decay, so the automatic choice never takes Radau (which would damp
+    it): its run is DOP853's bit for bit, the same right-hand sides."""
+    path = built_fmu(CRANE, backend="native")
+    start = {"m0": 1.0, "m1": 2e4, "alpha0": 0.05, "alpha1": 0.1, "rtol": 1e-6, "atol": 1e-6}
+    runs = [
+        run_fmu(path, stop_time=2.0, output_interval=0.01, start_values={**start, **solver})
+        for solver in ({}, {"solver": 2})
+    ]
+    for name in (*CRANE.state_names(), "n_rhs"):
+        np.testing.assert_array_equal(runs[0][name], runs[1][name], err_msg=name)
+    assert runs[0]["n_jacobians"][-1] == 0

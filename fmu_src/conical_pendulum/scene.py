@@ -488,6 +488,13 @@ class Scene:
         """State in core order: the seed's start values, some replaced by name."""
         return _merge(self.state_names(), self.state_defaults(), overrides, "state")
 
+    def split_start(self, start_values: dict) -> tuple[dict, dict]:
+        """An FMU's start values as (parameters and inputs, states) by name, for parameters()
+        and initial_state(); settings and other names left out."""
+        parameters = {k: v for k, v in start_values.items() if k in self.core_parameter_names()}
+        states = {k: v for k, v in start_values.items() if k in self.state_names()}
+        return parameters, states
+
     def to_dict(self) -> dict:
         return asdict(self)
 

@@ -103,8 +103,7 @@ def compare(
     begin = time.perf_counter()
     result = run_fmu(fmu_path, stop_time, output_interval, {**settings, **start_values})
     seconds = time.perf_counter() - begin
-    params = {k: v for k, v in start_values.items() if k in scene.core_parameter_names()}
-    state = {k: v for k, v in start_values.items() if k in scene.state_names()}
+    params, state = scene.split_start(start_values)
 
     def reference(rtol, atol):
         return simulate(

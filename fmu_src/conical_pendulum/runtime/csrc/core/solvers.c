@@ -381,7 +381,7 @@ int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, cp_n
             if (!cp_all_finite(n, x1)) return CP_NONFINITE;
             step->stiffness = (step->t1 - step->t0) * newton->rho;
             step->calm_steps = step->stiffness < CP_CALM_BOUND ? step->calm_steps + 1 : 0;
-            if (method == CP_AUTO && step->calm_steps >= CP_STIFF_STEPS) {
+            if (method == CP_AUTO && step->calm_steps >= CP_CALM_STEPS) {
                 step->next = CP_DOP853;  /* the scene calmed: back to the explicit pair */
                 step->calm_steps = step->stiff_steps = 0;
                 stats->nswitch++;
