@@ -152,11 +152,18 @@ class CoreError(RuntimeError):
                          f"(pivot ratio {pivot_ratio:.3g})")
 
 
-cdef void _system(cp_system *system, cp_model *model, const double *p, cp_stats *stats) noexcept nogil:
-    """The model's right-hand side as a solver's system, with fresh diagnostics and counters."""
+cdef cp_model _fresh_model(const double *p) noexcept nogil:
+    """The model at the core's p, its diagnostics fresh (no pivot seen, no speed at fault)."""
+    cdef cp_model model
     model.p = p
     model.pivot_ratio = 1.0
     model.bad_dof = -1
+    return model
+
+
+cdef void _system(cp_system *system, cp_model *model, const double *p, cp_stats *stats) noexcept nogil:
+    """The model's right-hand side as a solver's system, with fresh diagnostics and counters."""
+    model[0] = _fresh_model(p)
     system.dim = CP_NSTATE
     system.rhs = cp_held_rhs
     system.ctx = model
@@ -201,10 +208,7 @@ def rhs(x_in, p_in, hoist_acc=None):
     cdef const double[::1] p = _core_p(p_in, hoist_acc)
     out = np.empty(CP_NSTATE)
     cdef double[::1] dx = out
-    cdef cp_model model
-    model.p = &p[0]
-    model.pivot_ratio = 1.0
-    model.bad_dof = -1
+    cdef cp_model model = _fresh_model(&p[0])
     cdef int status
     with nogil:
         status = cp_rhs(&model, &x[0], &dx[0])
@@ -245,10 +249,7 @@ def jacobian(x_in, p_in, hoist_acc=None):
     cdef const double[::1] p = _core_p(p_in, hoist_acc)
     out = np.empty((CP_NSTATE, CP_NSTATE))
     cdef double[:, ::1] J = out
-    cdef cp_model model
-    model.p = &p[0]
-    model.pivot_ratio = 1.0
-    model.bad_dof = -1
+    cdef cp_model model = _fresh_model(&p[0])
     cdef int status
     with nogil:
         status = cp_held_jac(&model, 0.0, &x[0], &J[0, 0])

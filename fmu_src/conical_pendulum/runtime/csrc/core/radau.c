@@ -54,86 +54,50 @@ static matrices carve_matrices(int n, double *block)
     return mx;
 }
 
-/* a = a - b on the diagonal's shift (M = shift I - J), factored in place by partial
- * pivoting (LAPACK's getrf without blocking). */
-static void lu_real(int n, double shift, const double *J, double *a, double *pivots)
-{
-    for (int i = 0; i < n * n; i++) a[i] = -J[i];
-    for (int i = 0; i < n; i++) a[i * n + i] += shift;
-    for (int k = 0; k < n; k++) {
-        int p = k;
-        for (int i = k + 1; i < n; i++)
-            if (fabs(a[i * n + k]) > fabs(a[p * n + k])) p = i;
-        pivots[k] = p;
-        if (p != k)
-            for (int j = 0; j < n; j++) {
-                double s = a[k * n + j];
-                a[k * n + j] = a[p * n + j];
-                a[p * n + j] = s;
-            }
-        if (a[k * n + k] == 0.0) continue;  /* singular: the solve gives inf, Newton fails */
-        for (int i = k + 1; i < n; i++) {
-            double l = a[i * n + k] /= a[k * n + k];
-            for (int j = k + 1; j < n; j++) a[i * n + j] -= l * a[k * n + j];
-        }
+/* shift I - J into a, factored in place by partial pivoting (LAPACK's getrf without
+ * blocking), and the solve of a x = b in place: for real and for complex matrices alike
+ * (type, and its magnitude for the pivot's choice). A zero pivot is left as it is: the solve
+ * gives inf, and the Newton iteration fails on it. */
+#define LU_FUNCTIONS(factor_name, solve_name, type, magnitude)                              \
+    static void factor_name(int n, type shift, const double *J, type *a, double *pivots)     \
+    {                                                                                        \
+        for (int i = 0; i < n * n; i++) a[i] = -J[i];                                        \
+        for (int i = 0; i < n; i++) a[i * n + i] += shift;                                   \
+        for (int k = 0; k < n; k++) {                                                        \
+            int p = k;                                                                       \
+            for (int i = k + 1; i < n; i++)                                                  \
+                if (magnitude(a[i * n + k]) > magnitude(a[p * n + k])) p = i;                \
+            pivots[k] = p;                                                                   \
+            for (int j = 0; p != k && j < n; j++) {                                          \
+                type s = a[k * n + j];                                                       \
+                a[k * n + j] = a[p * n + j];                                                 \
+                a[p * n + j] = s;                                                            \
+            }                                                                                \
+            if (a[k * n + k] == 0.0) continue;                                               \
+            for (int i = k + 1; i < n; i++) {                                                \
+                type l = a[i * n + k] /= a[k * n + k];                                       \
+                for (int j = k + 1; j < n; j++) a[i * n + j] -= l * a[k * n + j];            \
+            }                                                                                \
+        }                                                                                    \
+    }                                                                                        \
+    static void solve_name(int n, const type *a, const double *pivots, type *b)              \
+    {                                                                                        \
+        for (int k = 0; k < n; k++) {                                                        \
+            int p = (int)pivots[k];                                                          \
+            type s = b[k];                                                                   \
+            b[k] = b[p];                                                                     \
+            b[p] = s;                                                                        \
+        }                                                                                    \
+        for (int i = 1; i < n; i++)                                                          \
+            for (int j = 0; j < i; j++) b[i] -= a[i * n + j] * b[j];                         \
+        for (int i = n - 1; i >= 0; i--) {                                                   \
+            for (int j = i + 1; j < n; j++) b[i] -= a[i * n + j] * b[j];                     \
+            b[i] /= a[i * n + i];                                                            \
+        }                                                                                    \
     }
-}
 
-static void lu_complex(int n, double complex shift, const double *J, double complex *a,
-                       double *pivots)
-{
-    for (int i = 0; i < n * n; i++) a[i] = -J[i];
-    for (int i = 0; i < n; i++) a[i * n + i] += shift;
-    for (int k = 0; k < n; k++) {
-        int p = k;
-        for (int i = k + 1; i < n; i++)
-            if (cabs(a[i * n + k]) > cabs(a[p * n + k])) p = i;
-        pivots[k] = p;
-        if (p != k)
-            for (int j = 0; j < n; j++) {
-                double complex s = a[k * n + j];
-                a[k * n + j] = a[p * n + j];
-                a[p * n + j] = s;
-            }
-        if (a[k * n + k] == 0.0) continue;
-        for (int i = k + 1; i < n; i++) {
-            double complex l = a[i * n + k] /= a[k * n + k];
-            for (int j = k + 1; j < n; j++) a[i * n + j] -= l * a[k * n + j];
-        }
-    }
-}
-
-static void solve_real(int n, const double *a, const double *pivots, double *b)
-{
-    for (int k = 0; k < n; k++) {
-        int p = (int)pivots[k];
-        double s = b[k];
-        b[k] = b[p];
-        b[p] = s;
-    }
-    for (int i = 1; i < n; i++)
-        for (int j = 0; j < i; j++) b[i] -= a[i * n + j] * b[j];
-    for (int i = n - 1; i >= 0; i--) {
-        for (int j = i + 1; j < n; j++) b[i] -= a[i * n + j] * b[j];
-        b[i] /= a[i * n + i];
-    }
-}
-
-static void solve_complex(int n, const double complex *a, const double *pivots, double complex *b)
-{
-    for (int k = 0; k < n; k++) {
-        int p = (int)pivots[k];
-        double complex s = b[k];
-        b[k] = b[p];
-        b[p] = s;
-    }
-    for (int i = 1; i < n; i++)
-        for (int j = 0; j < i; j++) b[i] -= a[i * n + j] * b[j];
-    for (int i = n - 1; i >= 0; i--) {
-        for (int j = i + 1; j < n; j++) b[i] -= a[i * n + j] * b[j];
-        b[i] /= a[i * n + i];
-    }
-}
+LU_FUNCTIONS(lu_real, solve_real, double, fabs)
+LU_FUNCTIONS(lu_complex, solve_complex, double complex, cabs)
 
 /* The largest |eigenvalue| of J, estimated by twenty power iterations from a fixed start
  * (growth over the last ten): the automatic choice's measure of how stiff the scene is. */
