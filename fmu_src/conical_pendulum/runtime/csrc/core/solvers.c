@@ -390,19 +390,24 @@ int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, cp_n
         }
         estimate stiffness = {0.0, 0.0};
         const double trust = method == CP_AUTO ? CP_AUTO_BOUND : INFINITY;
-        status = explicit_step(use, sys, step, rows, t_target, t_limit, trust, rtol, atol,
-                               max_step, max_steps, attempts, work, &stiffness, stats);
+        /* back from Radau, DOP853 stays inside its trusted bound on the Jacobian's modes */
+        const double cap = method == CP_AUTO && newton->jac_valid && newton->rho > 0
+                               ? fmin(max_step, CP_AUTO_BOUND / newton->rho)
+                               : max_step;
+        status = explicit_step(use, sys, step, rows, t_target, t_limit, trust, rtol, atol, cap,
+                               max_steps, attempts, work, &stiffness, stats);
         if (status == RETAKE_ON_POINT) {  /* the stiffness test counts the step not taken */
             estimate shortened;
             status = explicit_step(use, sys, step, rows, t_target, t_target, INFINITY, rtol, atol,
-                                   max_step, max_steps, attempts, work, &shortened, stats);
+                                   cap, max_steps, attempts, work, &shortened, stats);
         }
         if (status == CP_TOO_MANY_STEPS && step->stiff_steps >= CP_STIFF_STEPS)
             return CP_STIFF;  /* the steps were bounded by stability, not accuracy */
         if (status) return status;
         step->stiffness = stiffness.size;
         const tableau *tb = use == CP_RK45 ? &RK45_TABLEAU : &DOP853_TABLEAU;
-        const int past = method == CP_AUTO ? stiffness.decay > CP_AUTO_BOUND
+        /* auto: a fast decay, or accuracy asking for more than the cap allows */
+        const int past = method == CP_AUTO ? stiffness.decay > CP_AUTO_BOUND || step->h > cap
                                            : stiffness.size > tb->stiff_bound;
         if (looks_stiff(step, past) && method == CP_AUTO) {
             step->next = CP_RADAU;  /* stiff: the implicit solver from here */
