@@ -406,8 +406,9 @@ int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, cp_n
         if (status) return status;
         step->stiffness = stiffness.size;
         const tableau *tb = use == CP_RK45 ? &RK45_TABLEAU : &DOP853_TABLEAU;
-        /* auto: a fast decay, or accuracy asking for more than the cap allows */
-        const int past = method == CP_AUTO ? stiffness.decay > CP_AUTO_BOUND || step->h > cap
+        /* auto: a fast decay, or a step held at the cap while accuracy asks for more */
+        const int held = step->t1 - step->t0 >= cap && step->h > cap;
+        const int past = method == CP_AUTO ? stiffness.decay > CP_AUTO_BOUND || held
                                            : stiffness.size > tb->stiff_bound;
         if (looks_stiff(step, past) && method == CP_AUTO) {
             step->next = CP_RADAU;  /* stiff: the implicit solver from here */
