@@ -38,11 +38,17 @@ int cp_held_rhs(void *ctx, double t, const double *x, double *dx)
     return cp_rhs(ctx, x, dx);
 }
 
-static int interpolated_rhs(void *ctx, double t, const double *x, double *dx)
+/* The model with the inputs at t (ctx an interpolated). */
+static cp_model *model_at(void *ctx, double t)
 {
     interpolated *in = ctx;
     cp_input_at(in->p, in->rates, t - in->t0, in->p_at);
-    return cp_rhs(&in->model, x, dx);
+    return &in->model;
+}
+
+static int interpolated_rhs(void *ctx, double t, const double *x, double *dx)
+{
+    return cp_rhs(model_at(ctx, t), x, dx);
 }
 
 /* J = df/dx of the model at (x, its p), exact: a column per state by complex step
@@ -70,9 +76,7 @@ int cp_held_jac(void *ctx, double t, const double *x, double *J)
 
 static int interpolated_jac(void *ctx, double t, const double *x, double *J)
 {
-    interpolated *in = ctx;
-    cp_input_at(in->p, in->rates, t - in->t0, in->p_at);
-    return model_jacobian(&in->model, x, J);
+    return model_jacobian(model_at(ctx, t), x, J);
 }
 
 /* The polynomials' start: p with the inputs where the flight's integration started, and
