@@ -49,7 +49,7 @@ GENERATOR_SOURCES = [
     *(HERE / "fmi" / name for name in ("fmu_config.py", "variables.py")),
     HERE / "c_literals.py",
     *sorted((HERE / "templates").glob("*.in")),
-    HERE.parent / "scene.py",  # the variables' names
+    *sorted((HERE.parent / "scene").glob("*.py")),  # the variables' names
     HERE.parent / "runtime" / "rules.py",  # the statistics' slots (model.h), the value rules
     *sorted(CORE_CSRC.glob("*.[chp]*")),
     *(CSRC_FILES[name] for name in MODEL_FILES),

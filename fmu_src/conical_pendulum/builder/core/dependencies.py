@@ -118,7 +118,7 @@ def _chain(scene: Scene) -> Dependencies:
     for scalar in scene.output_scalars():
         i = scalar.link
         if scalar.stem == "bob" or scalar.quantity in ("link_x", "link_y", "link_z"):
-            # the first joint turns last about the pivot's x axis (scene.py's 'Space' 'ZXY'),
+            # the first joint turns last about the pivot's x axis (equations.py's 'Space' 'ZXY'),
             # which moves no point along x
             turns = above[i] - ({"beta0"} if scalar.suffix == "_x" else set())
             result[scalar.name] = turns | lengths[i]
