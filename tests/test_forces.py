@@ -18,12 +18,12 @@ from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.analysis.compare import compare
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
-from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.core.codegen import generate, generate_recursive
 from conical_pendulum.builder.core.equations import derive, joint_damping
 from conical_pendulum.runtime.rules import BadValue, check_value
 from conical_pendulum.scene import load_scene
 from fmu_helpers import INSTANCES
+from formulations import assert_formulations_agree
 from mujoco_chain import drag_callback, simulate_mujoco
 
 ERROR = 3  # fmi2Error, fmi3Error
@@ -155,20 +155,8 @@ def test_the_formulations_agree(links, coupling, drag):
     """M, F, x' (the books' rates too) and the outputs (the pivot force, F_free, M_app among
     them) at random states and inputs."""
     options = {"joint_damping": True, "coupling": coupling, "air_drag": drag}
-    cores = [load_core(Scene(links=links, formulation=f, **options)) for f in ("expanded", "recursive")]
     scene = Scene(links=links, **options)
-    rng = np.random.default_rng(3)
-    for _ in range(5):
-        x = rng.uniform(-1, 1, len(scene.state_names()))
-        p = np.array(scene.parameters())
-        p[len(scene.parameter_names()) :] = rng.uniform(-20, 20, len(scene.input_names()))
-        (me, fe), (mr, fr) = (core.mass_forcing(x, p) for core in cores)
-        np.testing.assert_allclose(mr, me, rtol=0, atol=1e-12 * np.abs(me).max())
-        np.testing.assert_allclose(fr, fe, rtol=0, atol=1e-12 * np.abs(fe).max())
-        de, dr = (core.rhs(x, p) for core in cores)
-        np.testing.assert_allclose(dr, de, rtol=1e-9, atol=1e-9)
-        ye, yr = (core.outputs(x, p) for core in cores)
-        np.testing.assert_allclose(yr, ye, rtol=0, atol=1e-10 * np.abs(ye).max())
+    for x, p, de, ye in assert_formulations_agree(links, options, seed=3, input_range=20):
         rates = x[2 * scene.n : 4 * scene.n]
         c = np.tile([link.damping for link in links], 2)
         damping = 4 * scene.n + scene.work_names().index("W_damping")

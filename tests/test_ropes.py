@@ -27,6 +27,7 @@ from conical_pendulum.builder.core.equations import derive
 from conical_pendulum.builder.core.kane import kanes_method
 from conical_pendulum.scene import load_scene, scene_from_dict
 from fmu_helpers import INSTANCES, Instance, Instance3
+from formulations import assert_formulations_agree
 from test_directional import Model
 from test_interpolation import assert_derivatives_match_differences, continuous_outputs
 
@@ -182,23 +183,7 @@ def test_the_formulations_agree(links, options):
     """M, F, x' (the lengths' and books' rates too) and every output (the tensions, the
     winches' power, the pivot force) at random states, lengths, inputs and the lengths'
     accelerations."""
-    cores = [load_core(Scene(links=links, formulation=f, **options)) for f in ("expanded", "recursive")]
-    scene = Scene(links=links, **options)
-    rng = np.random.default_rng(5)
-    for _ in range(5):
-        x = rng.uniform(-1, 1, len(scene.state_names()))
-        for i in scene.ropes():
-            x[scene.state_names().index(f"l{i}")] = rng.uniform(1.0, 20.0)
-        p = np.array(scene.parameters())
-        p[len(scene.parameter_names()) :] = rng.uniform(-5, 5, len(scene.input_names()))
-        acc = rng.uniform(-2, 2, len(scene.ropes()))
-        (me, fe), (mr, fr) = (core.mass_forcing(x, p, acc) for core in cores)
-        np.testing.assert_allclose(mr, me, rtol=0, atol=1e-12 * np.abs(me).max())
-        np.testing.assert_allclose(fr, fe, rtol=0, atol=1e-12 * np.abs(fe).max())
-        de, dr = (core.rhs(x, p, acc) for core in cores)
-        np.testing.assert_allclose(dr, de, rtol=1e-9, atol=1e-9)
-        ye, yr = (core.outputs(x, p, acc) for core in cores)
-        np.testing.assert_allclose(yr, ye, rtol=0, atol=1e-10 * np.abs(ye).max())
+    assert_formulations_agree(links, options, seed=5, input_range=5)
 
 
 def test_the_recursive_dependencies_are_what_the_expressions_say():
