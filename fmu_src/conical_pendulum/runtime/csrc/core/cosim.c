@@ -23,6 +23,16 @@ void cp_input_at(const double *p, const double (*rates)[2], double tau, double *
 #endif
 }
 
+void cp_input_direction(const double (*rates)[2], int order, double *dp)
+{
+    memset(dp, 0, CP_PSIZE * sizeof(double));
+    for (int k = 0; k < CP_NINPUT; k++) dp[INPUT0 + k] = rates[k][order - 1];
+#ifdef CP_NROPE
+    for (int k = 0; k < CP_NROPE && order == 1; k++)  /* (u' + u'' tau)' = u'' */
+        dp[CP_NPARAM + k] = rates[cp_rope_hoist[k] - INPUT0][1];
+#endif
+}
+
 /* The model's right-hand side with interpolated inputs: the inputs at the stage's time. */
 typedef struct {
     cp_model model;               /* model.p is p_at */

@@ -112,4 +112,8 @@ int cp_held_jac(void *ctx, double t, const double *x, double *J);
  * of its v_hoist there, u' + u'' tau). */
 void cp_input_at(const double *p, const double (*rates)[2], double tau, double *p_at);
 
+/* cp_input_at's derivative of order 1 or 2 in tau at tau = 0 (CP_PSIZE values, the parameters'
+ * entries 0): the direction the inputs move the core's p in, for the output derivatives. */
+void cp_input_direction(const double (*rates)[2], int order, double *dp);
+
 #endif

@@ -495,17 +495,9 @@ static ModelStatus time_rates(ModelData *m, int order, double time, char *messag
     if (m->rates_valid >= order) return MODEL_OK;
     ModelStatus status = derivatives(m, time, message, size);
     if (status != MODEL_OK) return status;
-    double vp[CP_PSIZE] = {0}, wp[CP_PSIZE] = {0}, x2[CP_NSTATE], y[CP_NOUTPUT + 1],
-           pivot_ratio, buffer[CP_PSIZE];
-    for (int k = 0; k < CP_NINPUT; k++) {
-        vp[CP_VR_INPUT + k] = m->input_rates[k][0];  /* the inputs end p (fmu_config.h) */
-        wp[CP_VR_INPUT + k] = m->input_rates[k][1];
-    }
-#ifdef CP_NROPE
-    /* a rope's l'' = v_hoist' moves at v_hoist'' (and no faster: the inputs are quadratic) */
-    for (int k = 0; k < CP_NROPE; k++)
-        vp[CP_NPARAM + k] = m->input_rates[cp_rope_hoist[k] - CP_VR_INPUT][1];
-#endif
+    double vp[CP_PSIZE], wp[CP_PSIZE], x2[CP_NSTATE], y[CP_NOUTPUT + 1], pivot_ratio, buffer[CP_PSIZE];
+    cp_input_direction((const double(*)[2])m->input_rates, 1, vp);
+    cp_input_direction((const double(*)[2])m->input_rates, 2, wp);
     const double *p = core_p(m, buffer);
     int bad_dof, found = CP_OK;
     if (m->rates_valid < 1) {
