@@ -187,6 +187,10 @@ FIXED = (
     "{name} cannot be set after initialization (variability fixed); set it before "
     "exitInitializationMode, or instantiate again"
 )
+TUNABLE = (
+    "{name} is a tunable parameter: it may be set in event mode, not in continuous-time mode "
+    "(the state cannot change under the host's integrator)"
+)
 
 
 class BadValue(ValueError):

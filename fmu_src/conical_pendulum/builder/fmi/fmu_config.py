@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 
-from ...runtime.rules import CALCULATED, FIXED, RULES
+from ...runtime.rules import CALCULATED, FIXED, RULES, TUNABLE
 from .. import c_literals as c
 from .contract import LOG_CATEGORIES, NativeModel
 from .variables import Variable, first_references
@@ -82,6 +82,7 @@ def config_header(model: NativeModel, data: dict, records: list[Variable], guid:
         finite_rule=c.define("CP_FINITE_RULE", RULE_INDEX["finite"]),
         calculated_message=c.define("CP_CALCULATED_MESSAGE", c.string(CALCULATED.replace("{name}", "%s"))),
         fixed_message=c.define("CP_FIXED_MESSAGE", c.string(FIXED.replace("{name}", "%s"))),
+        tunable_message=c.define("CP_TUNABLE_MESSAGE", c.string(TUNABLE.replace("{name}", "%s"))),
         log_constants=", ".join(map(log_constant, LOG_CATEGORIES)),
         log_categories=c.initializer(map(c.string, LOG_CATEGORIES)),
         rules=c.rows([_rule(rule) for rule in RULES.values()], list(RULES)),

@@ -18,9 +18,7 @@ const char *cp_not_settable(unsigned vr, int phase, char *message, size_t size)
     else if (how == CP_SET_BEFORE_INIT && phase != MODEL_BEFORE_INIT)
         snprintf(message, size, CP_FIXED_MESSAGE, cp_variable_name(vr));
     else if (how == CP_SET_AT_EVENTS && phase == MODEL_CONTINUOUS_TIME)
-        snprintf(message, size, "%s is a tunable parameter: it may be set in event mode, not in "
-                 "continuous-time mode (the state cannot change under the host's integrator)",
-                 cp_variable_name(vr));
+        snprintf(message, size, CP_TUNABLE_MESSAGE, cp_variable_name(vr));
     else return NULL;
     return message;
 }
