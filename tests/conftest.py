@@ -22,6 +22,7 @@ import shutil
 import subprocess
 import sys
 import sysconfig
+import tempfile
 import time
 from collections import Counter
 from importlib.metadata import version
@@ -158,6 +159,35 @@ def prune_kept(now: float) -> None:
 def pytest_sessionstart(session):
     if not os.environ.get("PYTEST_XDIST_WORKER") and not session.config.getoption("--fresh-fmus"):
         prune_kept(time.time())
+
+
+@pytest.fixture(scope="session", autouse=True)
+def temporary_folder(tmp_path_factory):
+    """This process's TMPDIR (its programs' too), inside pytest's own folder: what a test's
+    tools leave in it is seen by leaves_no_temporary_files, whichever test made it."""
+    folder = tmp_path_factory.mktemp("tmpdir")
+    before = os.environ.get("TMPDIR")
+    os.environ["TMPDIR"] = tempfile.tempdir = str(folder)
+    yield folder
+    tempfile.tempdir = None
+    if before is None:
+        del os.environ["TMPDIR"]
+    else:
+        os.environ["TMPDIR"] = before
+
+
+@pytest.fixture(autouse=True)
+def leaves_no_temporary_files(temporary_folder):
+    """Nothing a test (its FMU runs, fmpy's extractions, the programs it starts) leaves in
+    TMPDIR: fmpy leaves its extracted FMU there whenever a run raises, unless the run takes a
+    folder it removes (analysis.fmpy_runs.simulate_fmu); the leftovers are removed, and named."""
+    before = set(os.listdir(temporary_folder))
+    yield
+    left = sorted(set(os.listdir(temporary_folder)) - before)
+    for name in left:
+        path = temporary_folder / name
+        shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
+    assert left == [], f"the test left {len(left)} entries in TMPDIR: {left[:5]}"
 
 
 @pytest.fixture(scope="session")

@@ -56,11 +56,15 @@ class Instance:
             modelIdentifier=self.md.coSimulation.modelIdentifier,
             instanceName=name,
         )
-        self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
-        self.time = 0.0
-        self.set(start_values or {})
-        if initialize:
-            self.initialize()
+        try:
+            self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
+            self.time = 0.0
+            self.set(start_values or {})
+            if initialize:
+                self.initialize()
+        except Exception:  # refused: the folder goes, the instance as the failure left it
+            shutil.rmtree(self.unzipdir, ignore_errors=True)
+            raise
 
     def initialize(self, stop_time=None):
         self.fmu.setupExperiment(startTime=0.0, stopTime=stop_time)
@@ -156,11 +160,15 @@ class Instance3:
             modelIdentifier=self.md.coSimulation.modelIdentifier,
             instanceName=name,
         )
-        self.fmu.instantiate(loggingOn=True, logMessage=log, **options)
-        self.time = 0.0
-        self.set(start_values or {})
-        if initialize:
-            self.initialize()
+        try:
+            self.fmu.instantiate(loggingOn=True, logMessage=log, **options)
+            self.time = 0.0
+            self.set(start_values or {})
+            if initialize:
+                self.initialize()
+        except Exception:  # refused: the folder goes, the instance as the failure left it
+            shutil.rmtree(self.unzipdir, ignore_errors=True)
+            raise
 
     def initialize(self, stop_time=None):
         self.fmu.enterInitializationMode(startTime=0.0, stopTime=stop_time)

@@ -8,6 +8,7 @@ from pathlib import Path
 import fmpy
 import pytest
 
+from conical_pendulum.analysis.fmpy_runs import simulate_fmu
 from conical_pendulum.cli import main
 from conical_pendulum.commands import build as build_command
 
@@ -114,7 +115,7 @@ def test_each_kind_of_fmu_has_its_own_default_name(tmp_path, monkeypatch, capsys
     assert (
         versions["ConicalPendulum.fmu"][1] != versions["ConicalPendulum_native.fmu"][1]
     )  # pythonfmu, native
-    result = fmpy.simulate_fmu(
+    result = simulate_fmu(
         "dist/ConicalPendulum.fmu",
         stop_time=0.5,
         output_interval=1 / 60,

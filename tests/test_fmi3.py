@@ -12,12 +12,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import read_model_description, simulate_fmu
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from conical_pendulum import Scene
-from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.analysis.fmpy_runs import run_fmu, simulate_fmu
 from conical_pendulum.builder.fmi.contract import LOG_CATEGORIES
 from conical_pendulum.builder.packaging.native import fmi_headers
 from fmu_helpers import Instance3, fmi3_names, fmi3_start_values

@@ -10,11 +10,12 @@ from ctypes import byref, c_double
 
 import numpy as np
 import pytest
-from fmpy import read_model_description, simulate_fmu
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import fmi3Boolean, fmi3Float64
 
 from conical_pendulum import Link, Scene
+from conical_pendulum.analysis.fmpy_runs import simulate_fmu
 from conical_pendulum.runtime.rules import STATISTICS
 from differences import assert_adjoint_and_directional_match_differences, bisection
 from fmu_helpers import Instance3

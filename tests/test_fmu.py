@@ -9,6 +9,7 @@ import sys
 import xml.etree.ElementTree as ET
 import zipfile
 
+import fmpy
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
@@ -151,6 +152,20 @@ def test_bad_input_is_refused_and_named(seed_fmu, name, value, message):
     gc.collect()  # pythonfmu releases a failed instance twice: the slave makes up for it
     # the host and other instances carry on
     assert run_fmu(seed_fmu, stop_time=0.5)["alpha0"][-1] == run_fmu(seed_fmu, stop_time=0.5)["alpha0"][-1]
+
+
+def test_a_refused_run_leaves_no_folder_behind(seed_fmu, temporary_folder):
+    """fmpy's simulate_fmu leaves the FMU it extracted whenever the FMU refuses (it removes it
+    only after a run that completes); the package's runs extract into a folder they remove."""
+    before = set(os.listdir(temporary_folder))
+    with pytest.raises(FMICallException):
+        run_fmu(seed_fmu, stop_time=0.1, start_values={"l0": -1.0})
+    assert set(os.listdir(temporary_folder)) == before
+    with pytest.raises(FMICallException):
+        fmpy.simulate_fmu(str(seed_fmu), stop_time=0.1, start_values={"l0": -1.0})
+    left = set(os.listdir(temporary_folder)) - before
+    assert len(left) == 1  # what leaves_no_temporary_files would report
+    shutil.rmtree(temporary_folder / left.pop())
 
 
 @pytest.mark.parametrize(

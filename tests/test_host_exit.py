@@ -32,13 +32,15 @@ PROCESSES = 40
 INVALID = re.compile(r"^==\d+== (Invalid (read|write|free)|Mismatched free)", re.M)
 
 
-def refusing(fmu: Path, kinds: list[str], prefix: tuple[str, ...] = (), env=None, timeout=300):
+def refusing(fmu: Path, kinds: list[str], folder: Path, prefix: tuple[str, ...] = (), env=None, timeout=300):
+    """The host run on fmu; what fmpy extracts for each refused run stays in folder (its TMPDIR:
+    fmpy removes its extraction only after a run that completes)."""
     return subprocess.run(
         [*prefix, sys.executable, str(HOST), str(fmu), *kinds],
         check=False,
         capture_output=True,
         text=True,
-        env=env,
+        env={**(env or os.environ), "TMPDIR": str(folder)},
         timeout=timeout,
     )
 
@@ -49,13 +51,13 @@ def how_it_ended(run: subprocess.CompletedProcess) -> str:
     return f"exit status {run.returncode}: {run.stderr[-800:]}"
 
 
-def test_forty_processes_refusing_every_kind_exit_normally(seed_fmu):
+def test_forty_processes_refusing_every_kind_exit_normally(seed_fmu, tmp_path):
     """Each process has the FMU refuse each kind of value twice (in an order of its own)
     and then returns from its script: every one prints its last line and exits 0."""
     kinds = list(REFUSALS) * 2
 
     def one(k: int):
-        return refusing(seed_fmu, kinds[k % len(kinds) :] + kinds[: k % len(kinds)])
+        return refusing(seed_fmu, kinds[k % len(kinds) :] + kinds[: k % len(kinds)], tmp_path)
 
     with ThreadPoolExecutor(4) as pool:
         runs = list(pool.map(one, range(PROCESSES)))
@@ -74,13 +76,14 @@ def invalid_accesses(valgrind_log: str) -> list[str]:
 @pytest.mark.tools
 @pytest.mark.slow
 @pytest.mark.parametrize("kinds", [["nan", "state", "negative_length"], ["bad_setting", "inf", "nan"]])
-def test_under_valgrind_no_invalid_access_at_exit(seed_fmu, kinds):
+def test_under_valgrind_no_invalid_access_at_exit(seed_fmu, kinds, tmp_path):
     """Before the fix: one invalid read in pythonfmu's finalizePythonInterpreter at exit
     for every copy of the library fmpy had loaded, of a block the exit handlers had freed."""
     require_tool("valgrind", None, "Debian's valgrind (.ci/run installs it)")
     run = refusing(
         seed_fmu,
         kinds,
+        tmp_path,
         prefix=("valgrind", "--quiet"),
         env={**os.environ, "PYTHONMALLOC": "malloc"},
         timeout=1800,

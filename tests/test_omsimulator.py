@@ -5,11 +5,11 @@ OMSimulator: tests/test_ssp.py."""
 
 import subprocess
 
-import fmpy
 import numpy as np
 import pytest
 
 from conftest import SEED
+from conical_pendulum.analysis.fmpy_runs import simulate_fmu
 from required_tools import require_omsimulator
 
 STOP, STEP = "10", "0.01"
@@ -62,7 +62,7 @@ def test_the_fmi3_fmu_with_scalars_runs_in_omsimulator(omsimulator, built_fmu, n
     assert "error:" not in printed and "warning:" not in printed, printed
     # OMSimulator enters initialization with no stop time defined, so the solver's last step may
     # pass 10 s (and points inside it are answered by its dense output): fmpy is asked the same
-    reference = fmpy.simulate_fmu(
+    reference = simulate_fmu(
         str(native_seed_fmu),
         stop_time=float(STOP),
         output_interval=float(STEP),

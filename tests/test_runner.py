@@ -6,12 +6,12 @@ request), with fmpy's exceptions and the FMU's messages where fmpy raises."""
 import logging
 from pathlib import Path
 
-import fmpy
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
 from conical_pendulum.analysis import runner
+from conical_pendulum.analysis.fmpy_runs import simulate_fmu
 from conical_pendulum.analysis.sweep import LOOPS, LoadedFmu
 from shapes import build_shapes_fmus
 
@@ -65,7 +65,7 @@ def test_our_fmus_bit_for_bit(backend, seed_fmu, native_seed_fmu, loaded):
     outputs = [v.name for v in fmu.md.modelVariables if v.causality == "output"]
     for start_values in ({}, {"l0": 7.5, "alpha0": 0.9, "delta2": -1.0}, {"solver": 1, "rtol": 1e-6}):
         got = fmu.simulate(start_values, 10.0, 1 / 60, outputs)
-        expected = fmpy.simulate_fmu(
+        expected = simulate_fmu(
             str(path), stop_time=10.0, output_interval=1 / 60, start_values=start_values, output=outputs
         )
         assert len(got) == 601 and got["time"][-1] == 10.0
@@ -109,7 +109,7 @@ def test_another_shape_bit_for_bit(shapes_fmu, loaded, variable_steps, start_val
     path = shapes_fmu[variable_steps]
     outputs = ["x", "h", "count", "above"]
     got, got_error, got_messages = outcome(loaded(path, "runner"), start_values, stop_time, interval, outputs)
-    expected = fmpy.simulate_fmu(
+    expected = simulate_fmu(
         str(path), stop_time=stop_time, output_interval=interval, start_values=start_values, output=outputs
     )
     assert got_error is None

@@ -8,13 +8,14 @@ from ctypes import POINTER, c_double
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description, simulate_fmu
+from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Model
 from fmpy.validation import validate_fmu
 
 from conical_pendulum import Scene
+from conical_pendulum.analysis.fmpy_runs import simulate_fmu
 from conical_pendulum.builder.fmi.units import UNITS
 from conical_pendulum.runtime.rules import RULES, SETTINGS, SOLVERS
 from fmu_helpers import INSTANCES
@@ -111,6 +112,7 @@ def test_values_beyond_a_rule_are_refused_with_its_message(fmus, name, version, 
         )
     finally:  # never initialized (and the pythonfmu FMU answers fmi2Fatal): only freed
         instance.fmu.freeInstance()
+        shutil.rmtree(instance.unzipdir, ignore_errors=True)
 
 
 def test_the_solver_is_an_enumeration_of_the_same_numbers(fmus):

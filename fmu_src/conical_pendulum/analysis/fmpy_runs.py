@@ -1,6 +1,12 @@
-"""fmpy glue: runs with the output interval always given, and a logger that collects messages."""
+"""fmpy glue: runs with the output interval always given and the FMU's folder removed however
+they end, and a logger that collects messages."""
 
 from __future__ import annotations
+
+import contextlib
+import shutil
+import tempfile
+from pathlib import Path
 
 from .fmi3_arrays import array_start_values, fmu_data, scalar_columns
 
@@ -32,17 +38,41 @@ def logging_callbacks(on_message):
     return callbacks
 
 
+@contextlib.contextmanager
+def extracted(fmu_path):
+    """The FMU unzipped into a temporary folder, removed on leaving whatever happened (a folder
+    given is used as it is and kept)."""
+    import fmpy
+
+    if Path(fmu_path).is_dir():
+        yield str(fmu_path)
+        return
+    folder = tempfile.mkdtemp(prefix="conical_pendulum_fmu_")
+    try:
+        fmpy.extract(str(fmu_path), folder)
+        yield folder
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def simulate_fmu(fmu_path, **kwargs):
+    """fmpy.simulate_fmu on the FMU extracted (extracted()): fmpy removes the folder it extracts
+    to only when the run completes, and leaves it behind whenever the FMU refuses and it raises."""
+    import fmpy
+
+    with extracted(fmu_path) as folder:
+        return fmpy.simulate_fmu(folder, **kwargs)
+
+
 def run_fmu(fmu_path, stop_time=10.0, output_interval=1.0 / 60.0, start_values=None, **kwargs):
     """fmpy.simulate_fmu with the output interval always given (fmpy ignores step_size for CS).
     An FMI 3.0 FMU of this package takes and gives the FMI 2.0 FMU's scalar names (its arrays
     set whole and split into columns: analysis.fmi3_arrays)."""
-    import fmpy
-
     data = fmu_data(fmu_path)
     if data is not None:
         start_values = array_start_values(data, start_values or {})
-    result = fmpy.simulate_fmu(
-        str(fmu_path),
+    result = simulate_fmu(
+        fmu_path,
         stop_time=stop_time,
         output_interval=output_interval,
         start_values=start_values or {},
