@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import UserError, needs
-from .fmi3_arrays import element_names, fmu_data
-from .fmpy_runs import logging_callbacks
+from ...errors import UserError, needs
+from ..fmi3_arrays import element_names, fmu_data
+from ..fmpy_runs import logging_callbacks
 
 DIFFERENCE_STEP = 1e-3  # relative to max(|value|, nominal): central differences' h^2 and h^4 terms
 FLOAT_TYPES = ("Real", "Float64")
@@ -414,7 +414,7 @@ class _Session:
     def _set_parameters(self, values: dict) -> None:
         data = fmu_data(self.path) if self.fmi3 else None
         if data is not None:  # this package's FMI 3.0 FMU, given the FMI 2.0 names
-            from .fmi3_arrays import array_start_values
+            from ..fmi3_arrays import array_start_values
 
             values = array_start_values(data, values)
         for name, value in values.items():
