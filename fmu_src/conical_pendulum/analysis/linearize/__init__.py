@@ -21,17 +21,18 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import math
 import shutil
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ...errors import UserError
-from ..fmi3_arrays import element_names, fmu_data
+from ..fmi3_arrays import fmu_data
 from ..fmpy_runs import logging_callbacks
 from .model import LinearModel, Mode, Stiffness, describe_modes
+from .variables import FLOAT_TYPES, Block, block_of, continuous_float, fmi2_names, replaced
 
 __all__ = [
     "DIFFERENCE_STEP",
@@ -47,27 +48,7 @@ __all__ = [
 ]
 
 DIFFERENCE_STEP = 1e-3  # relative to max(|value|, nominal): central differences' h^2 and h^4 terms
-FLOAT_TYPES = ("Real", "Float64")
 NATIVE_BUILD = "conical-pendulum build --native (FMI 2.0) or --native --fmi 3 (docs/native.md)"
-
-
-@dataclass(frozen=True)
-class Block:
-    """Variables of one kind (states, inputs, outputs): value references, each one's number of
-    values (an FMI 3.0 array's elements), and one name per value."""
-
-    vrs: tuple[int, ...]
-    sizes: tuple[int, ...]
-    names: tuple[str, ...]
-
-    @property
-    def columns(self) -> dict[int, range]:
-        """Each value reference's positions among the block's values."""
-        found, start = {}, 0
-        for vr, size in zip(self.vrs, self.sizes):
-            found[vr] = range(start, start + size)
-            start += size
-        return found
 
 
 def linearize(
@@ -159,19 +140,19 @@ class _Session:
             )
         self.directional = _gives_directional_derivatives(path)
         self.messages: list[str] = []
-        self._names = _element_names(path) if self.fmi3 else {}
+        named = functools.partial(block_of, fmi3=self.fmi3, names=fmi2_names(path) if self.fmi3 else {})
         self._variables = {v.name: v for v in self.md.modelVariables}
-        self.states = self._block([u.variable.derivative for u in self.md.derivatives])
-        self.inputs = self._block(
-            [v for v in self.md.modelVariables if v.causality == "input" and _continuous_float(v)]
+        self.states = named([u.variable.derivative for u in self.md.derivatives])
+        self.inputs = named(
+            [v for v in self.md.modelVariables if v.causality == "input" and continuous_float(v)]
         )
         state_vrs = set(self.states.vrs)
-        self.unknown_outputs = [u for u in self.md.outputs if _continuous_float(u.variable)]
-        self.outputs = self._block([u.variable for u in self.unknown_outputs])
-        self.computed = self._block(
+        self.unknown_outputs = [u for u in self.md.outputs if continuous_float(u.variable)]
+        self.outputs = named([u.variable for u in self.unknown_outputs])
+        self.computed = named(
             [u.variable for u in self.unknown_outputs if u.variable.valueReference not in state_vrs]
         )
-        self.derivatives = self._block([u.variable for u in self.md.derivatives])
+        self.derivatives = named([u.variable for u in self.md.derivatives])
         self.unzipdir = extract(str(path))
         try:
             self._instantiate(interface.modelIdentifier, parameters)
@@ -193,17 +174,7 @@ class _Session:
     def __exit__(self, *exc):
         self.close()
 
-    # --- the FMU's variables ---
-
-    def _block(self, variables) -> Block:
-        vrs, sizes, names = [], [], []
-        for v in variables:
-            shape = tuple(v.shape or ()) if self.fmi3 else ()
-            size = math.prod(shape)
-            vrs.append(v.valueReference)
-            sizes.append(size)
-            names += [self._names.get((v.name, k)) or _indexed(v.name, shape, k) for k in range(size)]
-        return Block(tuple(vrs), tuple(sizes), tuple(names))
+    # --- the instance and its start values ---
 
     def _instantiate(self, identifier: str, parameters: dict) -> None:
         from fmpy.fmi2 import FMU2Model
@@ -308,8 +279,8 @@ class _Session:
         x = (ctypes.c_double * n)()
         if n:
             self._call("reading the states", self.fmu.getContinuousStates, x, n)
-        self.x0 = _replaced(np.array(x[:]), self.states, states, "state", self.path.name)
-        self.u0 = _replaced(self._reals(self.inputs), self.inputs, inputs, "input", self.path.name)
+        self.x0 = replaced(np.array(x[:]), self.states, states, "state", self.path.name)
+        self.u0 = replaced(self._reals(self.inputs), self.inputs, inputs, "input", self.path.name)
         self._call("setting the operating point", self._at, self.x0, self.u0)
         self.dx0 = self._call("evaluating at the operating point", self._evaluate)[0]
         self.y0 = self._reals(self.outputs)
@@ -520,11 +491,6 @@ def _scatter(matrix, pattern, group, values) -> None:
         matrix[rows, j] = values[rows]
 
 
-def _continuous_float(variable) -> bool:
-    """A continuous Float64 (Real) variable: what a linear model's inputs and outputs are."""
-    return variable.type in FLOAT_TYPES and variable.variability == "continuous"
-
-
 def _gives_directional_derivatives(path: Path) -> bool:
     """Whether the Model Exchange interface provides directional derivatives, read from the
     model description itself (fmpy 0.3 reads FMI 3.0's providesDirectionalDerivatives as False);
@@ -547,46 +513,3 @@ def _gives_directional_derivatives(path: Path) -> bool:
             elif element.tag == "ModelVariables":
                 break
     return found
-
-
-def _element_names(path: Path) -> dict[tuple[str, int], str]:
-    """(array, 0-based element) -> the FMI 2.0 FMU's name, for an FMI 3.0 FMU of this package."""
-    data = fmu_data(path)
-    if data is None:
-        return {}
-    return {(array, k): name for name, (array, k) in element_names(data).items()}
-
-
-def _indexed(name: str, shape: tuple, k: int) -> str:
-    """An FMI 3.0 array element's name (1-based, row-major: A[2,3]); a scalar's own name."""
-    if not shape:
-        return name
-    return f"{name}[{','.join(str(i + 1) for i in np.unravel_index(k, shape))}]"
-
-
-def _replaced(values: np.ndarray, block: Block, given: dict, what: str, fmu: str) -> np.ndarray:
-    """values with some replaced by name: an element by its name, a whole FMI 3.0 array by
-    its name, or with * and ? every element whose name matches (alpha* = 0: one value for all)."""
-    import fnmatch
-
-    values = values.copy()
-    index = {name: i for i, name in enumerate(block.names)}
-    for name, value in given.items():
-        numbers = np.atleast_1d(np.asarray(value, dtype=float))
-        if name in index:
-            positions = [index[name]]
-        elif "*" in name or "?" in name:
-            pattern = name.replace("[", "[[]")
-            positions = [i for i, n in enumerate(block.names) if fnmatch.fnmatchcase(n, pattern)]
-            numbers = np.broadcast_to(numbers, (len(positions),)) if len(numbers) == 1 else numbers
-        else:
-            positions = [i for i, n in enumerate(block.names) if n.split("[")[0] == name]
-        if not positions:
-            listed = ", ".join(block.names[:12]) + (", ..." if len(block.names) > 12 else "")
-            raise UserError(f"{what} {name!r}: {fmu} has no {what} by that name; it has {listed or 'none'}")
-        if len(numbers) != len(positions):
-            raise UserError(f"{what} {name!r}: expected {len(positions)} value(s), got {len(numbers)}")
-        if not np.isfinite(numbers).all():
-            raise UserError(f"{what} {name!r}: must be finite, got {value!r}")
-        values[positions] = numbers
-    return values
