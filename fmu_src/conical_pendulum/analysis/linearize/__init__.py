@@ -31,6 +31,7 @@ import numpy as np
 from ...errors import UserError
 from ..fmi3_arrays import fmu_data
 from ..fmpy_runs import logging_callbacks
+from .jacobian import DIFFERENCE_STEP, color_columns, jacobian_at
 from .model import LinearModel, Mode, Stiffness, describe_modes
 from .variables import FLOAT_TYPES, Block, block_of, continuous_float, fmi2_names, replaced
 
@@ -47,7 +48,6 @@ __all__ = [
     "linearize",
 ]
 
-DIFFERENCE_STEP = 1e-3  # relative to max(|value|, nominal): central differences' h^2 and h^4 terms
 NATIVE_BUILD = "conical-pendulum build --native (FMI 2.0) or --native --fmi 3 (docs/native.md)"
 
 
@@ -81,27 +81,52 @@ def linearize(
             )
         session.place(states or {}, inputs or {})
         use = "directional" if method != "differences" and session.directional else "differences"
-        return session.linearize(use, grouped, step)
+        jacobian, error, calls = jacobian_at(session, use, grouped, step)
+        return _model(session, jacobian, error, use, calls)
 
 
-def color_columns(pattern: np.ndarray) -> list[list[int]]:
-    """Columns of a boolean pattern (rows x columns) in groups whose columns share no row
-    (greedy, in order); columns with no row are in no group: they are zero."""
-    groups: list[list[int]] = []
-    taken: list[int] = []  # each group's rows as the bits of one integer
-    for j in range(pattern.shape[1]):
-        rows = int.from_bytes(np.packbits(pattern[:, j]).tobytes(), "big")
-        if not rows:
-            continue
-        for k, used in enumerate(taken):
-            if not used & rows:
-                groups[k].append(j)
-                taken[k] |= rows
-                break
-        else:
-            groups.append([j])
-            taken.append(rows)
-    return groups
+def _model(session, jacobian, error, method, calls) -> LinearModel:
+    """The Jacobian's rows in [[A, B], [C, D]] (_unknown_rows), an output that is a state its
+    own row of C, exactly, and the session's operating point and names."""
+    n, m = len(session.states.names), len(session.inputs.names)
+    n_out = len(session.outputs.names)
+    full = np.zeros((n + n_out, n + m))
+    full_error = None if error is None else np.zeros(full.shape)
+    rows = _unknown_rows(session)
+    full[rows] = jacobian
+    if error is not None:
+        full_error[rows] = error
+    state_of = dict(zip(session.states.vrs, session.states.columns.values()))
+    for vr, positions in session.outputs.columns.items():
+        if vr in state_of:  # an output that is a state: its own row, exactly
+            for row, column in zip(positions, state_of[vr]):
+                full[n + row, column] = 1.0
+    return LinearModel(
+        A=full[:n, :n],
+        B=full[:n, n:],
+        C=full[n:, :n],
+        D=full[n:, n:],
+        states=list(session.states.names),
+        inputs=list(session.inputs.names),
+        outputs=list(session.outputs.names),
+        x0=session.x0,
+        u0=session.u0,
+        y0=session.y0,
+        dx0=session.dx0,
+        time=session.time,
+        method=method,
+        calls=calls,
+        fmu=str(session.path),
+        error=full_error,
+    )
+
+
+def _unknown_rows(session) -> list[int]:
+    """Where the unknowns' rows go in [[A, B], [C, D]]: the derivatives, then the outputs
+    that are not states at their places among the outputs."""
+    n = len(session.states.names)
+    places = session.outputs.columns
+    return list(range(n)) + [n + row for vr in session.computed.vrs for row in places[vr]]
 
 
 class _Session:
@@ -198,7 +223,7 @@ class _Session:
             self._logger = logging_callbacks(lambda status, text: self.messages.append(text))
             self.fmu.instantiate(callbacks=self._logger, loggingOn=True)
         self._instantiated = True
-        self._call("setting up the experiment", self._start, parameters)
+        self.call("setting up the experiment", self._start, parameters)
 
     def _start(self, parameters: dict) -> None:
         fmu = self.fmu
@@ -244,7 +269,7 @@ class _Session:
             else:
                 raise UserError(f"parameter {name!r}: its type {variable.type} cannot be set here")
 
-    def _call(self, what: str, function, *args):
+    def call(self, what: str, function, *args):
         """function(*args), an FMI call failing as a UserError with what the FMU said."""
         from fmpy.fmi1 import FMICallException
 
@@ -278,199 +303,35 @@ class _Session:
         n = len(self.states.names)
         x = (ctypes.c_double * n)()
         if n:
-            self._call("reading the states", self.fmu.getContinuousStates, x, n)
+            self.call("reading the states", self.fmu.getContinuousStates, x, n)
         self.x0 = replaced(np.array(x[:]), self.states, states, "state", self.path.name)
         self.u0 = replaced(self._reals(self.inputs), self.inputs, inputs, "input", self.path.name)
-        self._call("setting the operating point", self._at, self.x0, self.u0)
-        self.dx0 = self._call("evaluating at the operating point", self._evaluate)[0]
+        self.call("setting the operating point", self.at, self.x0, self.u0)
+        self.dx0 = self.call("evaluating at the operating point", self.evaluate)[0]
         self.y0 = self._reals(self.outputs)
 
-    def _at(self, x, u) -> None:
+    def at(self, x, u) -> None:
+        """The states x (where the FMU has any) and the inputs u set."""
         if len(x):
             self._set_states(x)
         self._set_inputs(u)
 
-    def _evaluate(self) -> tuple[np.ndarray, np.ndarray]:
+    def evaluate(self) -> tuple[np.ndarray, np.ndarray]:
+        """The state derivatives and the outputs that are not states at what is set."""
         n = len(self.states.names)
         dx = (ctypes.c_double * n)()
         if n:
             (self.fmu.getContinuousStateDerivatives if self.fmi3 else self.fmu.getDerivatives)(dx, n)
         return np.array(dx[:]), self._reals(self.computed)
 
-    # --- the matrices ---
-
-    def pattern(self) -> np.ndarray:
-        """Which unknowns (derivatives, then the outputs that are not states) the ModelStructure
-        says depend on which knowns (states, then inputs), element by element."""
-        knowns = dict(self.states.columns)
-        offset = len(self.states.names)
-        knowns |= {vr: range(r.start + offset, r.stop + offset) for vr, r in self.inputs.columns.items()}
-        n_knowns = offset + len(self.inputs.names)
-        computed = set(self.computed.vrs)
-        unknowns = list(self.md.derivatives) + [
-            u for u in self.unknown_outputs if u.variable.valueReference in computed
-        ]
-        sizes = [math.prod(tuple(u.variable.shape or ())) if self.fmi3 else 1 for u in unknowns]
-        pattern = np.zeros((sum(sizes), n_knowns), dtype=bool)
-        row = 0
-        for unknown, size in zip(unknowns, sizes):
-            if unknown.dependencies is None:  # no list: every known
-                pattern[row : row + size] = True
-            else:
-                columns = [
-                    k
-                    for variable in unknown.dependencies
-                    if variable.valueReference in knowns
-                    for k in knowns[variable.valueReference]
-                ]
-                pattern[row : row + size, columns] = True
-            row += size
-        return pattern
-
-    def linearize(self, method: str, grouped: bool, step: float) -> LinearModel:
-        pattern = self.pattern()
-        n_knowns = pattern.shape[1]
-        groups = color_columns(pattern) if grouped else [[j] for j in range(n_knowns) if pattern[:, j].any()]
-        if method == "directional":
-            jacobian, error = self._directional(pattern, groups), None
-            calls = len(groups)
-        else:
-            jacobian, error = self._differences(pattern, groups, step)
-            calls = 4 * len(groups)
-        self._call("restoring the operating point", self._at, self.x0, self.u0)
-        return self._model(jacobian, error, method, calls)
-
-    def _directional(self, pattern, groups) -> np.ndarray:
-        """One fmi2GetDirectionalDerivative / fmi3GetDirectionalDerivative per group, its seed 1
-        on the group's columns (FMI 2.0: only the group's knowns are passed; FMI 3.0: every
-        known, an array whole), into ctypes arrays made once."""
-        from ctypes import c_double, c_uint
-
-        knowns = list(self.states.vrs) + list(self.inputs.vrs)
-        unknowns = list(self.derivatives.vrs) + list(self.computed.vrs)
-        n_rows, n_columns = pattern.shape
-        unknown_refs = (c_uint * len(unknowns))(*unknowns)
-        sensitivity = (c_double * n_rows)()
-        jacobian = np.zeros(pattern.shape)
-        if self.fmi3:
-            known_refs = (c_uint * len(knowns))(*knowns)
-            seed = (c_double * n_columns)()
-        for group in groups:
-            if self.fmi3:
-                ctypes.memset(seed, 0, ctypes.sizeof(seed))
-                for j in group:
-                    seed[j] = 1.0
-                arguments = (unknown_refs, len(unknowns), known_refs, len(knowns), seed, n_columns)
-                self._call(
-                    "fmi3GetDirectionalDerivative",
-                    self.fmu.fmi3GetDirectionalDerivative,
-                    self.fmu.component,
-                    *arguments,
-                    sensitivity,
-                    n_rows,
-                )
-            else:
-                group_refs = (c_uint * len(group))(*(knowns[j] for j in group))
-                ones = (c_double * len(group))(*([1.0] * len(group)))
-                self._call(
-                    "fmi2GetDirectionalDerivative",
-                    self.fmu.fmi2GetDirectionalDerivative,
-                    self.fmu.component,
-                    unknown_refs,
-                    len(unknowns),
-                    group_refs,
-                    len(group),
-                    ones,
-                    sensitivity,
-                )
-            _scatter(jacobian, pattern, group, np.ctypeslib.as_array(sensitivity))
-        return jacobian
-
-    def _differences(self, pattern, groups, step) -> tuple[np.ndarray, np.ndarray]:
-        """Central differences at h and 2h per group, extrapolated: R = (4 D(h) - D(2h)) / 3.
-        The error estimate of each entry: |D(h) - D(2h)| / 3 (D(h)'s own truncation error,
-        which bounds R's where the h^2 term dominates) plus rounding, 4 eps s / h, with s the
-        size of what f is made of: its largest value, or the terms J_ik x_k where they cancel
-        to a smaller f (y = C x + D u can be near 0 with every term of order 1)."""
-        point = np.concatenate([self.x0, self.u0])
-        nominal = np.array(
-            [self._nominal(name) for name in self.states.names + self.inputs.names] if len(point) else []
-        )
-        h = step * np.maximum(np.abs(point), nominal)
-        jacobian, truncation = np.zeros(pattern.shape), np.zeros(pattern.shape)
-        largest = np.zeros(pattern.shape[0])  # each unknown's largest value met
-        n = len(self.x0)
-
-        def values(at):
-            self._at(at[:n], at[n:])
-            return np.concatenate(self._evaluate())
-
-        for group in groups:
-            direction = np.zeros(len(point))
-            direction[group] = h[group]
-            scale = np.zeros(pattern.shape[0])
-            for j in group:
-                scale[pattern[:, j]] = h[j]
-            fs = [
-                self._call("evaluating a difference", values, point + k * direction) for k in (1, -1, 2, -2)
-            ]
-            largest = np.maximum(largest, np.max(np.abs(fs), axis=0))
-            with np.errstate(divide="ignore", invalid="ignore"):
-                near = np.where(scale > 0, (fs[0] - fs[1]) / (2 * scale), 0.0)
-                far = np.where(scale > 0, (fs[2] - fs[3]) / (4 * scale), 0.0)
-            _scatter(jacobian, pattern, group, (4 * near - far) / 3)
-            _scatter(truncation, pattern, group, np.abs(near - far) / 3)
-        size = np.maximum(largest, np.abs(jacobian) @ np.abs(point))
-        rounding = 4 * np.finfo(float).eps * np.outer(size, 1 / np.where(h > 0, h, 1.0))
-        return jacobian, np.where(pattern, truncation + rounding, 0.0)
-
-    def _nominal(self, name: str) -> float:
+    def nominal(self, name: str) -> float:
+        """A variable's nominal, 1 where it has none: the differences' step near a value of 0."""
         variable = self._variables.get(name)
         nominal = getattr(variable, "nominal", None) if variable is not None else None
         try:
             return abs(float(nominal)) if nominal is not None else 1.0
         except ValueError:
             return 1.0
-
-    def _model(self, jacobian, error, method, calls) -> LinearModel:
-        n, m = len(self.states.names), len(self.inputs.names)
-        n_out = len(self.outputs.names)
-        full = np.zeros((n + n_out, n + m))
-        full_error = None if error is None else np.zeros(full.shape)
-        rows = self._unknown_rows()
-        full[rows] = jacobian
-        if error is not None:
-            full_error[rows] = error
-        state_of = dict(zip(self.states.vrs, self.states.columns.values()))
-        for vr, positions in self.outputs.columns.items():
-            if vr in state_of:  # an output that is a state: its own row, exactly
-                for row, column in zip(positions, state_of[vr]):
-                    full[n + row, column] = 1.0
-        return LinearModel(
-            A=full[:n, :n],
-            B=full[:n, n:],
-            C=full[n:, :n],
-            D=full[n:, n:],
-            states=list(self.states.names),
-            inputs=list(self.inputs.names),
-            outputs=list(self.outputs.names),
-            x0=self.x0,
-            u0=self.u0,
-            y0=self.y0,
-            dx0=self.dx0,
-            time=self.time,
-            method=method,
-            calls=calls,
-            fmu=str(self.path),
-            error=full_error,
-        )
-
-    def _unknown_rows(self) -> list[int]:
-        """Where the unknowns' rows go in [[A, B], [C, D]]: the derivatives, then the outputs
-        that are not states at their places among the outputs."""
-        n = len(self.states.names)
-        places = self.outputs.columns
-        return list(range(n)) + [n + row for vr in self.computed.vrs for row in places[vr]]
 
     def close(self) -> None:
         if getattr(self, "_instantiated", False):
@@ -482,13 +343,6 @@ class _Session:
         if getattr(self, "unzipdir", None):
             shutil.rmtree(self.unzipdir, ignore_errors=True)
             self.unzipdir = None
-
-
-def _scatter(matrix, pattern, group, values) -> None:
-    """A group's values into its columns: each row to the one column of the group it depends on."""
-    for j in group:
-        rows = pattern[:, j]
-        matrix[rows, j] = values[rows]
 
 
 def _gives_directional_derivatives(path: Path) -> bool:
