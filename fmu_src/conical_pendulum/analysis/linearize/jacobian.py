@@ -4,8 +4,9 @@ states) by its knowns (the states, then the inputs) at a session's operating poi
 Columns come in groups that share no row by the ModelStructure's dependencies (Curtis, Powell
 and Reid's grouping, greedy, in the ModelStructure's order), one call per group, and a column
 nothing depends on costs no call: from the FMU's directional derivatives, exact to its own
-accuracy, or from central differences of the derivatives and outputs at the steps h and 2h,
-extrapolated (Richardson), with an error estimate per entry."""
+accuracy, or from central differences of fmi2GetDerivatives / fmi3GetContinuousStateDerivatives
+and the outputs at the steps h and 2h, extrapolated (Richardson), with an error estimate per
+entry."""
 
 from __future__ import annotations
 
