@@ -1,4 +1,4 @@
-"""`conical-pendulum linearize`: A, B, C, D of an FMU at an operating point (analysis/linearize.py),
+"""`conical-pendulum linearize`: A, B, C, D of an FMU at an operating point (analysis/linearize/),
 its modes printed, the model written as .npz or .mat, a chain's mode shapes drawn."""
 
 from __future__ import annotations
