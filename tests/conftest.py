@@ -15,6 +15,7 @@ import fcntl
 import functools
 import hashlib
 import json
+import multiprocessing.util
 import os
 import platform
 import shlex
@@ -168,6 +169,9 @@ def temporary_folder(tmp_path_factory):
     folder = tmp_path_factory.mktemp("tmpdir")
     before = os.environ.get("TMPDIR")
     os.environ["TMPDIR"] = tempfile.tempdir = str(folder)
+    # the process's own multiprocessing folder (a local sweep cluster's fork server keeps its
+    # socket there), made now: multiprocessing removes it when the process exits
+    multiprocessing.util.get_temp_dir()
     yield folder
     tempfile.tempdir = None
     if before is None:

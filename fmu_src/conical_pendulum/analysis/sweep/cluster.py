@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+import multiprocessing
 import shutil
 import signal
 import tempfile
@@ -66,8 +67,16 @@ def _local_cluster(n_workers: int):
     # a timer of `lost-worker-timeout` (15 s) at every worker's removal, and when it fires
     # while that worker's nanny is restarting it after another crash, closes the nanny for
     # good and starts none: with a run crashing every few seconds, the cluster lost all its
-    # workers and the sweep waited forever. The nannies restart their workers: a day.
+    # workers and the sweep waited forever. The nannies restart their workers: a day. A
+    # worker a run killed restarts forked from a server that imported Dask and numpy once
+    # (where there is one: not on Windows), not spawned to import them again: a crashing run
+    # costs a third of the time (benchmarks/sweep_crashes.py).
     settings = {
+        **(
+            {"distributed.worker.multiprocessing-method": "forkserver"}
+            if "forkserver" in multiprocessing.get_all_start_methods()
+            else {}
+        ),
         "distributed.worker.profile.enabled": False,
         "distributed.scheduler.allowed-failures": 0,
         "distributed.deploy.lost-worker-timeout": "1 day",
