@@ -40,6 +40,20 @@ BAD_VALUES = [
 ]
 
 
+def start(instance, instantiate, start_values, initialize) -> None:
+    """An Instance's or Instance3's start: instantiated, its start values set, initialized if
+    asked; its extracted folder removed when any of it is refused (the instance as it was left)."""
+    try:
+        instantiate()
+        instance.time = 0.0
+        instance.set(start_values or {})
+        if initialize:
+            instance.initialize()
+    except Exception:
+        shutil.rmtree(instance.unzipdir, ignore_errors=True)
+        raise
+
+
 class Instance:
     """One instantiated FMU; `messages` collects (status, text) from its logger."""
 
@@ -56,15 +70,12 @@ class Instance:
             modelIdentifier=self.md.coSimulation.modelIdentifier,
             instanceName=name,
         )
-        try:
-            self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
-            self.time = 0.0
-            self.set(start_values or {})
-            if initialize:
-                self.initialize()
-        except Exception:  # refused: the folder goes, the instance as the failure left it
-            shutil.rmtree(self.unzipdir, ignore_errors=True)
-            raise
+        start(
+            self,
+            lambda: self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True),
+            start_values,
+            initialize,
+        )
 
     def initialize(self, stop_time=None):
         self.fmu.setupExperiment(startTime=0.0, stopTime=stop_time)
@@ -160,15 +171,12 @@ class Instance3:
             modelIdentifier=self.md.coSimulation.modelIdentifier,
             instanceName=name,
         )
-        try:
-            self.fmu.instantiate(loggingOn=True, logMessage=log, **options)
-            self.time = 0.0
-            self.set(start_values or {})
-            if initialize:
-                self.initialize()
-        except Exception:  # refused: the folder goes, the instance as the failure left it
-            shutil.rmtree(self.unzipdir, ignore_errors=True)
-            raise
+        start(
+            self,
+            lambda: self.fmu.instantiate(loggingOn=True, logMessage=log, **options),
+            start_values,
+            initialize,
+        )
 
     def initialize(self, stop_time=None):
         self.fmu.enterInitializationMode(startTime=0.0, stopTime=stop_time)
