@@ -180,18 +180,20 @@ def temporary_folder(tmp_path_factory):
         os.environ["TMPDIR"] = before
 
 
-@pytest.fixture(autouse=True)
+@pytest.fixture(scope="module", autouse=True)
 def leaves_no_temporary_files(temporary_folder):
-    """Nothing a test (its FMU runs, fmpy's extractions, the programs it starts) leaves in
-    TMPDIR: fmpy leaves its extracted FMU there whenever a run raises, unless the run takes a
-    folder it removes (analysis.fmpy_runs.simulate_fmu); the leftovers are removed, and named."""
+    """Nothing a test file (its FMU runs, fmpy's extractions, the programs it starts, its
+    fixtures once closed) leaves in TMPDIR: fmpy leaves its extracted FMU there whenever a run
+    raises, unless the run takes a folder it removes (analysis.fmpy_runs.simulate_fmu). Checked
+    after the file's last test, as its module fixtures may keep an instance across tests; the
+    leftovers are removed, and named."""
     before = set(os.listdir(temporary_folder))
     yield
     left = sorted(set(os.listdir(temporary_folder)) - before)
     for name in left:
         path = temporary_folder / name
         shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
-    assert left == [], f"the test left {len(left)} entries in TMPDIR: {left[:5]}"
+    assert left == [], f"the test file left {len(left)} entries in TMPDIR: {left[:5]}"
 
 
 @pytest.fixture(scope="session")

@@ -2,6 +2,7 @@
 finite differences, at random states, in Model Exchange and Co-Simulation."""
 
 import ctypes
+import shutil
 
 import numpy as np
 import pytest
@@ -59,9 +60,10 @@ class Model:
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.messages = []
         self._callbacks = logging_callbacks(lambda status, text: self.messages.append((status, text)))
+        self.unzipdir = extract(str(path))
         self.fmu = FMU2Model(
             guid=self.md.guid,
-            unzipDirectory=extract(str(path)),
+            unzipDirectory=self.unzipdir,
             modelIdentifier=self.md.modelExchange.modelIdentifier,
             instanceName="me",
         )
@@ -115,6 +117,7 @@ class Model:
     def close(self):
         self.fmu.terminate()
         self.fmu.freeInstance()
+        shutil.rmtree(self.unzipdir, ignore_errors=True)
 
 
 def random_point(scene, seed):

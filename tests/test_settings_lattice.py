@@ -10,6 +10,7 @@ success with a state that did not move, never more internal steps in one doStep 
 """
 
 import math
+import shutil
 import time
 from collections import Counter
 
@@ -68,9 +69,10 @@ class Lattice:
         self.counters = [self.vr["n_steps"], self.vr["n_rejected"]]
         self.messages = []
         self._callbacks = logging_callbacks(lambda status, text: self.messages.append(text))
+        self.unzipdir = extract(str(path))
         self.fmu = FMU2Slave(
             guid=md.guid,
-            unzipDirectory=extract(str(path)),
+            unzipDirectory=self.unzipdir,
             modelIdentifier=md.coSimulation.modelIdentifier,
             instanceName="case",
         )
@@ -108,6 +110,7 @@ class Lattice:
 
     def close(self):
         self.fmu.freeLibrary()
+        shutil.rmtree(self.unzipdir, ignore_errors=True)
 
 
 def rk4(core, x, p, dt, max_step):
