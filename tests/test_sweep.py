@@ -15,6 +15,7 @@ import threading
 import time
 from pathlib import Path
 
+import dask
 import numpy as np
 import pandas as pd
 import pyarrow.dataset as ds
@@ -43,6 +44,14 @@ pytestmark = pytest.mark.cluster  # Dask clusters, local ones or the command's o
 # with the solver settings it was found with (the defaults before DOP853 at 1e-11 across points)
 OLD_SOLVER = {"solver": 1, "rtol": 1e-8, "atol": 1e-8, "across_points": 0}
 DISCARDED_AT_1_5 = {"alpha0": 1.2, "delta2": 3.0, "max_steps": 25, **OLD_SOLVER}
+
+
+@pytest.fixture(scope="module", autouse=True)
+def dask_scratch(tmp_path_factory):
+    """The tests' own clusters keep Dask's scratch space in pytest's folder, not in TMPDIR,
+    where Dask would leave its dask-scratch-space (a sweep's cluster makes and removes its own)."""
+    with dask.config.set({"temporary-directory": str(tmp_path_factory.mktemp("dask-scratch"))}):
+        yield
 
 
 @pytest.fixture(scope="module")
