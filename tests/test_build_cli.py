@@ -100,6 +100,8 @@ def test_a_scene_without_the_outputs_a_picture_needs_still_builds(tmp_path, buil
     assert "Traceback" not in run.stderr
 
 
+# about a minute: the README's three builds through the command line, as a user runs them (what
+# is tested is that none overwrites another's file, so the test fixtures' cached FMUs cannot do)
 def test_each_kind_of_fmu_has_its_own_default_name(tmp_path, monkeypatch, capsys):
     """The README's builds in its order (pythonfmu, --native, --native --fmi 3) leave three
     FMUs, and its fmpy snippet still runs the first: no build overwrites another's."""

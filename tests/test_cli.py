@@ -78,7 +78,7 @@ def test_each_command_explains_its_options(name, options):
 @pytest.mark.slow
 def test_build_checks_and_draws_the_run(tmp_path):
     """Without --no-check: the fmpy run against the native reference, then its CSV, plot and
-    animation named after the FMU (about 25 s, most of it the GIF)."""
+    animation named after the FMU (25 s quiet, 105 s on a loaded machine, most of it the GIF)."""
     run = cli("build", "--links", "1", "--output", tmp_path / "One.fmu", timeout=600)
     assert run.returncode == 0, run.stderr
     assert f"built {tmp_path / 'One.fmu'}" in run.stdout and "1 links" in run.stdout

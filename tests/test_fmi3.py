@@ -388,6 +388,7 @@ def test_build_fmu_py_builds_it_and_refuses_fmi_3_without_native(tmp_path):
     assert run.returncode != 0 and "--fmi 3: only the native FMU is FMI 3.0; add --native" in run.stderr
 
 
+# about a minute: CMake's configure and compile from the FMI 3.0 build description alone
 def test_a_host_rebuilds_the_binary_from_the_sources_and_build_description(fmus, tmp_path):
     """fmpy's build_platform_binary (CMake) reads sources/buildDescription.xml alone."""
     from fmpy.build import build_platform_binary

@@ -139,7 +139,9 @@ def test_a_chain_of_rods_approaches_the_continuous_chain(built_fmu):
     assert (np.abs(limit / expected - 1) < 0.1 * errors[2]).all(), (limit / expected - 1, errors[2])
 
 
-@pytest.mark.slow  # sympy's linearization of the seed: 1 to 4 minutes
+# slow: sympy's linearization of the seed takes 2 to 4 minutes; it is the one check of A against a
+# linearizer nobody here wrote (the others are closed forms of one or two links)
+@pytest.mark.slow
 def test_the_seeds_a_is_sympys_kanesmethod_linearize(built_fmu):
     """The seed scene's A at the hanging equilibrium against sympy's own KanesMethod.linearize
     of the same construction (builder.core.kane.chain), M [q' u'] = A [q u] at q = u = q' = u' = 0

@@ -171,6 +171,7 @@ def test_model_exchange_matches_the_native_reference(fmus):
     assert np.abs(run["energy"] - reference["energy"]).max() < 1e-6 * abs(reference["energy"][0])
 
 
+# about a minute: CMake's configure and compile, as a host rebuilding the FMU does
 def test_a_host_rebuilds_the_binary_from_the_fmus_sources(native, tmp_path):
     """fmpy's build_platform_binary (CMake) on the FMU's sources/ alone."""
     from fmpy.build import build_platform_binary
@@ -319,6 +320,8 @@ def test_ecos_command_line_engine_runs_it_with_a_clean_environment(native, tmp_p
         )
 
 
+# under a minute each: valgrind runs the host some 30 times slower; the only check of the C glue's
+# memory over many instance lifetimes
 @pytest.mark.tools
 @pytest.mark.parametrize("fmi_version", [2, 3])
 def test_a_thousand_cycles_under_valgrind(built_fmu, c_host, fmi_version, tmp_path):
@@ -516,6 +519,8 @@ def test_the_windows_binary_runs_under_wine(built_fmu, c_host, fmi_version, tmp_
     np.testing.assert_allclose(rows[0], rows[1], rtol=1e-12, atol=1e-12)  # libm differs, not the C
 
 
+# a minute or two: the cross-compiled FMU built for three platforms, and qemu emulating every
+# ARM instruction of the host's run; the only run of the aarch64 binary
 @pytest.mark.tools
 def test_the_aarch64_binary_runs_under_qemu_as_the_x86_64_one(built_fmu, c_host, tmp_path):
     """One FMI 3.0 FMU carrying every platform: its aarch64-linux binary, cross-compiled with
