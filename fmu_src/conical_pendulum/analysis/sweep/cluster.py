@@ -69,8 +69,8 @@ def _local_cluster(n_workers: int):
     # good and starts none: with a run crashing every few seconds, the cluster lost all its
     # workers and the sweep waited forever. The nannies restart their workers: a day. A
     # worker a run killed restarts forked from a server that imported Dask and numpy once
-    # (where there is one: not on Windows), not spawned to import them again: a crashing run
-    # costs a third of the time (benchmarks/sweep_crashes.py).
+    # (where there is one: not on Windows), not spawned to import them again: 15 all-crashing
+    # runs on one worker 47 s spawned, 15 s forked (docs/sweeps.md).
     settings = {
         **(
             {"distributed.worker.multiprocessing-method": "forkserver"}
