@@ -9,7 +9,8 @@ from conical_pendulum.builder.compiler import load_core
 
 def assert_formulations_agree(links, options: dict, seed: int, input_range: float) -> list[tuple]:
     """M, F, x' (the books' and the ropes' lengths' rates too) and every output of both cores at
-    five random states (the ropes' lengths 1 to 20 m), inputs in +-input_range and the ropes'
+    five random states (the ropes' lengths 1 to 20 m, an elastic one's reach within 20 cm of its
+    length), inputs in +-input_range and the ropes'
     accelerations in +-2 m/s2. Returns each point as (x, p, x', outputs) for the caller's checks."""
     cores = [load_core(Scene(links=links, formulation=f, **options)) for f in ("expanded", "recursive")]
     scene = Scene(links=links, **options)
@@ -19,6 +20,8 @@ def assert_formulations_agree(links, options: dict, seed: int, input_range: floa
         x = rng.uniform(-1, 1, len(scene.state_names()))
         for i in scene.ropes():
             x[scene.state_names().index(f"l{i}")] = rng.uniform(1.0, 20.0)
+        for i in scene.elastic_ropes():  # taut or slack by up to 20 cm
+            x[scene.state_names().index(f"r{i}")] = x[scene.state_names().index(f"l{i}")] + rng.uniform(-0.2, 0.2)
         p = np.array(scene.parameters())
         p[len(scene.parameter_names()) :] = rng.uniform(-input_range, input_range, len(scene.input_names()))
         acc = rng.uniform(-2, 2, len(scene.ropes()))

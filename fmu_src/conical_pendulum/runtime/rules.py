@@ -102,7 +102,13 @@ QUANTITIES = {
     "Ixx": ("non-negative", "a moment of inertia"),
     "Iyy": ("non-negative", "a moment of inertia"),
     "Izz": ("non-negative", "a moment of inertia"),
-    "c": ("non-negative", "a joint damping coefficient"),  # a negative one would feed energy in
+    "c": ("non-negative", "a joint damping coefficient"),
+    "EA": ("positive", "a rope's axial stiffness"),
+    "zeta_rope": ("non-negative", "a damping ratio"),  # a negative one would feed energy in
+    "r": (
+        "positive",
+        "a rope's reach",
+    ),  # its bob's distance from its top  # a negative one would feed energy in
     "rho": ("non-negative", "an air density"),  # the drag's: negative ones would feed energy in
     "C_d": ("non-negative", "a drag coefficient"),
     "A": ("non-negative", "a frontal area"),

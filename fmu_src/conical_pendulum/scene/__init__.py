@@ -21,6 +21,7 @@ from .scene import (
 )
 from .variables import (
     APPARENT_MASS,
+    ELASTIC_OUTPUTS,
     FREE_FORCE,
     PIVOT_INPUTS,
     PIVOT_OUTPUTS,
@@ -35,6 +36,7 @@ from .variables import (
 __all__ = [
     "AIR_DENSITY",
     "APPARENT_MASS",
+    "ELASTIC_OUTPUTS",
     "FORMULATIONS",
     "FREE_FORCE",
     "KINEMATICS",

@@ -43,6 +43,11 @@ class Link:
     rope: bool = False
     rope_min: float | None = None
     rope_max: float | None = None
+    # an elastic rope: its axial stiffness EA [N] (None: inextensible) and the damping ratio of
+    # its stretch with everything hanging below it (0 to 1: a fraction of critical damping);
+    # its bob's distance r<i> from the rope's top and its rate v_r<i> are states
+    rope_stiffness: float | None = None
+    rope_damping: float | None = None
     # a load: the bob's mass m<i> may be changed at a communication point (a tunable
     # parameter; a load set down, picked up or released), its energy's jump booked in W_load
     bob_load: bool = False
@@ -84,7 +89,12 @@ PARTS = {
             ("mass", "radius", "force", "drag_coefficient", "area", "load"),
             "{ mass = ..., radius = ... }",
         ),
-        Part("rope", "rope", ("min", "max"), "{ min = ..., max = ... }"),
+        Part(
+            "rope",
+            "rope",
+            ("min", "max", "stiffness", "damping"),
+            "{ min = ..., max = ... }",  # an elastic one's stiffness and damping are optional
+        ),
     )
 }
 FILE_NAMES = {  # Link fields as a file names them: bob.mass, rope.min
@@ -155,7 +165,7 @@ def _check_rope(scene, i: int, link: Link) -> None:
     if not isinstance(link.rope, bool):
         raise SceneError(f"{where}: expected a table {PARTS['rope'].shape}, got {link.rope!r}")
     if not link.rope:
-        for name in ("rope_min", "rope_max"):
+        for name in ("rope_min", "rope_max", "rope_stiffness", "rope_damping"):
             if getattr(link, name) is not None:
                 raise SceneError(
                     f"{where}.{name.removeprefix('rope_')}: {getattr(link, name)!r} given, but "
@@ -177,6 +187,27 @@ def _check_rope(scene, i: int, link: Link) -> None:
         raise SceneError(
             f"{where}: link {i}'s length {link.length!r} m is outside its range [{low!r}, {high!r}] m"
         )
+    _check_elastic(where, i, link)
+
+
+def _check_elastic(where: str, i: int, link: Link) -> None:
+    """An elastic rope: a stiffness EA > 0, a damping ratio >= 0 only with it, and a bob at its
+    end, whose distance from the rope's top is the rope's state."""
+    stiffness, damping = link.rope_stiffness, link.rope_damping
+    if stiffness is None:
+        if damping is not None:
+            raise SceneError(
+                f"{where}.damping: {damping!r} given, but rope {i} is inextensible: give it a "
+                "stiffness = EA [N] to make it elastic"
+            )
+        return
+    for name, value, quantity in (("stiffness", stiffness, "EA"), ("damping", damping, "zeta_rope")):
+        if value is not None and not satisfies(QUANTITIES[quantity][0], value):
+            raise SceneError(
+                f"{where}.{name}: must be {RULES[QUANTITIES[quantity][0]].wanted}, got {value!r}"
+            )
+    if not link.has_bob:
+        raise SceneError(f"{where}: an elastic rope holds a bob at its end; give link {i} a bob")
 
 
 # Each link's checks, in order, once the scene's own fields and options are known good

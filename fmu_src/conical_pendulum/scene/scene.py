@@ -156,6 +156,11 @@ class Scene(SceneVariables):
         """The links that are ropes (a state l<i> and an input v_hoist<i> each)."""
         return [i for i, link in enumerate(self.links) if link.rope]
 
+    def elastic_ropes(self) -> list[int]:
+        """The ropes that stretch (a stiffness EA): their bob's distance r<i> from the rope's top
+        and its rate v_r<i> are states, a generalized coordinate and speed each."""
+        return [i for i in self.ropes() if self.links[i].rope_stiffness is not None]
+
     def resolved_formulation(self) -> str:
         """The formulation the core is generated in: as chosen, or for "auto" the faster one
         at this number of links (benchmarks/chain_scaling.py measures the crossover)."""
@@ -173,6 +178,8 @@ class Scene(SceneVariables):
             options["bob_forces"] = self.forced_bobs()
         if self.ropes():  # the ranges are in the generated C
             options["ropes"] = [[i, self.links[i].rope_min, self.links[i].rope_max] for i in self.ropes()]
+        if self.elastic_ropes():
+            options["elastic_ropes"] = self.elastic_ropes()
         if self.loads():
             options["loads"] = self.loads()
         return {

@@ -22,11 +22,13 @@ FREE_FORCE = ("F_free_x", "F_free_y", "F_free_z")
 APPARENT_MASS = ("M_pivot_xx", "M_pivot_xy", "M_pivot_xz", "M_pivot_yy", "M_pivot_yz", "M_pivot_zz")
 # The energy's books: states with the work of each non-conservative force since the start
 # (the joints' damping, the air's drag on the bobs, the bobs' applied forces, the moving
-# pivot's inertial force, the winches of the ropes), and the energy that changes of the loads'
-# masses took or gave
-WORKS = ("W_damping", "W_drag", "W_external", "W_pivot", "W_hoist", "W_load")
+# pivot's inertial force, the winches of the ropes), the energy that changes of the loads'
+# masses took or gave, and the work of the elastic ropes' damping
+WORKS = ("W_damping", "W_drag", "W_external", "W_pivot", "W_hoist", "W_load", "W_rope")
 # A rope's: its tension [N] and its winch's power [W] (-tension * v_hoist)
 ROPE_OUTPUTS = ("T_rope", "P_hoist")
+# An elastic rope's: its stretch r - l [m] (< 0: slack)
+ELASTIC_OUTPUTS = ("stretch",)
 SEED_ANGLE = math.radians(10.0)
 
 
@@ -60,7 +62,8 @@ class SceneVariables:
     def parameter_scalars(self) -> list[Scalar]:
         """Parameters in the seed's order: l (links that are no rope), m (bobs), M (links), Ixx, Iyy, Izz, then the
         joints' damping c (with joint_damping), the bobs' drag coefficients C_d and areas A
-        and the air's density rho (with air_drag), then g."""
+        and the air's density rho (with air_drag), the elastic ropes' stiffnesses EA and damping
+        ratios zeta_rope, then g."""
         n = range(self.n)
         massive = [i for i in n if self.links[i].has_mass]
         bobs = [i for i in n if self.links[i].has_bob]
@@ -73,6 +76,7 @@ class SceneVariables:
             + ([Scalar("c", i) for i in n] if self.joint_damping else [])
             + [Scalar(quantity, i) for quantity in ("C_d", "A") for i in dragged]
             + ([Scalar("rho")] if dragged else [])
+            + [Scalar(quantity, i) for quantity in ("EA", "zeta_rope") for i in self.elastic_ropes()]
             + [Scalar("g")]
         )
 
@@ -88,6 +92,7 @@ class SceneVariables:
             values[f"Ixx{i}"], values[f"Iyy{i}"], values[f"Izz{i}"] = link.inertia()
             values[f"c{i}"] = link.damping
             values[f"C_d{i}"], values[f"A{i}"] = link.drag()
+            values[f"EA{i}"], values[f"zeta_rope{i}"] = link.rope_stiffness, link.rope_damping or 0.0
         values["rho"] = self.air_density
         values["g"] = self.gravity
         return [float(values[name]) for name in self.parameter_names()]
@@ -120,18 +125,32 @@ class SceneVariables:
     def hoist_acceleration_names(self) -> list[str]:
         """What the core reads after the parameters and inputs (no variable holds them): each
         rope's l<i>'', the rate of its v_hoist<i>, which the native FMUs interpolate (0 where
-        the inputs are held)."""
-        return [f"a_hoist{i}" for i in self.ropes()]
+        the inputs are held); then each elastic rope's tension T_law<i> and taut stretch
+        s_taut<i> (max(r - l, 0)), which the core's rope law (runtime/csrc/core/elastic.c)
+        computes from the state before every evaluation of the equations."""
+        return [f"a_hoist{i}" for i in self.ropes()] + [
+            f"{name}{i}" for i in self.elastic_ropes() for name in ("T_law", "s_taut")
+        ]
 
     def state_scalars(self) -> list[Scalar]:
-        """alpha, beta (angles), omega = alpha', delta = beta': the seed's state order; then
-        the energy's books, the work of each force a scene adds since the start (work_names);
-        then the ropes' lengths l<i>."""
+        """The generalized coordinates q: alpha, beta (angles), then each elastic rope's reach
+        r<i> (its bob's distance from its top); the speeds u = q': omega = alpha', delta = beta',
+        v_r<i> = r<i>' (the seed's state order, where the scene has no elastic rope); then the
+        energy's books, the work of each force a scene adds since the start (work_names); then
+        the ropes' (unstretched) lengths l<i>."""
+        n, elastic = range(self.n), self.elastic_ropes()
         return (
-            [Scalar(s, i) for s in ("alpha", "beta", "omega", "delta") for i in range(self.n)]
+            [Scalar(s, i) for s in ("alpha", "beta") for i in n]
+            + [Scalar("r", i) for i in elastic]
+            + [Scalar(s, i) for s in ("omega", "delta") for i in n]
+            + [Scalar("v_r", i) for i in elastic]
             + [Scalar(name) for name in self.work_names()]
             + [Scalar("l", i) for i in self.ropes()]
         )
+
+    def dof(self) -> int:
+        """The generalized speeds: two angles' rates a link, and each elastic rope's v_r."""
+        return 2 * self.n + len(self.elastic_ropes())
 
     def work_names(self) -> list[str]:
         """The energy's books: states integrating the power of each non-conservative force
@@ -139,17 +158,21 @@ class SceneVariables:
         forces = (self.joint_damping, self.air_drag, bool(self.forced_bobs()))
         ropes, loads = bool(self.ropes()), bool(self.loads())
         # the moving pivot's work is kept with the other books (a coupled scene without them
-        # stays as it was); a rope's winch always does work, and a load's change moves energy
-        kept = (*forces, self.coupling and (any(forces) or ropes or loads), ropes, loads)
+        # stays as it was); a rope's winch always does work, a load's change moves energy, and
+        # an elastic rope's damping takes it
+        pivot = self.coupling and (any(forces) or ropes or loads)
+        kept = (*forces, pivot, ropes, loads, bool(self.elastic_ropes()))
         return [name for name, keep in zip(WORKS, kept) if keep]
 
     def state_names(self) -> list[str]:
         return _names(self.state_scalars())
 
     def state_defaults(self) -> list[float]:
+        reaches = [self.links[i].length for i in self.elastic_ropes()]  # taut, unstretched
         return (
             [SEED_ANGLE] * (2 * self.n)
-            + [0.0] * (2 * self.n)
+            + reaches
+            + [0.0] * (2 * self.n + len(reaches))
             + [0.0] * len(self.work_names())
             + [self.links[i].length for i in self.ropes()]
         )
@@ -174,6 +197,8 @@ class SceneVariables:
         # each rope's tension and its winch's power (after the pivot's: the core finds those
         # at fixed places)
         scalars += [Scalar(stem, i) for stem in ROPE_OUTPUTS for i in self.ropes()]
+        # and each elastic rope's stretch
+        scalars += [Scalar(stem, i) for stem in ELASTIC_OUTPUTS for i in self.elastic_ropes()]
         return scalars
 
     def output_names(self) -> list[str]:

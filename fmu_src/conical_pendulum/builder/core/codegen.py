@@ -90,8 +90,9 @@ def _books(scene: Scene) -> list[str]:
     works = scene.work_names()
     if not works:
         return []
-    # W_load's slot only where kept (#ifdef CP_WORK_LOAD): scenes without loads keep their C
-    named = [name for name in WORKS if name != "W_load" or name in works]
+    # W_load's and W_rope's slots only where kept (#ifdef CP_WORK_LOAD): scenes without loads
+    # or elastic ropes keep their C
+    named = [name for name in WORKS if name not in ("W_load", "W_rope") or name in works]
     return [
         c.define("CP_NWORK", len(works)),
         *(c.define(f"CP_WORK_{name.removeprefix('W_').upper()}", _index(works, name)) for name in named),
@@ -186,12 +187,55 @@ def _ropes(scene: Scene) -> list[str]:
         + c.initializer(c.double(scene.links[i].rope_max) for i in ropes)
         + ";",
         c.define("CP_TENSION_OUTPUT", outputs.index(f"T_rope{ropes[0]}")),
+        *_elastic_ropes(scene),
+    ]
+
+
+def _elastic_ropes(scene: Scene) -> list[str]:
+    """model.h's lines for the elastic ropes, if the scene has any (none: no line): where each
+    one's numbers are, for the rope's law (dynamics.c's cp_rope_law) and the recursive
+    formulation."""
+    elastic = scene.elastic_ropes()
+    if not elastic:
+        return []
+    states, params = scene.state_names(), scene.core_parameter_names()
+    core = params + scene.hoist_acceleration_names()
+    below = []  # the masses hanging from each elastic rope, its link's and those below, and -1
+    for i in elastic:
+        names = (f"{mass}{j}" for j in range(i, scene.n) for mass in ("m", "M"))
+        below += [params.index(name) for name in names if name in params] + [-1]
+    return [
+        c.define("CP_NELASTIC", len(elastic)),
+        "/* Each elastic rope (Scene.elastic_ropes' order): its place among the ropes, where its",
+        "   reach r<i> and v_r<i> = r<i>' are in x, its EA<i> and zeta_rope<i> in p, and its law's",
+        "   T_law<i> (s_taut<i> after it) in the core's p; then the masses hanging from each, their",
+        "   places in p, each rope's list ended by -1 (its damping ratio is of their stretch). */",
+        "static const int cp_elastic_rope[CP_NELASTIC] = "
+        + c.initializer(scene.ropes().index(i) for i in elastic)
+        + ";",
+        "static const int cp_elastic_reach[CP_NELASTIC] = "
+        + c.initializer(states.index(f"r{i}") for i in elastic)
+        + ";",
+        "static const int cp_elastic_rate[CP_NELASTIC] = "
+        + c.initializer(states.index(f"v_r{i}") for i in elastic)
+        + ";",
+        "static const int cp_elastic_stiffness[CP_NELASTIC] = "
+        + c.initializer(params.index(f"EA{i}") for i in elastic)
+        + ";",
+        "static const int cp_elastic_damping[CP_NELASTIC] = "
+        + c.initializer(params.index(f"zeta_rope{i}") for i in elastic)
+        + ";",
+        "static const int cp_elastic_law[CP_NELASTIC] = "
+        + c.initializer(core.index(f"T_law{i}") for i in elastic)
+        + ";",
+        "static const int cp_elastic_masses[] = " + c.initializer(below) + ";",
+        c.define("CP_STRETCH_OUTPUT", scene.output_names().index(f"stretch{elastic[0]}")),
     ]
 
 
 def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: list[str]) -> str:
     """model.h: the sizes and names every formulation shares, then its own lines."""
-    ndof = 2 * scene.n
+    ndof = scene.dof()
     return c.fill(
         "model.h.in",
         sizes="\n".join(
@@ -240,7 +284,7 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
         [f"link {i}" for i in range(scene.n)],
     )
     pivot = index(scene.input_scalars()[0].quantity) if scene.coupling else -1
-    ropes = scene.ropes()
+    ropes, elastic = scene.ropes(), scene.elastic_ropes()
     header = _header(
         scene,
         len(names),
@@ -257,6 +301,16 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
                     + ";",
                 ]
                 if ropes
+                else []
+            ),
+            *(
+                [
+                    "/* Each link's elastic rope (its place in Scene.elastic_ropes' order; -1: none). */",
+                    "static const int cp_link_elastic[CP_NLINK] = "
+                    + c.initializer(elastic.index(i) if i in elastic else -1 for i in range(scene.n))
+                    + ";",
+                ]
+                if elastic
                 else []
             ),
             c.define("CP_G_INDEX", index("g")),

@@ -34,7 +34,8 @@ def dependencies(scene: Scene) -> Dependencies:
 
 
 def _symbolic(scene: Scene, eqs) -> Dependencies:
-    knowns = {s: s.name for s in eqs.states} | dict(zip(eqs.params, scene.core_parameter_names()))
+    core = scene.core_parameter_names() + scene.hoist_acceleration_names()  # _law resolves the latter
+    knowns = {s: s.name for s in eqs.states} | dict(zip(eqs.params, core))
     rates = set(eqs.rates)
     closure: dict = {}  # symbol -> the knowns (and rates u') it depends on
 
@@ -78,7 +79,25 @@ def _symbolic(scene: Scene, eqs) -> Dependencies:
         whole_mass = frozenset().union(*(of(mass[i, j]) for i in range(dim) for j in range(dim)))
         result |= dict.fromkeys(FREE_FORCE, everything - set(PIVOT_INPUTS))  # F_pivot at a_pivot = 0
         result |= dict.fromkeys(APPARENT_MASS, momentum | whole_mass)  # m I - P M^-1 P^T
-    return result
+    return {
+        name: frozenset(k for item in found for k in _law(scene).get(item, {item}))
+        for name, found in result.items()
+    }
+
+
+def _law(scene: Scene) -> Dependencies:
+    """What the core's p holds beyond the variables, by what it depends on: each rope's l''
+    (the rate of an input: nothing a variable holds), and each elastic rope's law (T_law,
+    s_taut: dynamics.c's cp_rope_law), from its length, reach and their rates, its EA and
+    damping, and the masses hanging from it."""
+    law = {f"a_hoist{i}": frozenset() for i in scene.ropes()}
+    parameters = set(scene.parameter_names())
+    for i in scene.elastic_ropes():
+        masses = {f"{mass}{j}" for j in range(i, scene.n) for mass in ("m", "M")} & parameters
+        rope = {f"l{i}", f"r{i}", f"v_r{i}", f"v_hoist{i}", f"EA{i}", f"zeta_rope{i}"}
+        law[f"T_law{i}"] = frozenset(rope | masses)
+        law[f"s_taut{i}"] = frozenset({f"l{i}", f"r{i}"})
+    return law
 
 
 def _blocks(dim: int, linked) -> list[list[int]]:
@@ -106,12 +125,18 @@ def _chain(scene: Scene) -> Dependencies:
     n, parameters = scene.n, set(scene.parameter_names())
     angles = [frozenset({f"alpha{i}", f"beta{i}"}) for i in range(n)]
     above = [frozenset().union(*angles[: i + 1]) for i in range(n)]  # orientation of link i
-    lengths = [frozenset(f"l{k}" for k in range(i + 1)) for i in range(n)]
-    # the winches' speeds that move link i's bob: of the ropes at or above it
-    hoists = [frozenset(f"v_hoist{k}" for k in scene.ropes() if k <= i) for i in range(n)]
+    elastic = scene.elastic_ropes()
+    # the distances down to link i's lower end: the links' lengths, the elastic ropes' reaches
+    lengths = [frozenset(f"r{k}" if k in elastic else f"l{k}" for k in range(i + 1)) for i in range(n)]
+    # the winches' speeds that move link i's bob: of the (inextensible) ropes at or above it
+    hoists = [
+        frozenset(f"v_hoist{k}" for k in scene.ropes() if k <= i and k not in elastic) for i in range(n)
+    ]
     inputs, works = set(scene.input_names()), set(scene.work_names())
     # the forces' coefficients, which move nothing but the chain's dynamics (and the books)
-    coefficients = {s.name for s in scene.parameter_scalars() if s.quantity in ("c", "C_d", "A", "rho")}
+    coefficients = {
+        s.name for s in scene.parameter_scalars() if s.quantity in ("c", "C_d", "A", "rho", "zeta_rope")
+    }
     everything = frozenset(scene.state_names()) | parameters | inputs
     motion = everything - works  # the chain's motion; the energy's books follow it
     result = {}
@@ -131,11 +156,18 @@ def _chain(scene: Scene) -> Dependencies:
         elif scalar.name in FREE_FORCE:
             result[scalar.name] = motion - set(PIVOT_INPUTS)
         elif scalar.name in APPARENT_MASS:
-            result[scalar.name] = above[n - 1] | (parameters - {"g"} - coefficients) | lengths[n - 1]
+            stiffnesses = {f"EA{i}" for i in elastic}  # the ropes' pull is no inertia
+            result[scalar.name] = (
+                above[n - 1] | (parameters - {"g"} - coefficients - stiffnesses) | lengths[n - 1]
+            )
+        elif scalar.stem in ("T_rope", "P_hoist") and i in elastic:  # the rope's law
+            result[scalar.name] = _law(scene)[f"T_law{i}"]
         elif scalar.stem in ("T_rope", "P_hoist"):  # Newton's law for what hangs from the rope
             result[scalar.name] = motion
+        elif scalar.stem == "stretch":
+            result[scalar.name] = frozenset({f"r{i}", f"l{i}"})
     names = scene.state_names()
-    dim = 2 * n
+    dim = scene.dof()
     result |= {f"der({names[k]})": frozenset({names[k + dim]}) for k in range(dim)}
     result |= {f"der({names[dim + k]})": motion for k in range(dim)}
     result |= _work_rates(scene, above, lengths, hoists)
@@ -147,15 +179,18 @@ def _work_rates(scene: Scene, above, lengths, hoists) -> Dependencies:
     """The energy's books' rates: each force's power, its size times the velocity of where
     it acts (a point of link i moves with the joints, lengths and winches down to i); the
     winches' power, their speeds times the ropes' tensions, with everything."""
-    n = scene.n
-    rates = [frozenset({f"omega{i}", f"delta{i}"}) for i in range(n)]
+    n, elastic = scene.n, scene.elastic_ropes()
+    rates = [
+        frozenset({f"omega{i}", f"delta{i}"} | ({f"v_r{i}"} if i in elastic else set())) for i in range(n)
+    ]
     moving = [above[i] | frozenset().union(*rates[: i + 1]) | lengths[i] | hoists[i] for i in range(n)]
 
     def of_kind(*quantities):
         return {s.name for s in scene.parameter_scalars() if s.quantity in quantities}
 
     powers = {
-        "W_damping": of_kind("c") | frozenset().union(*rates),  # c w_rel^2: the rates alone
+        "W_damping": of_kind("c")
+        | {f"{rate}{i}" for rate in ("omega", "delta") for i in range(n)},  # c w_rel^2
         "W_drag": frozenset().union(  # the drag times the bob's velocity
             *(moving[i] | of_kind("rho") | {f"C_d{i}", f"A{i}"} for i in scene.dragged_bobs())
         )
@@ -164,9 +199,16 @@ def _work_rates(scene: Scene, above, lengths, hoists) -> Dependencies:
             *(moving[i] | {f"F_bob{i}_{c}" for c in "xyz"} for i in scene.forced_bobs())
         ),
         "W_pivot": moving[n - 1] | of_kind("m", "M") | set(PIVOT_INPUTS),  # -m a_pivot . v
-        "W_hoist": frozenset(scene.state_names()) - set(scene.work_names())
-        | set(scene.parameter_names())
-        | set(scene.input_names()),
+        # an inextensible rope's tension is Newton's law for all below it, an elastic one's its law
+        "W_hoist": frozenset().union(*(_law(scene)[f"T_law{i}"] for i in elastic))
+        | (
+            frozenset(scene.state_names()) - set(scene.work_names())
+            | set(scene.parameter_names())
+            | set(scene.input_names())
+            if set(scene.ropes()) - set(elastic)
+            else frozenset()
+        ),
         "W_load": frozenset(),  # it jumps at a load's change, and stays between
+        "W_rope": frozenset().union(*(_law(scene)[f"T_law{i}"] for i in scene.elastic_ropes())),
     }
     return {f"der({name})": frozenset(powers[name]) for name in scene.work_names()}

@@ -17,6 +17,17 @@ input, held over an integration: l<i>'' = 0): its lower end moves relative to th
 Newton's law for everything hanging from it, along the rope; the winch's power is -tension
 v_hoist, and the book W_hoist integrates it.
 
+An elastic rope (Link.rope_stiffness) lets its bob's distance r<i> from the rope's top be a
+generalized coordinate of its own (speed v_r<i>): the bob slides along the rope's axis at
+-v_r e_y, a partial velocity -e_y, and the rope pulls it back with its tension T, a generalized
+force -T on v_r (on the angles' speeds the pull on the bob and on the rope's top cancel). T
+follows the rope's law, which is not analytic (zero when slack): the core computes it from
+the state (runtime/csrc/core/elastic.c) and hands it in p with the taut stretch s+ = max(r - l,
+0), so these equations stay analytic. The rope's elastic energy EA s+^2 / (2 l) is in the
+energy; its damping's work, (EA s+ / l - T) (v_r - v_hoist), in the book W_rope; and its
+winch's power is -(T + EA s+^2 / (2 l^2)) v_hoist: the tension's work on the rope paid out,
+and the strain energy it carries off the drum.
+
 With coupling, the pivot accelerates by a_pivot (inputs, inertial components): every
 mass centre's acceleration gains a_pivot. The force on the support is Newton's law for
 the whole chain, sum m (g - a), so it needs u' (the symbols `rates`).
@@ -145,6 +156,7 @@ def _work_rates(scene: Scene, sym: _Symbols, sums: _Sums) -> list[sm.Expr]:
         "W_pivot": lambda: -sym.pivot_acc.dot(sums.linear_momentum),
         "W_hoist": lambda: sum(sums.hoist_power, sm.S.Zero),
         "W_load": lambda: sm.S.Zero,  # it jumps at a load's change (the model's), and stays between
+        "W_rope": lambda: sum(sums.rope_damping_power, sm.S.Zero),
     }
     return [power[name]() for name in scene.work_names()]
 
@@ -182,19 +194,36 @@ class _Symbols:
     rates: tuple
     params: dict[str, sm.Symbol]
     pivot_acc: sm.Matrix | None
-    lengths: tuple  # l<i>: a parameter, or a rope's state
+    lengths: tuple  # l<i>: a parameter, or a rope's state (an elastic one's unstretched length)
+    elastic: list[int]  # the links that are elastic ropes (Scene.elastic_ropes)
+    reaches: dict[int, sm.Symbol]  # each elastic rope's r<i>
+    reach_rates: dict[int, sm.Symbol]  # and its v_r<i>, a generalized speed after the angles'
 
     def hoist(self, i: int):
         """Link i's rate of lengthening: a rope's v_hoist<i>, else 0."""
         return self.params.get(f"v_hoist{i}", sm.S.Zero)
 
-    def hoist_acc(self, i: int):
-        """Link i's length's acceleration: a rope's a_hoist<i> (l<i>''), else 0."""
-        return self.params.get(f"a_hoist{i}", sm.S.Zero)
+    def reach(self, i: int):
+        """Link i's distance from its top to its lower end: an elastic rope's r<i>, else l<i>."""
+        return self.reaches.get(i, self.lengths[i])
+
+    def slide(self, i: int):
+        """The speed at which link i's lower end slides away from its top: an elastic rope's
+        v_r<i> (a generalized speed), another rope's v_hoist<i>, else 0."""
+        return self.reach_rates.get(i, self.hoist(i))
+
+    def slide_acc(self, i: int):
+        """That slide's acceleration, where it is prescribed: a rope's a_hoist<i> (l<i>''); 0
+        for an elastic rope (v_r<i>' is a rate u') and for other links."""
+        return sm.S.Zero if i in self.reaches else self.params.get(f"a_hoist{i}", sm.S.Zero)
+
+    def speed_index(self, i: int) -> int:
+        """Where an elastic rope's v_r<i> is among the generalized speeds."""
+        return 2 * self.n + self.elastic.index(i)
 
     @property
     def dim(self) -> int:
-        return 2 * self.n
+        return 2 * self.n + len(self.elastic)
 
     @property
     def g(self) -> sm.Symbol:
@@ -208,7 +237,7 @@ def _core_p_names(scene: Scene) -> list[str]:
 
 def _symbols(scene: Scene) -> _Symbols:
     """Symbols named as the FMU's variables, so that the generated C reads like the model."""
-    n = scene.n
+    n, elastic = scene.n, scene.elastic_ropes()
     params = {name: sm.Symbol(name) for name in _core_p_names(scene)}
     return _Symbols(
         n=n,
@@ -216,10 +245,15 @@ def _symbols(scene: Scene) -> _Symbols:
         beta=sm.symbols(f"beta0:{n}"),
         omega=sm.symbols(f"omega0:{n}"),
         delta=sm.symbols(f"delta0:{n}"),
-        rates=sm.symbols(f"domega0:{n}") + sm.symbols(f"ddelta0:{n}"),
+        rates=sm.symbols(f"domega0:{n}")
+        + sm.symbols(f"ddelta0:{n}")
+        + tuple(sm.Symbol(f"dv_r{i}") for i in elastic),
         params=params,
         pivot_acc=Vec([params[name] for name in PIVOT_INPUTS]) if scene.coupling else None,
         lengths=sm.symbols(f"l0:{n}"),
+        elastic=elastic,
+        reaches={i: sm.Symbol(f"r{i}") for i in elastic},
+        reach_rates={i: sm.Symbol(f"v_r{i}") for i in elastic},
     )
 
 
@@ -287,6 +321,7 @@ class _Sums:
     hangs: list[sm.Matrix] = field(default_factory=list)
     tensions: list[sm.Expr] = field(default_factory=list)  # each rope's (Scene.ropes' order)
     hoist_power: list[sm.Expr] = field(default_factory=list)  # each rope's winch's
+    rope_damping_power: list[sm.Expr] = field(default_factory=list)  # each elastic rope's
 
     @classmethod
     def empty(cls, dim: int) -> _Sums:
@@ -330,22 +365,25 @@ def _link_points(b: _Builder, sym: _Symbols, i: int, parent: _Parent, frame: _Fr
     (centre and quaternion) as an output.
     Returns (centre, lower end, quaternion)."""
     joint, w, dim = parent.joint, frame.w, sym.dim
-    r = b.name(f"r{i}", -sym.lengths[i] * frame.rotation[:, 1])
-    # a rope's lower end moves along it at -v_hoist e_y relative to the link's frame
-    slide = -sym.hoist(i) * frame.rotation[:, 1]
+    r = b.name(f"r{i}", -sym.reach(i) * frame.rotation[:, 1])
+    # a rope's lower end moves along it at -v_hoist e_y relative to the link's frame (an
+    # elastic rope's at -v_r e_y)
+    slide = -sym.slide(i) * frame.rotation[:, 1]
     w_cross_r = w.cross(r) + slide
-    # and accelerates along it at -l'' e_y
+    # and accelerates along it at -l'' e_y (an elastic rope's -v_r' e_y is its partial's)
     acc_rel = b.name(
         f"ar{i}",
         frame.wb.cross(r)
         + w.cross(w.cross(r))
         + 2 * w.cross(slide)
-        - sym.hoist_acc(i) * frame.rotation[:, 1],
+        - sym.slide_acc(i) * frame.rotation[:, 1],
     )
     partial_rel = [
         b.name(f"vr{i}_{s}", frame.partial_w[s].cross(r)) if frame.partial_w[s] != ZERO else ZERO
         for s in range(dim)
     ]
+    if i in sym.reaches:
+        partial_rel[sym.speed_index(i)] = -frame.rotation[:, 1]
     centre = _Point(
         joint.position + r / 2,
         [joint.partials[s] + partial_rel[s] / 2 for s in range(dim)],
@@ -458,6 +496,20 @@ def _add_link_rotation(b: _Builder, sums: _Sums, sym: _Symbols, i: int, frame: _
     sums.kinetic += body_w.dot(body_h) / 2
 
 
+def _add_elastic_rope(sums: _Sums, sym: _Symbols, i: int) -> None:
+    """An elastic rope's pull on its bob in Kane's equations, a generalized force -T on its v_r
+    (module docstring), with T and s+ as the core hands them in p; its elastic energy, its
+    tension and winch's power (outputs) and its damping's power (W_rope)."""
+    p, length = sym.params, sym.lengths[i]
+    tension, taut, stiffness = p[f"T_law{i}"], p[f"s_taut{i}"], p[f"EA{i}"]
+    sums.force_terms[sym.speed_index(i)] -= tension
+    sums.potential += stiffness * taut**2 / (2 * length)
+    sums.tensions.append(tension)
+    sums.hoist_power.append(-(tension + stiffness * taut**2 / (2 * length**2)) * sym.hoist(i))
+    stretch_rate = sym.reach_rates[i] - sym.hoist(i)
+    sums.rope_damping_power.append((stiffness * taut / length - tension) * stretch_rate)
+
+
 def _mass_matrix_and_forcing(scene: Scene, sums: _Sums, dim: int) -> tuple[sm.Matrix, sm.Matrix]:
     """M (symmetric: the upper triangle mirrored) and F; the published model's come from
     the seed's own KanesMethod derivation instead (module docstring)."""
@@ -469,7 +521,7 @@ def _mass_matrix_and_forcing(scene: Scene, sums: _Sums, dim: int) -> tuple[sm.Ma
     )
 
 
-def _outputs(scene: Scene, sums: _Sums, bobs: list, poses: list) -> list[sm.Expr]:
+def _outputs(scene: Scene, sym: _Symbols, sums: _Sums, bobs: list, poses: list) -> list[sm.Expr]:
     """The calculated outputs the scene asks for, in the FMU's order (Scene.output_names; the
     pivot's F_free and M_app, which dynamics.c computes, left out)."""
     outputs = []
@@ -481,7 +533,8 @@ def _outputs(scene: Scene, sums: _Sums, bobs: list, poses: list) -> list[sm.Expr
         outputs.append(sums.kinetic + sums.potential)
     if scene.coupling:
         outputs += list(sums.support_force)
-    return outputs + sums.tensions + sums.hoist_power
+    stretches = [sym.reaches[i] - sym.lengths[i] for i in sym.elastic]
+    return outputs + sums.tensions + sums.hoist_power + stretches
 
 
 def derive(scene: Scene) -> Equations:
@@ -513,9 +566,12 @@ def derive(scene: Scene) -> Equations:
             _add_link_rotation(b, sums, sym, i, frame)
         parent = _Parent(frame, lower, quaternion)
     if scene.joint_damping:
-        sums.force_terms = [f + q for f, q in zip(sums.force_terms, joint_damping(scene)[0])]
-    for i in scene.ropes():  # the rope holds what hangs below its joint, along e_y
-        held = sum(sums.hangs[i:], ZERO)
+        sums.force_terms[: 2 * sym.n] = [f + q for f, q in zip(sums.force_terms, joint_damping(scene)[0])]
+    for i in scene.ropes():
+        if i in sym.reaches:
+            _add_elastic_rope(sums, sym, i)
+            continue
+        held = sum(sums.hangs[i:], ZERO)  # the rope holds what hangs below its joint, along e_y
         sums.tensions.append(b.name(f"tension{i}", axes[i].dot(held)))
         sums.hoist_power.append(-sums.tensions[-1] * sym.hoist(i))
     mass_matrix, forcing = _mass_matrix_and_forcing(scene, sums, sym.dim)
@@ -523,15 +579,17 @@ def derive(scene: Scene) -> Equations:
         scene=scene,
         states=list(sym.alpha)
         + list(sym.beta)
+        + [sym.reaches[i] for i in sym.elastic]
         + list(sym.omega)
         + list(sym.delta)
+        + [sym.reach_rates[i] for i in sym.elastic]
         + [sym.lengths[i] for i in scene.ropes()],
         params=[sym.params[name] for name in _core_p_names(scene)],
         rates=list(sym.rates),
         definitions=b.definitions,
         mass_matrix=mass_matrix,
         forcing=forcing,
-        outputs=_outputs(scene, sums, bobs, poses),
+        outputs=_outputs(scene, sym, sums, bobs, poses),
         momentum=sm.Matrix.hstack(*sums.momentum) if scene.coupling else None,
         total_mass=sums.total_mass if scene.coupling else None,
         work_rates=_work_rates(scene, sym, sums),

@@ -232,12 +232,42 @@ DESCRIBED = {
     ),
     "T_rope": Described(
         "N",
-        "tension of rope {link}: the force along it that holds what hangs below it (a rope cannot "
-        "push: a negative tension discards the step) [{unit}]",
+        "tension of rope {link}: the force along it that holds what hangs below it (an inextensible "
+        "rope cannot push: a negative tension discards the step; an elastic one's follows its law, "
+        "EA{link} stretch{link} / l{link} plus its damping while taut, never negative) [{unit}]",
     ),
     "P_hoist": Described(
         "W",
-        "power rope {link}'s winch puts into the chain, -T_rope{link} v_hoist{link} [{unit}]",
+        "power rope {link}'s winch puts into the chain, -T_rope{link} v_hoist{link} (an elastic "
+        "rope's with the strain energy its rope paid out carries, -(T_rope{link} + EA{link} "
+        "(stretch{link} / l{link})^2 / 2) v_hoist{link} while taut) [{unit}]",
+    ),
+    "EA": Described(
+        "N",
+        "axial stiffness of elastic rope {link}, its Young's modulus times its cross-section: its "
+        "tension is EA{link} stretch{link} / l{link} while taut [{unit}]",
+    ),
+    "zeta_rope": Described(
+        "1",
+        "damping ratio of elastic rope {link}'s stretch with everything hanging from it (1: "
+        "critical): its damping force is 2 zeta_rope{link} sqrt(EA{link} / l{link} m) (v_r{link} - "
+        "v_hoist{link}), m that mass, while the rope pulls [{unit}]",
+    ),
+    "r": Described(
+        "m",
+        "reach of elastic rope {link}: the distance from its top to its bob; stretch{link} = "
+        "r{link} - l{link} [{unit}]",
+    ),
+    "v_r": Described("m/s", "{of}' [{unit}]", "r"),
+    "stretch": Described(
+        "m",
+        "stretch of elastic rope {link}, r{link} - l{link}: > 0 taut, <= 0 slack [{unit}]",
+    ),
+    "W_rope": Described(
+        "J",
+        "work done on the chain by the elastic ropes' damping since the start (<= 0: with the "
+        "strain energy a rope recoiling faster than it can pull loses); energy minus the W_ "
+        "outputs' sum stays constant [{unit}]",
     ),
     **_axes(
         "force applied to bob {{link}}, inertial {axis} (Y up) [{unit}]; " + HELD_INPUT,
@@ -245,7 +275,9 @@ DESCRIBED = {
         {f"F_bob_{c}": c for c in "xyz"},
     ),
     "energy": Described(
-        "J", "total mechanical energy relative to the pivot (kinetic + potential, zero at Y = 0) [{unit}]"
+        "J",
+        "total mechanical energy relative to the pivot (kinetic + potential, zero at Y = 0, with "
+        "the elastic ropes' strain energy) [{unit}]",
     ),
     **_axes(
         "acceleration of the pivot (the support), inertial {axis} (Y up) [{unit}]; " + HELD_INPUT,
@@ -375,6 +407,8 @@ NOMINAL = {
     "omega": _frequency,
     "delta": _frequency,
     "l": _rope_length,  # a rope's length, a state
+    "r": _rope_length,  # an elastic rope's reach
+    "v_r": lambda scene: _rope_length(scene) * _frequency(scene),
     **dict.fromkeys(WORKS, _weight_times_length),
 }
 

@@ -6,6 +6,11 @@
  * a rigid body's force is f = I a + b, with b the velocity terms. Gravity enters as an
  * upward acceleration of the pivot, so the force through joint 0 is the support's force.
  *
+ * An elastic rope's bob slides along the rope (its reach r, a generalized coordinate): a
+ * prismatic joint along -e_y between the massless rope and its bob (with all below it), at the
+ * same reference point, so that the articulated-body algorithm condenses it first (its
+ * generalized force -T, the rope's law from p) and the rope's two angles after it.
+ *
  * Every value computed from x and p is a cp_real (real.h): double, or double complex in
  * directional.c's complex-step copy; what is not analytic (the pivot check) looks at real
  * parts only.
@@ -35,6 +40,7 @@ typedef struct {
     cp_real I[36];     /* spatial inertia of link and bob about the joint */
     cp_real b[6];      /* velocity-dependent force of link and bob about the joint */
     cp_real IA[36], pA[6], U[12], Dinv[4], uu[2];
+    cp_real Up[6], Dp, up;  /* an elastic rope's slide: IA S, S^T IA S and -T - S^T pA */
 #ifdef CP_DRAG
     cp_real drag[3];   /* the air's drag on the bob (bob_drag) */
 #endif
@@ -140,7 +146,7 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
         const cp_real *Rp = parent ? parent->R : identity;
         const cp_real zero[3] = {0, 0, 0};
         const cp_real *wp = parent ? parent->w : zero;
-        const cp_real u[2] = {x[2 * n + i], x[3 * n + i]};
+        const cp_real u[2] = {x[CP_NDOF + i], x[CP_NDOF + n + i]};
         cp_real C[9], J[6], Ja[6], Jb[6], rate[6], wrel[3], dE[3], t[3];
         cp_joint(x[i], x[n + i], C, J, Ja, Jb);
         mul3(Rp, C, 3, k->R);
@@ -171,9 +177,17 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
         const cp_link_params *lp = &cp_links[i];
 #ifdef CP_NROPE
         const int rope = cp_link_rope[i];
-        const cp_real l = rope >= 0 ? x[cp_rope_state[rope]] : p[lp->l];
-        const cp_real v = rope >= 0 ? p[cp_rope_hoist[rope]] : 0.0;
-        const cp_real a = rope >= 0 ? p[CP_NPARAM + rope] : 0.0;  /* l'' (cp_model's p) */
+        cp_real l = rope >= 0 ? x[cp_rope_state[rope]] : p[lp->l];
+        cp_real v = rope >= 0 ? p[cp_rope_hoist[rope]] : 0.0;
+        cp_real a = rope >= 0 ? p[CP_NPARAM + rope] : 0.0;  /* l'' (cp_model's p) */
+#ifdef CP_NELASTIC
+        const int elastic = cp_link_elastic[i];
+        if (elastic >= 0) {  /* its bob at its reach, sliding at v_r; v_r' is a rate */
+            l = x[cp_elastic_reach[elastic]];
+            v = x[cp_elastic_rate[elastic]];
+            a = 0.0;
+        }
+#endif
 #else
         const cp_real l = p[lp->l], v = 0.0, a = 0.0;
 #endif
@@ -226,6 +240,35 @@ static void carry(const Link *k, const cp_real parent[6], cp_real out[6])
     }
 }
 
+#ifdef CP_NELASTIC
+/* An elastic rope's slide, S = [0; -e_y], with its generalized force: U = IA S, D = S^T U and
+ * u = force - S^T pA kept, IA and pA condensed in place (IA - U U^T / D, pA + U u / D: its
+ * velocity terms are the bob's and the children's already, Link.as). */
+static void slide(Link *k, cp_real force)
+{
+    const cp_real ey[3] = {k->R[1], k->R[4], k->R[7]};
+    for (int r = 0; r < 6; r++)
+        k->Up[r] = -(k->IA[r * 6 + 3] * ey[0] + k->IA[r * 6 + 4] * ey[1] + k->IA[r * 6 + 5] * ey[2]);
+    k->Dp = -(ey[0] * k->Up[3] + ey[1] * k->Up[4] + ey[2] * k->Up[5]);
+    k->up = force + ey[0] * k->pA[3] + ey[1] * k->pA[4] + ey[2] * k->pA[5];
+    for (int r = 0; r < 6; r++) {
+        for (int c = 0; c < 6; c++) k->IA[r * 6 + c] -= k->Up[r] * k->Up[c] / k->Dp;
+        k->pA[r] += k->Up[r] * k->up / k->Dp;
+    }
+}
+
+/* The slide's acceleration r'' once the rope's frame accelerates by a, which it then adds to a
+ * (the bob's and the children's frame). */
+static cp_real slide_acceleration(const Link *k, cp_real a[6])
+{
+    cp_real rdd = k->up;
+    for (int j = 0; j < 6; j++) rdd -= k->Up[j] * a[j];
+    rdd /= k->Dp;
+    for (int j = 0; j < 3; j++) a[3 + j] -= k->R[j * 3 + 1] * rdd;
+    return rdd;
+}
+#endif
+
 /* The articulated-body algorithm's pass from the tip to the pivot: every link's articulated
  * inertia IA and bias pA, and its joint's U, Dinv and uu. CP_SINGULAR where a joint's 2x2
  * articulated inertia is. */
@@ -240,6 +283,9 @@ static int articulate(cp_model *model, const cp_real *x, Link *links)
     }
     for (int i = n - 1; i >= 0; i--) {
         Link *k = &links[i];
+#ifdef CP_NELASTIC
+        if (cp_link_elastic[i] >= 0) slide(k, -p[cp_elastic_law[cp_link_elastic[i]]]);
+#endif
         cp_real D[4] = {0, 0, 0, 0};
         for (int r = 0; r < 6; r++)
             for (int c = 0; c < 2; c++)
@@ -256,7 +302,7 @@ static int articulate(cp_model *model, const cp_real *x, Link *links)
 #ifdef CP_DAMPING_INDEX
         /* the joint's damping torque -c w_rel: generalized forces -c (omega, delta), as the
            joint's axes are orthonormal (builder.core.equations.joint_damping) */
-        for (int r = 0; r < 2; r++) k->uu[r] -= p[CP_DAMPING_INDEX + i] * x[(2 + r) * n + i];
+        for (int r = 0; r < 2; r++) k->uu[r] -= p[CP_DAMPING_INDEX + i] * x[CP_NDOF + r * n + i];
 #endif
         /* LDL^T pivots of this joint's 2x2 articulated inertia: a cheap condition estimate,
            of the real parts (real.h) */
@@ -320,7 +366,7 @@ static int accelerate(cp_model *model, const cp_real *x, const Link *links, cp_r
     const cp_real *p = model->p;
     cp_real a[6];
     base_acceleration(p, 1, a);
-    memcpy(dx, x + 2 * n, 2 * n * sizeof(cp_real));
+    memcpy(dx, x + CP_NDOF, CP_NDOF * sizeof(cp_real));
     for (int i = 0; i < n; i++) {
         const Link *k = &links[i];
         cp_real ai[6], rhs[2];
@@ -334,12 +380,22 @@ static int accelerate(cp_model *model, const cp_real *x, const Link *links, cp_r
         cp_real Eu[3];
         mul32(k->E, ud, Eu);
         for (int j = 0; j < 3; j++) ai[j] += Eu[j];
-        memcpy(a, ai, sizeof a);
-        dx[2 * n + i] = ud[0], dx[3 * n + i] = ud[1];
+        dx[CP_NDOF + i] = ud[0], dx[CP_NDOF + n + i] = ud[1];
         if (!CP_FINITE(ud[0]) || !CP_FINITE(ud[1])) {
             model->bad_dof = CP_FINITE(ud[0]) ? n + i : i;
             return CP_NONFINITE;
         }
+#ifdef CP_NELASTIC
+        const int e = cp_link_elastic[i];
+        if (e >= 0) {
+            const cp_real rdd = dx[cp_elastic_rate[e]] = slide_acceleration(k, ai);
+            if (!CP_FINITE(rdd)) {
+                model->bad_dof = 2 * n + e;
+                return CP_NONFINITE;
+            }
+        }
+#endif
+        memcpy(a, ai, sizeof a);
     }
     return CP_OK;
 }
@@ -358,10 +414,14 @@ static void hanging(const cp_real *p, const Link *links, const cp_real *dx, cp_r
         const Link *k = &links[i];
         const cp_link_params *lp = &cp_links[i];
         cp_real ai[6], Eu[3];
-        const cp_real u2[2] = {dx[2 * n + i], dx[3 * n + i]};
+        const cp_real u2[2] = {dx[CP_NDOF + i], dx[CP_NDOF + n + i]};
         carry(k, a, ai);
         mul32(k->E, u2, Eu);
         for (int j = 0; j < 3; j++) ai[j] += Eu[j];
+#ifdef CP_NELASTIC
+        if (cp_link_elastic[i] >= 0)  /* the bob's slide */
+            for (int j = 0; j < 3; j++) ai[3 + j] -= k->R[j * 3 + 1] * dx[cp_elastic_rate[cp_link_elastic[i]]];
+#endif
         memcpy(a, ai, sizeof a);
         cp_real *h = hang[i];
         h[0] = h[1] = h[2] = 0;
@@ -395,14 +455,53 @@ static void hanging(const cp_real *p, const Link *links, const cp_real *dx, cp_r
 #endif
 
 #ifdef CP_NROPE
-/* Each rope's tension (Scene.ropes' order): what hangs from its joint along the rope, e_y. */
-static void tensions(const Link *links, const cp_real hang[][3], cp_real *T)
+/* Each rope's tension (Scene.ropes' order): what hangs from its joint along the rope, e_y; an
+ * elastic rope's, its law's (p). */
+static void tensions(const cp_real *p, const Link *links, const cp_real hang[][3], cp_real *T)
 {
+    (void)p;
     for (int k = 0; k < CP_NROPE; k++) {
         const Link *rope = &links[cp_rope_link[k]];
         const cp_real *h = hang[cp_rope_link[k]];
         T[k] = rope->R[1] * h[0] + rope->R[4] * h[1] + rope->R[7] * h[2];
     }
+#ifdef CP_NELASTIC
+    for (int e = 0; e < CP_NELASTIC; e++) T[cp_elastic_rope[e]] = p[cp_elastic_law[e]];
+#endif
+}
+
+/* Rope k's winch's power: -T v_hoist; an elastic rope's -(T + EA s+^2 / (2 l^2)) v_hoist,
+ * with the strain energy the rope paid out carries (builder.core.equations). */
+static cp_real hoist_power(int k, const cp_real *x, const cp_real *p, const cp_real *T)
+{
+    cp_real carried = 0.0;
+#ifdef CP_NELASTIC
+    for (int e = 0; e < CP_NELASTIC; e++)
+        if (cp_elastic_rope[e] == k) {
+            const cp_real strain = p[cp_elastic_law[e] + 1] / x[cp_rope_state[k]];
+            carried = p[cp_elastic_stiffness[e]] * strain * strain / 2;
+        }
+#else
+    (void)x;
+#endif
+    return -(T[k] + carried) * p[cp_rope_hoist[k]];
+}
+#endif
+
+#ifdef CP_NELASTIC
+/* Elastic rope e's strain energy EA s+^2 / (2 l) and its damping's power (EA s+ / l - T)
+ * (v_r - v_hoist), from its law in p. */
+static cp_real strain_energy(int e, const cp_real *x, const cp_real *p)
+{
+    const cp_real taut = p[cp_elastic_law[e] + 1];
+    return p[cp_elastic_stiffness[e]] * taut * taut / (2 * x[cp_rope_state[cp_elastic_rope[e]]]);
+}
+
+static cp_real rope_damping_power(int e, const cp_real *x, const cp_real *p)
+{
+    const int k = cp_elastic_rope[e];
+    const cp_real elastic = p[cp_elastic_stiffness[e]] * p[cp_elastic_law[e] + 1] / x[cp_rope_state[k]];
+    return (elastic - p[cp_elastic_law[e]]) * (x[cp_elastic_rate[e]] - p[cp_rope_hoist[k]]);
 }
 #endif
 
@@ -418,9 +517,14 @@ static void work_rates(const cp_real *x, const cp_real *p, const Link *links, co
 #if CP_WORK_HOIST >= 0
     cp_real hang[CP_NLINK][3], T[CP_NROPE], hoist = 0;
     hanging(p, links, dx, hang);
-    tensions(links, (const cp_real(*)[3])hang, T);
-    for (int k = 0; k < CP_NROPE; k++) hoist -= T[k] * p[cp_rope_hoist[k]];
+    tensions(p, links, (const cp_real(*)[3])hang, T);
+    for (int k = 0; k < CP_NROPE; k++) hoist += hoist_power(k, x, p, T);
     dW[CP_WORK_HOIST] = hoist;
+#endif
+#ifdef CP_WORK_ROPE  /* defined only where kept: the elastic ropes' damping */
+    cp_real damped = 0;
+    for (int e = 0; e < CP_NELASTIC; e++) damped += rope_damping_power(e, x, p);
+    dW[CP_WORK_ROPE] = damped;
 #endif
 #ifdef CP_WORK_LOAD  /* defined only where kept: it jumps at a load's change, and stays between */
     dW[CP_WORK_LOAD] = 0;
@@ -428,7 +532,8 @@ static void work_rates(const cp_real *x, const cp_real *p, const Link *links, co
 #if CP_WORK_DAMPING >= 0
     cp_real damping = 0;  /* -c (omega^2 + delta^2) per joint (articulate) */
     for (int i = 0; i < n; i++)
-        damping -= p[CP_DAMPING_INDEX + i] * (x[2 * n + i] * x[2 * n + i] + x[3 * n + i] * x[3 * n + i]);
+        damping -= p[CP_DAMPING_INDEX + i]
+                   * (x[CP_NDOF + i] * x[CP_NDOF + i] + x[CP_NDOF + n + i] * x[CP_NDOF + n + i]);
     dW[CP_WORK_DAMPING] = damping;
 #endif
 #if CP_WORK_DRAG >= 0 || CP_WORK_EXTERNAL >= 0 || CP_WORK_PIVOT >= 0
@@ -513,6 +618,10 @@ static void inverse_dynamics(const Link *links, const cp_real *p, const cp_real 
         carry(k, a, ai);
         mul32(k->E, u2, Eu);
         for (int j = 0; j < 3; j++) ai[j] += Eu[j];
+#ifdef CP_NELASTIC
+        if (cp_link_elastic[i] >= 0)  /* the bob's slide */
+            for (int j = 0; j < 3; j++) ai[3 + j] -= k->R[j * 3 + 1] * ud[2 * n + cp_link_elastic[i]];
+#endif
         for (int r = 0; r < 6; r++) {
             f[i][r] = k->b[r];
             for (int c = 0; c < 6; c++) f[i][r] += k->I[r * 6 + c] * ai[c];
@@ -523,6 +632,13 @@ static void inverse_dynamics(const Link *links, const cp_real *p, const cp_real 
         const Link *k = &links[i];
         tau[i] = tau[n + i] = 0;
         for (int j = 0; j < 3; j++) tau[i] += k->E[j * 2] * f[i][j], tau[n + i] += k->E[j * 2 + 1] * f[i][j];
+#ifdef CP_NELASTIC
+        if (cp_link_elastic[i] >= 0) {  /* the force along the slide, S^T f */
+            cp_real *t = &tau[2 * n + cp_link_elastic[i]];
+            *t = 0;
+            for (int j = 0; j < 3; j++) *t -= k->R[j * 3 + 1] * f[i][3 + j];
+        }
+#endif
         if (i) {
             cp_real t[3];
             cross(k->d, f[i] + 3, t);
@@ -546,7 +662,11 @@ void cp_mass_forcing(const cp_real *x, const cp_real *p, cp_real *M, cp_real *F)
     }
 #ifdef CP_DAMPING_INDEX
     /* the joints' damping, -c (omega, delta) (articulate) */
-    for (int k = 0; k < CP_NDOF; k++) F[k] -= p[CP_DAMPING_INDEX + k % CP_NLINK] * x[CP_NDOF + k];
+    for (int k = 0; k < 2 * CP_NLINK; k++) F[k] -= p[CP_DAMPING_INDEX + k % CP_NLINK] * x[CP_NDOF + k];
+#endif
+#ifdef CP_NELASTIC
+    /* each elastic rope's pull on its bob: -T on its slide */
+    for (int e = 0; e < CP_NELASTIC; e++) F[2 * CP_NLINK + e] -= p[cp_elastic_law[e]];
 #endif
 }
 
@@ -568,10 +688,14 @@ static void quaternion(const cp_real parent[4], cp_real a, cp_real b, cp_real q[
 #if CP_OUTPUT_ENERGY || defined(CP_ENERGY_JUMPS)
 /* The chain's energy from its links' kinematics: kinetic, relative to the pivot, and potential
  * (zero at Y = 0). */
-static cp_real energy_of(const Link *links, const cp_real *p)
+static cp_real energy_of(const cp_real *x, const Link *links, const cp_real *p)
 {
     const cp_real g = p[CP_G_INDEX];
     cp_real energy = 0;
+    (void)x;
+#ifdef CP_NELASTIC
+    for (int e = 0; e < CP_NELASTIC; e++) energy += strain_energy(e, x, p);
+#endif
     for (int i = 0; i < CP_NLINK; i++) {
         const Link *k = &links[i];
         const cp_link_params *lp = &cp_links[i];
@@ -602,7 +726,7 @@ void cp_energy(const cp_real *x, const cp_real *p, cp_real *E)
 {
     Link links[CP_NLINK];
     kinematics(x, p, links);
-    *E = energy_of(links, p);
+    *E = energy_of(x, links, p);
 }
 #endif
 
@@ -627,7 +751,7 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
     }
 #endif
 #if CP_OUTPUT_ENERGY
-    *out++ = energy_of(links, p);
+    *out++ = energy_of(x, links, p);
 #endif
 #if defined(CP_NROPE) || CP_PIVOT_INDEX >= 0
     cp_real hang[CP_NLINK][3];
@@ -638,11 +762,14 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
 #endif
 #ifdef CP_NROPE
     out += 9 * (CP_PIVOT_INDEX >= 0);  /* F_free and M_app: dynamics.c's */
-    /* each rope's tension, then its winch's power -T v_hoist */
+    /* each rope's tension, then its winch's power, then each elastic rope's stretch */
     cp_real T[CP_NROPE];
-    tensions(links, (const cp_real(*)[3])hang, T);
+    tensions(p, links, (const cp_real(*)[3])hang, T);
     for (int k = 0; k < CP_NROPE; k++) *out++ = T[k];
-    for (int k = 0; k < CP_NROPE; k++) *out++ = -T[k] * p[cp_rope_hoist[k]];
+    for (int k = 0; k < CP_NROPE; k++) *out++ = hoist_power(k, x, p, T);
+#endif
+#ifdef CP_NELASTIC
+    for (int e = 0; e < CP_NELASTIC; e++) *out++ = x[cp_elastic_reach[e]] - x[cp_rope_state[cp_elastic_rope[e]]];
 #endif
 }
 

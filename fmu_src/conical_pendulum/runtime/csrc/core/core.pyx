@@ -38,7 +38,7 @@ cdef extern from "solvers.h":
                       cp_stats *stats) noexcept nogil
 
 cdef extern from "dynamics.h":
-    int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT, CP_PSIZE
+    int CP_NDOF, CP_NSTATE, CP_NPARAM, CP_NINPUT, CP_NOUTPUT, CP_PSIZE, CP_NHOIST_ACC
     int CP_NSTAT, CP_STAT_N_RHS, CP_STAT_N_STEPS, CP_STAT_N_REJECTED, CP_STAT_N_JACOBIANS
     int CP_STAT_N_FACTORIZATIONS
     const char *CP_STATE_NAMES
@@ -51,6 +51,7 @@ cdef extern from "dynamics.h":
         int bad_dof
     int cp_rhs(void *ctx, const double *x, double *dx) noexcept nogil
     void cp_mass_forcing(const double *x, const double *p, double *M, double *F) noexcept nogil
+    void cp_rope_law(const double *x, double *p) noexcept nogil
     void cp_eval_outputs(const double *x, const double *p, double *y) noexcept nogil
 
 cdef extern from "diagnosis.h":
@@ -127,7 +128,7 @@ NDOF = CP_NDOF
 NSTATE = CP_NSTATE
 NPARAM = CP_NPARAM  # parameters, then inputs: the p every function here takes
 NINPUT = CP_NINPUT
-NROPE = CP_PSIZE - CP_NPARAM  # the ropes: the accelerations hoist_acc takes, their l''
+NROPE = CP_NHOIST_ACC  # the ropes: the accelerations hoist_acc takes, their l''
 NOUTPUT = CP_NOUTPUT
 STATISTICS_SLOTS = {"n_rhs": CP_STAT_N_RHS, "n_steps": CP_STAT_N_STEPS, "n_rejected": CP_STAT_N_REJECTED,
                     "n_jacobians": CP_STAT_N_JACOBIANS, "n_factorizations": CP_STAT_N_FACTORIZATIONS}
@@ -189,15 +190,16 @@ cdef const double[::1] _vector(object a, int size, str what):
 
 cdef const double[::1] _core_p(object p_in, object hoist_acc):
     """The core's p (dynamics.h): the parameters and inputs p, then each rope's l'' (the
-    rates of its v_hoist, Scene.ropes' order; None: 0, the winches at constant speed). Without
-    ropes, p itself."""
+    rates of its v_hoist, Scene.ropes' order; None: 0, the winches at constant speed), then
+    the elastic ropes' law (0 here: the core computes it from the state). Without ropes, p
+    itself."""
     cdef const double[::1] parameters = _vector(p_in, CP_NPARAM, "parameters")
     if CP_PSIZE == CP_NPARAM and hoist_acc is None:
         return parameters
     p = np.zeros(CP_PSIZE)
     p[:CP_NPARAM] = parameters
     if hoist_acc is not None:
-        p[CP_NPARAM:] = _vector(hoist_acc, CP_PSIZE - CP_NPARAM, "hoist_acc")
+        p[CP_NPARAM:CP_NPARAM + CP_NHOIST_ACC] = _vector(hoist_acc, CP_NHOIST_ACC, "hoist_acc")
     return p
 
 
@@ -225,8 +227,10 @@ def mass_forcing(x_in, p_in, hoist_acc=None):
     F = np.empty(CP_NDOF)
     cdef double[:, ::1] m = M
     cdef double[::1] f = F
+    cdef double[::1] law = np.array(p)  # with the elastic ropes' law at x
     with nogil:
-        cp_mass_forcing(&x[0], &p[0], &m[0, 0], &f[0])
+        cp_rope_law(&x[0], &law[0])
+        cp_mass_forcing(&x[0], &law[0], &m[0, 0], &f[0])
     return M, F
 
 

@@ -21,6 +21,8 @@ void cp_input_at(const double *p, const double (*rates)[2], double tau, double *
         p_at[CP_NPARAM + k] = rates[i][0] + tau * rates[i][1];
     }
 #endif
+    /* the elastic ropes' law: the core's to fill from the state (cp_rope_law) */
+    for (int k = CP_NPARAM + CP_NHOIST_ACC; k < CP_PSIZE; k++) p_at[k] = 0.0;
 }
 
 void cp_input_direction(const double (*rates)[2], int order, double *dp)

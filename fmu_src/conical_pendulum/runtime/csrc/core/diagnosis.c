@@ -19,12 +19,24 @@ int cp_rope_hint(char *buf, size_t size, int status, const cp_failure *f)
 
 int cp_diagnose(char *buf, size_t size, int status, const cp_failure *f)
 {
-    const int n = CP_NDOF / 2, dof = f->bad_dof;
+#ifdef CP_NELASTIC
+    const int n = (CP_NDOF - CP_NELASTIC) / 2;  /* the links; the elastic ropes' v_r after */
+#else
+    const int n = CP_NDOF / 2;
+#endif
+    const int dof = f->bad_dof;
     char speed[32] = "?", link[16] = "?", joint[256], hint[768];
-    if (dof >= 0 && dof < CP_NDOF) {
+    if (dof >= 0 && dof < 2 * n) {
         snprintf(speed, sizeof speed, "%s%d", dof < n ? "omega" : "delta", dof % n);
         snprintf(link, sizeof link, "%d", dof % n);
     }
+#ifdef CP_NELASTIC
+    else if (dof >= 2 * n && dof < CP_NDOF) {
+        const int rope = cp_rope_link[cp_elastic_rope[dof - 2 * n]];
+        snprintf(speed, sizeof speed, "v_r%d", rope);
+        snprintf(link, sizeof link, "%d", rope);
+    }
+#endif
     snprintf(joint, sizeof joint, "link %s's two-angle joint cannot represent this orientation "
              "(it lies along its parent's x axis, alpha = +-90 degrees) or a link has too little "
              "inertia", link);

@@ -85,23 +85,54 @@ static int expanded_rates(cp_model *model, const cp_real *x, cp_real *dx, cp_rea
 }
 #endif
 
+void cp_rope_law(const cp_real *x, cp_real *p)
+{
+#ifdef CP_NELASTIC
+    for (int e = 0, j = 0; e < CP_NELASTIC; e++, j++) {
+        const int k = cp_elastic_rope[e];
+        cp_real hanging = 0.0;
+        for (; cp_elastic_masses[j] >= 0; j++) hanging += p[cp_elastic_masses[j]];
+        const cp_real length = x[cp_rope_state[k]], stiffness = p[cp_elastic_stiffness[e]] / length;
+        const cp_real damping = 2.0 * p[cp_elastic_damping[e]] * sqrt(stiffness * hanging);
+        const cp_real stretch = x[cp_elastic_reach[e]] - length;
+        const cp_real pull = stiffness * stretch + damping * (x[cp_elastic_rate[e]] - p[cp_rope_hoist[k]]);
+        const int taut = CP_RE(stretch) > 0;
+        p[cp_elastic_law[e]] = taut && CP_RE(pull) > 0 ? pull : 0.0;
+        p[cp_elastic_law[e] + 1] = taut ? stretch : 0.0;
+    }
+#else
+    (void)x, (void)p;
+#endif
+}
+
 int cp_rhs(void *ctx, const cp_real *x, cp_real *dx)
 {
+    cp_model *model = ctx;
+#ifdef CP_NELASTIC
+    const cp_real *given = model->p;
+    cp_real p[CP_PSIZE];
+    memcpy(p, given, sizeof p);
+    cp_rope_law(x, p);
+    model->p = p;
+#endif
 #if CP_RECURSIVE
-    int status = cp_chain_rhs((cp_model *)ctx, x, dx);
+    int status = cp_chain_rhs(model, x, dx);
 #else
     cp_real M[CP_NDOF * CP_NDOF];
     int perm[CP_NDOF];
-    int status = expanded_rates((cp_model *)ctx, x, dx, M, perm);
+    int status = expanded_rates(model, x, dx, M, perm);
 #endif
 #if defined(CP_NWORK) && !CP_RECURSIVE
     /* the energy's books: each added force's power, the rate of its work (the recursive
        formulation's cp_chain_rhs gives them from its own kinematics) */
-    if (!status) cp_work_rates(x, ((cp_model *)ctx)->p, dx, dx + 2 * CP_NDOF);
+    if (!status) cp_work_rates(x, model->p, dx, dx + 2 * CP_NDOF);
 #endif
 #ifdef CP_NROPE
     /* the ropes' lengths grow at their winches' speeds */
-    for (int k = 0; k < CP_NROPE; k++) dx[cp_rope_state[k]] = ((cp_model *)ctx)->p[cp_rope_hoist[k]];
+    for (int k = 0; k < CP_NROPE; k++) dx[cp_rope_state[k]] = model->p[cp_rope_hoist[k]];
+#endif
+#ifdef CP_NELASTIC
+    model->p = given;
 #endif
     return status;
 }
@@ -158,8 +189,15 @@ static void free_force_and_apparent_mass(const cp_real *x, const cp_real *p, cp_
 }
 #endif
 
-void cp_eval_outputs(const cp_real *x, const cp_real *p, cp_real *y)
+void cp_eval_outputs(const cp_real *x, const cp_real *given, cp_real *y)
 {
+#ifdef CP_NELASTIC
+    cp_real p[CP_PSIZE];  /* with the elastic ropes' law, which the outputs read */
+    memcpy(p, given, sizeof p);
+    cp_rope_law(x, p);
+#else
+    const cp_real *p = given;
+#endif
 #if CP_OUTPUTS_NEED_RATES
     cp_real dx[CP_NSTATE];
     cp_model model = {p, 1.0, -1};

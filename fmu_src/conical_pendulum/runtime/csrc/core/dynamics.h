@@ -12,8 +12,16 @@
 #define CP_SINGULAR_RATIO 1e-13
 
 /* The core's p: the parameters and inputs (CP_NPARAM, the FMU's first variables), then each
- * rope's l'' (Scene.ropes' order), which no variable holds. */
+ * rope's l'' (Scene.ropes' order), then each elastic rope's tension and taut stretch, which
+ * cp_rope_law computes from the state: no variable holds them. */
 #ifdef CP_NROPE
+#define CP_NHOIST_ACC CP_NROPE  /* the entries a caller gives after the parameters and inputs */
+#else
+#define CP_NHOIST_ACC 0
+#endif
+#if defined(CP_NELASTIC)
+#define CP_PSIZE (CP_NPARAM + CP_NROPE + 2 * CP_NELASTIC)
+#elif defined(CP_NROPE)
 #define CP_PSIZE (CP_NPARAM + CP_NROPE)
 #else
 #define CP_PSIZE CP_NPARAM
@@ -30,8 +38,18 @@ typedef struct {
                               non-finite acceleration */
 } cp_model;
 
-/* x = (alpha, beta, omega, delta); dx = (omega, delta, M^-1 F). ctx is a cp_model. */
+/* x = (q, u, the books, the ropes' lengths), q the angles alpha, beta and the elastic ropes'
+ * reaches r, u = q'; dx = (u, M^-1 F, the books' rates, the winches' speeds). ctx is a cp_model;
+ * its p's elastic ropes' entries are not read (cp_rope_law fills a copy). */
 int cp_rhs(void *ctx, const cp_real *x, cp_real *dx);
+
+/* Each elastic rope's law at the state x into p's entries for it (the core's p, CP_PSIZE
+ * values): its tension T = EA s / l + c s' while the rope is taut (stretch s = r - l > 0)
+ * and pulls, else 0 (a rope cannot push, even stretched while it recoils faster than its
+ * damping lets it pull), c = 2 zeta sqrt(EA / l m) with m the mass hanging from it; and its
+ * taut stretch max(s, 0), whose elastic energy the equations count. Nothing without elastic
+ * ropes. Not analytic at the switches: its branches look at real parts (real.h). */
+void cp_rope_law(const cp_real *x, cp_real *p);
 
 #if CP_RECURSIVE
 /* cp_rhs of the recursive formulation (chain.c). */

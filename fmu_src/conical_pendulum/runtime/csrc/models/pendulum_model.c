@@ -273,8 +273,10 @@ static void book_jump(ModelData *m, unsigned k, double value)
     if (book < 0) return;
     double buffer[CP_PSIZE], p[CP_PSIZE], before, after;
     memcpy(p, core_p(m, buffer), sizeof p);
+    cp_rope_law(X(m), p);
     cp_energy(X(m), p, &before);
     p[k] = value;
+    cp_rope_law(X(m), p);
     cp_energy(X(m), p, &after);
     X(m)[book] += after - before;
     m->states_jumped = 1;

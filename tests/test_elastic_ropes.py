@@ -1,0 +1,301 @@
+"""Elastic ropes (Link.rope_stiffness): a rope that stretches, goes slack and snaps taut, its
+bob's reach r<i> a state. Checked against closed forms nobody here derived for this model: a
+load dropped onto a rope (the meeting time of free fall, the peak of a spring's energy
+balance), a load bouncing on a rope (half a spring cycle and a ballistic flight, repeated), a
+taut elastic pendulum's two frequencies; and energy less the books. The slack and taut
+switches are located here by scipy's event finder on the core's right-hand side."""
+
+import re
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from conical_pendulum import Link, Scene, SceneError
+from conical_pendulum.analysis.compare import compare
+from conical_pendulum.analysis.fmpy_runs import run_fmu
+from conical_pendulum.analysis.simulate import simulate
+from conical_pendulum.builder.compiler import load_core
+from conical_pendulum.builder.core import dependencies
+from conical_pendulum.builder.core.equations import derive
+from formulations import assert_formulations_agree
+
+G = 9.8
+FORMULATIONS = ("expanded", "recursive")
+
+
+def elastic(length=10.0, stiffness=1e6, mass=100.0, zeta=None, low=1.0, high=30.0, **fields):
+    """An elastic rope of EA = stiffness [N] and damping ratio zeta with a load of mass [kg] at
+    its end."""
+    return Link(
+        has_mass=False,
+        rope=True,
+        rope_min=low,
+        rope_max=high,
+        length=length,
+        bob_mass=mass,
+        rope_stiffness=stiffness,
+        rope_damping=zeta,
+        **fields,
+    )
+
+
+def vertical(formulation, **fields):
+    """One elastic rope and its load, hanging straight down (the joint's angles 0)."""
+    scene = Scene(links=(elastic(**fields),), formulation=formulation, outputs=("energy",))
+    return scene, load_core(scene)
+
+
+def run(scene, core, start, stop, events=(), inputs=None):
+    """The core's right-hand side by scipy's DOP853 at 1e-12, from the start values by name,
+    ended and restarted wherever the rope goes taut or slack (its stretch r0 - l0 crosses 0),
+    as an FMU's located events do: no step straddles the law's switch. Returns each piece's
+    solution, the times of those events and of `events` (each a state_event), and p."""
+    names = scene.state_names()
+    switch = state_event(scene, lambda v: v["r0"] - v["l0"], 0)
+    switch.terminal = True
+    x = np.array(scene.initial_state({"alpha0": 0.0, "beta0": 0.0, **start}))
+    p = np.array(scene.parameters(inputs))
+    t, pieces, found = 0.0, [], [[] for _ in range(1 + len(events))]
+    while t < stop:
+        sol = solve_ivp(
+            lambda t, x: core.rhs(x, p),
+            (t, stop),
+            x,
+            method="DOP853",
+            rtol=1e-12,
+            atol=1e-12,
+            events=(switch, *events),
+            dense_output=True,
+        )
+        assert sol.success, sol.message
+        pieces.append(sol)
+        for k, times in enumerate(sol.t_events):
+            found[k] += [time for time in times if time > t]
+        t, x = sol.t[-1], sol.y[:, -1]
+    assert len(names) == len(x)
+    return pieces, found, p
+
+
+def state_event(scene, expression, direction):
+    """A scipy event on states by name: expression(values by name) crossing 0 in direction."""
+    names = scene.state_names()
+
+    def event(t, x):
+        return expression(dict(zip(names, x)))
+
+    event.direction = direction
+    return event
+
+
+def books(scene, core, p, x):
+    """Energy less the books at state x."""
+    values = dict(zip(scene.state_names(), x))
+    return core.outputs(x, p)[scene.output_names().index("energy")] - sum(
+        values[name] for name in scene.work_names()
+    )
+
+
+@pytest.mark.parametrize("formulation", FORMULATIONS)
+def test_a_load_dropped_onto_the_rope_meets_it_and_peaks_as_the_closed_form_says(formulation):
+    """100 kg dropped from rest with h = 0.5 m of slack onto 10 m of EA = 1e6 N: it meets the
+    rope at sqrt(2 h / g), and the tension peaks at m g (1 + sqrt(1 + 2 k h / (m g))), k = EA / l,
+    where the load stops."""
+    m, length, h, stiffness = 100.0, 10.0, 0.5, 1e6
+    scene, core = vertical(formulation, mass=m, length=length, stiffness=stiffness)
+    stops = state_event(scene, lambda v: v["v_r0"], -1)
+    pieces, (switches, stopped), p = run(scene, core, {"r0": length - h}, 1.0, (stops,))
+    assert switches[0] == pytest.approx(np.sqrt(2 * h / G), rel=1e-12)
+    stop = stopped[0]
+    x = next(piece.sol(stop) for piece in pieces if piece.t[0] <= stop <= piece.t[-1])
+    peak = core.outputs(x, p)[scene.output_names().index("T_rope0")]
+    k = stiffness / length
+    assert peak == pytest.approx(m * G * (1 + np.sqrt(1 + 2 * k * h / (m * G))), rel=1e-11)
+    energies = [books(scene, core, p, x) for piece in pieces for x in piece.y.T]  # at the solver's steps
+    assert np.ptp(energies) < 1e-10 * m * G * length
+
+
+def bounce_period(m, length, h, stiffness):
+    """A load bouncing on an undamped rope, from rest with h of slack: a spring's half cycle about
+    the static stretch s_e = m g / k, entered and left at the speed v0 = sqrt(2 g h), then a
+    ballistic flight up and back (2 v0 / g)."""
+    k, v0 = stiffness / length, np.sqrt(2 * G * h)
+    omega, s_e = np.sqrt(k / m), m * G * length / stiffness
+    return (np.pi + 2 * np.arctan(omega * s_e / v0)) / omega + 2 * v0 / G
+
+
+@pytest.mark.parametrize("formulation", FORMULATIONS)
+def test_an_undamped_bounce_keeps_its_period_and_energy_over_100_snaps(formulation):
+    """The load meets the taut rope every bounce_period, 100 times, at the closed form's times,
+    and energy less the books stays what it was."""
+    m, length, h, stiffness = 100.0, 10.0, 0.2, 1e6
+    scene, core = vertical(formulation, mass=m, length=length, stiffness=stiffness)
+    period = bounce_period(m, length, h, stiffness)
+    pieces, (switches,), p = run(scene, core, {"r0": length - h}, 100.5 * period + np.sqrt(2 * h / G))
+    snaps = np.array(switches[::2])  # taut, slack, taut, ...
+    expected = np.sqrt(2 * h / G) + period * np.arange(len(snaps))
+    assert len(snaps) == 101
+    assert np.abs(snaps - expected).max() < 1e-9 * snaps[-1]
+    energies = [books(scene, core, p, piece.y[:, 0]) for piece in pieces]
+    assert np.ptp(energies) < 1e-10 * m * G * length
+
+
+@pytest.mark.parametrize("formulation", FORMULATIONS)
+def test_a_taut_elastic_pendulum_swings_and_stretches_at_its_two_frequencies(formulation):
+    """At rest at its static reach L = l + m g / k, the linearized motion's frequencies are the
+    stretch's sqrt(k / m) and the swing's sqrt(g / L), twice (two swing planes)."""
+    m, length, stiffness = 50.0, 8.0, 2e5
+    scene, core = vertical(formulation, mass=m, length=length, stiffness=stiffness)
+    k = stiffness / length
+    x = np.array(scene.initial_state({"alpha0": 0.0, "beta0": 0.0, "r0": length + m * G / k}))
+    p = np.array(scene.parameters())
+    moving = [
+        scene.state_names().index(name) for name in ("alpha0", "beta0", "r0", "omega0", "delta0", "v_r0")
+    ]
+    jacobian = core.jacobian(x, p)[np.ix_(moving, moving)]
+    found = np.sort(np.abs(np.linalg.eigvals(jacobian).imag))[::2]
+    swing = np.sqrt(G / (length + m * G / k))
+    np.testing.assert_allclose(found, [swing, swing, np.sqrt(k / m)], rtol=1e-10)
+
+
+@pytest.mark.parametrize(
+    "links, options",
+    [
+        ((elastic(),), {}),
+        (
+            (elastic(zeta=0.3, bob_force=True), Link(length=2.0, mass=3.0, bob_mass=1.0)),
+            {"coupling": True},
+        ),
+        ((Link(length=2.0), elastic(length=6.0, zeta=0.1), Link(has_mass=False)), {"air_drag": True}),
+        (
+            (elastic(zeta=0.05), Link(has_mass=False, length=3.0), elastic(length=4.0)),
+            {"joint_damping": True},
+        ),
+    ],
+    ids=["load", "hook-and-link", "below-a-link", "two-elastic"],
+)
+def test_the_formulations_agree(links, options):
+    """M, F, x', the books' rates and every output, the ropes taut or slack."""
+    assert_formulations_agree(links, options, seed=7, input_range=3)
+
+
+def test_the_recursive_dependencies_are_what_the_expressions_say():
+    scene = Scene(
+        links=(
+            elastic(zeta=0.3, bob_force=True),
+            Link(length=2.0, mass=3.0, bob_mass=1.0),
+            elastic(length=4.0),
+        ),
+        coupling=True,
+        joint_damping=True,
+    )
+    assert dependencies._chain(scene) == dependencies._symbolic(scene, derive(scene))
+
+
+def test_a_rope_recoiling_faster_than_it_can_pull_pushes_nothing():
+    """Stretched 1 cm but shortening at 1 m/s, the damping would push: the tension is 0, and the
+    strain energy it still holds is lost to W_rope as it recoils."""
+    scene, core = vertical("expanded", stiffness=1e6, zeta=0.5)
+    x = np.array(scene.initial_state({"alpha0": 0.0, "beta0": 0.0, "r0": 10.01, "v_r0": -1.0}))
+    p = np.array(scene.parameters())
+    outputs = dict(zip(scene.output_names(), core.outputs(x, p)))
+    assert outputs["T_rope0"] == 0.0 and outputs["stretch0"] == pytest.approx(0.01)
+    rates = dict(zip(scene.state_names(), core.rhs(x, p)))
+    assert rates["v_r0"] == pytest.approx(G, rel=1e-12)  # falling freely along the rope
+    assert rates["W_rope"] == pytest.approx(-1e6 / 10.0 * 0.01 * 1.0, rel=1e-12)
+
+
+def test_energy_less_the_books_stays_constant_through_slack_and_snaps_with_the_winch_working():
+    """A damped rope on a hook with a link below, swinging on an accelerating support while the
+    winch pays out: it goes slack and snaps taut; energy less W_hoist, W_rope and W_pivot
+    stays constant, and the damping took energy."""
+    scene = Scene(
+        links=(
+            elastic(length=6.0, stiffness=2e5, zeta=0.05, mass=20.0),
+            Link(length=2.0, mass=30.0, bob_mass=50.0),
+        ),
+        coupling=True,
+    )
+    times = np.linspace(0, 6, 1201)
+    inputs = {"v_hoist0": 0.3, "a_pivot_x": 1.5, "a_pivot_y": 4.0}
+    result = simulate(
+        scene, times, parameters=inputs, state={"beta0": 0.4, "r0": 5.8, "v_r0": -1.0}, rtol=1e-12, atol=1e-12
+    )
+    stretch = result["stretch0"]
+    assert (stretch < 0).any() and (stretch > 0).any()
+    assert result["W_rope"][-1] < -1.0
+    kept = result["energy"] - sum(result[name] for name in scene.work_names())
+    assert np.abs(kept - kept[0]).max() < 1e-8 * np.abs(result["energy"]).max()
+
+
+@pytest.mark.parametrize(
+    "fields, message",
+    [
+        ({"rope_stiffness": -1.0}, "link[0].rope.stiffness: must be a positive finite number, got -1.0"),
+        ({"rope_stiffness": 1e6, "rope_damping": -0.1}, "link[0].rope.damping: must be a finite number >= 0"),
+        ({"rope_damping": 0.1}, "link[0].rope.damping: 0.1 given, but rope 0 is inextensible"),
+        ({"rope_stiffness": 1e6, "has_bob": False}, "link[0].rope: an elastic rope holds a bob at its end"),
+    ],
+)
+def test_a_bad_elastic_rope_is_refused_naming_it(fields, message):
+    link = Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0, **fields)
+    with pytest.raises(SceneError, match=re.escape(message)):
+        Scene(links=(link, Link()) if not fields.get("has_bob", True) else (link,))
+
+
+def test_a_stiffness_given_to_a_link_that_is_no_rope_is_refused():
+    with pytest.raises(
+        SceneError, match=r"link\[0\]\.rope\.stiffness: 1000000\.0 given, but link 0 is no rope"
+    ):
+        Scene(links=(Link(rope_stiffness=1e6),))
+
+
+def test_an_elastic_rope_adds_its_reach_its_numbers_and_its_stretch():
+    scene = Scene(links=(elastic(zeta=0.2), Link()))
+    assert scene.state_names()[:10] == [
+        "alpha0", "alpha1", "beta0", "beta1", "r0", "omega0", "omega1", "delta0", "delta1", "v_r0",
+    ]  # fmt: skip
+    assert scene.work_names() == ["W_hoist", "W_rope"]
+    assert {"EA0", "zeta_rope0"} <= set(scene.parameter_names())
+    assert scene.output_names()[-3:] == ["T_rope0", "P_hoist0", "stretch0"]
+    assert dict(zip(scene.state_names(), scene.state_defaults()))["r0"] == 10.0  # taut, unstretched
+    inextensible = Scene(links=(Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0), Link()))
+    assert inextensible.key() != scene.key() and "r0" not in inextensible.state_names()
+
+
+# A crane's hook on an elastic rope, a load slung below, on a moving support, the winch paying out
+SWUNG = Scene(
+    links=(
+        elastic(length=6.0, stiffness=5e5, zeta=0.1, mass=20.0),
+        Link(has_mass=False, length=2.0, bob_mass=200.0),
+    ),
+    coupling=True,
+)
+SWINGING = {"v_hoist0": 0.2, "beta0": 0.2, "alpha1": 0.3, "a_pivot_x": 0.5, "r0": 6.02}
+
+
+@pytest.mark.parametrize("backend, fmi_version", [("pythonfmu", 2), ("native", 2), ("native", 3)])
+def test_its_fmus_follow_the_reference_and_keep_the_books(built_fmu, backend, fmi_version):
+    fmu = built_fmu(SWUNG, backend=backend, fmi_version=fmi_version)
+    comparison = compare(fmu, SWUNG, start_values=SWINGING, stop_time=5.0)
+    assert comparison.passed(), comparison.report()
+    result = comparison.result
+    kept = result["energy"] - sum(result[name] for name in SWUNG.work_names())
+    assert np.abs(kept - kept[0]).max() < 1e-8 * np.abs(result["energy"]).max()
+
+
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_model_exchange_follows_the_reference(built_fmu, fmi_version):
+    result = run_fmu(
+        built_fmu(SWUNG, backend="native", fmi_version=fmi_version),
+        stop_time=5.0,
+        fmi_type="ModelExchange",
+        relative_tolerance=1e-10,
+        start_values=SWINGING,
+    )
+    inputs = {k: v for k, v in SWINGING.items() if k in SWUNG.input_names()}
+    state = {k: v for k, v in SWINGING.items() if k in SWUNG.state_names()}
+    reference = simulate(SWUNG, result["time"], parameters=inputs, state=state, rtol=1e-12, atol=1e-12)
+    for name in SWUNG.state_names():
+        scale = max(1.0, np.abs(reference[name]).max())
+        assert np.abs(result[name] - reference[name]).max() < 1e-6 * scale, name
