@@ -21,12 +21,12 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from results_csv import write_rows
-from stiff_ladder import INTERVAL, SOLVERS, STOP, cvode_run, error, fmu_run, scipy_run, split
 
 from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.scene import load_scene
+from results_csv import write_rows
+from stiff_ladder import INTERVAL, SOLVERS, STOP, cvode_run, error, fmu_run, scipy_run, split
 
 ROOT = Path(__file__).resolve().parent.parent
 G = 9.8
