@@ -156,43 +156,49 @@ def error(states, reference):
     return float((np.abs(states - reference) / scale).max())
 
 
+def rung(name, scene, start, reference_method, path):
+    """One rung's rows: the scene's native FMU (built at path) with each solver, fmpy's CVode
+    and scipy's stiff solvers, each against the core's reference_method at 1e-12."""
+    rows = []
+    path = build_fmu(scene, path, backend="native").path
+    core = load_core(scene)
+    names = list(core.STATE_NAMES)
+    p, x0 = split(scene, start)
+    times = np.linspace(0.0, STOP, round(STOP / INTERVAL) + 1)
+    reference, _ = core.integrate_grid(x0, p, times, 1e-12, 1e-12, method=reference_method, max_steps=10**8)
+
+    def row(solver, states, counts, seconds, why):
+        rows.append(
+            {
+                "rung": name,
+                "solver": solver,
+                "rhs": counts.get("rhs", ""),
+                "jacobians": counts.get("jacobians", ""),
+                "factorizations": counts.get("lu", ""),
+                "seconds": round(seconds, 4),
+                "error": error(states, reference),
+                "outcome": why,
+            }
+        )
+        print(
+            f"{name:28} {solver:22} {counts.get('rhs', ''):>10} {counts.get('jacobians', ''):>6} "
+            f"{counts.get('lu', ''):>6} {seconds:8.3f} s  error {rows[-1]['error']:.2g}  {why}",
+            flush=True,
+        )
+
+    for solver, value in SOLVERS.items():
+        row(f"FMU {solver}", *fmu_run(path, start, names, value))
+    states, seconds, why = cvode_run(path, start, names)
+    row("fmpy CVode (ME)", states, {}, seconds, why)
+    for method in ("Radau", "BDF", "LSODA"):
+        row(f"scipy {method}", *scipy_run(core, x0, p, times, method))
+    return rows
+
+
 def ladder(quick, out):
     rows = []
     for k, (name, scene, start, reference_method) in enumerate(rungs(quick)):
-        path = build_fmu(scene, out / f"stiff_{k}.fmu", backend="native").path
-        core = load_core(scene)
-        names = list(core.STATE_NAMES)
-        p, x0 = split(scene, start)
-        times = np.linspace(0.0, STOP, round(STOP / INTERVAL) + 1)
-        reference, _ = core.integrate_grid(
-            x0, p, times, 1e-12, 1e-12, method=reference_method, max_steps=10**8
-        )
-
-        def row(solver, states, counts, seconds, why):
-            rows.append(
-                {
-                    "rung": name,
-                    "solver": solver,
-                    "rhs": counts.get("rhs", ""),
-                    "jacobians": counts.get("jacobians", ""),
-                    "factorizations": counts.get("lu", ""),
-                    "seconds": round(seconds, 4),
-                    "error": error(states, reference),
-                    "outcome": why,
-                }
-            )
-            print(
-                f"{name:28} {solver:22} {counts.get('rhs', ''):>10} {counts.get('jacobians', ''):>6} "
-                f"{counts.get('lu', ''):>6} {seconds:8.3f} s  error {rows[-1]['error']:.2g}  {why}",
-                flush=True,
-            )
-
-        for solver, value in SOLVERS.items():
-            row(f"FMU {solver}", *fmu_run(path, start, names, value))
-        states, seconds, why = cvode_run(path, start, names)
-        row("fmpy CVode (ME)", states, {}, seconds, why)
-        for method in ("Radau", "BDF", "LSODA"):
-            row(f"scipy {method}", *scipy_run(core, x0, p, times, method))
+        rows += rung(name, scene, start, reference_method, out / f"stiff_{k}.fmu")
     return rows
 
 

@@ -210,26 +210,18 @@ def _elastic_ropes(scene: Scene) -> list[str]:
         "   reach r<i> and v_r<i> = r<i>' are in x, its EA<i> and zeta_rope<i> in p, and its law's",
         "   T_law<i> (s_taut<i> after it) in the core's p; then the masses hanging from each, their",
         "   places in p, each rope's list ended by -1 (its damping ratio is of their stretch). */",
-        "static const int cp_elastic_rope[CP_NELASTIC] = "
-        + c.initializer(scene.ropes().index(i) for i in elastic)
-        + ";",
-        "static const int cp_elastic_reach[CP_NELASTIC] = "
-        + c.initializer(states.index(f"r{i}") for i in elastic)
-        + ";",
-        "static const int cp_elastic_rate[CP_NELASTIC] = "
-        + c.initializer(states.index(f"v_r{i}") for i in elastic)
-        + ";",
-        "static const int cp_elastic_stiffness[CP_NELASTIC] = "
-        + c.initializer(params.index(f"EA{i}") for i in elastic)
-        + ";",
-        "static const int cp_elastic_damping[CP_NELASTIC] = "
-        + c.initializer(params.index(f"zeta_rope{i}") for i in elastic)
-        + ";",
-        "static const int cp_elastic_law[CP_NELASTIC] = "
-        + c.initializer(core.index(f"T_law{i}") for i in elastic)
-        + ";",
+        *(
+            f"static const int cp_elastic_{name}[CP_NELASTIC] = {c.initializer(places)};"
+            for name, places in (
+                ("rope", [scene.ropes().index(i) for i in elastic]),
+                ("reach", [states.index(f"r{i}") for i in elastic]),
+                ("rate", [states.index(f"v_r{i}") for i in elastic]),
+                ("stiffness", [params.index(f"EA{i}") for i in elastic]),
+                ("damping", [params.index(f"zeta_rope{i}") for i in elastic]),
+                ("law", [core.index(f"T_law{i}") for i in elastic]),
+            )
+        ),
         "static const int cp_elastic_masses[] = " + c.initializer(below) + ";",
-        c.define("CP_STRETCH_OUTPUT", scene.output_names().index(f"stretch{elastic[0]}")),
     ]
 
 
