@@ -177,8 +177,8 @@ static double rms3(int n, const double *v, const double *scale)
 
 /* solve_collocation_system: the stages Z (3 rows of n) of the step h from (t, y), from the
  * guess Z0; CP_OK and *converged, *n_iter, *rate, or the right-hand side's status. A stage
- * whose right-hand side is not finite (CP_NONFINITE, or a non-finite value) ends the
- * iteration unconverged; *trial_failure keeps that status. */
+ * whose right-hand side cannot be had there (cp_trial_rejects, or a non-finite value) ends
+ * the iteration unconverged; *trial_failure keeps that status. */
 static int collocation(const cp_system *sys, double t, const double *y, double h, radau_memory *m,
                        double tol, const matrices *mx, cp_stats *stats, int *converged,
                        int *n_iter, double *rate, int *trial_failure)
@@ -198,8 +198,8 @@ static int collocation(const cp_system *sys, double t, const double *y, double h
         for (int s = 0; s < 3; s++) {
             for (int i = 0; i < n; i++) m->tmp[i] = y[i] + m->Z[s * n + i];
             int status = cp_eval(sys, t + h * C[s], m->tmp, m->F + s * n, stats);
-            if (status == CP_NONFINITE || (status == CP_OK && !cp_all_finite(n, m->F + s * n))) {
-                *trial_failure = CP_NONFINITE;
+            if (cp_trial_rejects(status) || (status == CP_OK && !cp_all_finite(n, m->F + s * n))) {
+                *trial_failure = status ? status : CP_NONFINITE;
                 return CP_OK;
             }
             if (status) return status;
@@ -320,7 +320,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
             double *at = m.F, *fe = m.F + n;
             for (int i = 0; i < n; i++) at[i] = y[i] + m.err[i];
             status = cp_eval(sys, t, at, fe, stats);
-            if (status && status != CP_NONFINITE) return status;
+            if (status && !cp_trial_rejects(status)) return status;
             for (int i = 0; i < n; i++) m.err[i] = fe[i] + m.tmp[i];
             solve_real(n, mx.lu_real, mx.pivots_real, m.err);
             error_norm = status ? NAN : cp_rms(n, m.err, m.scale);

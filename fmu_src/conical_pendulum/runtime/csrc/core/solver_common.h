@@ -15,6 +15,16 @@ static inline int cp_eval(const cp_system *sys, double t, const double *x, doubl
 }
 
 /* sqrt(mean((v / scale)^2)): scipy's norm of a scaled error. */
+/* A trial stage's failure that rejects the step rather than ending the integration: a
+ * non-finite acceleration or a singular mass matrix there says the step was too long for the
+ * scene (a trial stage can fling a light body through a configuration the path never
+ * reaches), not that the scene is wrong; where the path itself meets one, the step shrinks
+ * to the least step and fails with it. */
+static inline int cp_trial_rejects(int status)
+{
+    return status == CP_NONFINITE || status == CP_SINGULAR;
+}
+
 static inline double cp_rms(int n, const double *v, const double *scale)
 {
     double s = 0.0;

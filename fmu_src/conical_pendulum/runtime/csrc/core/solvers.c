@@ -32,13 +32,6 @@ double cp_stiffness_bound(int method)
 #define eval cp_eval
 #define rms cp_rms
 
-/* A trial stage's failure that rejects the step rather than ending the integration: a
- * non-finite acceleration there says the step was too long for the scene, not that the
- * scene is wrong. */
-static int trial_rejects(int status)
-{
-    return status == CP_NONFINITE;
-}
 
 /* cp_rk4 has checked that ceil(dt / max_step) <= max_steps. On failure, good holds the
  * last point where x' was computed (x itself when none was) and *done the substeps that led
@@ -86,7 +79,7 @@ static int initial_step(const cp_system *sys, double t, const double *y, const d
     for (;;) {  /* the Euler step's guess shrunk until the scene can be evaluated there */
         for (int i = 0; i < n; i++) tmp[i] = y[i] + h0 * f[i];
         status = eval(sys, t + h0, tmp, f1, stats);
-        if (!(trial_rejects(status) || (status == CP_OK && !cp_all_finite(n, f1)))) break;
+        if (!(cp_trial_rejects(status) || (status == CP_OK && !cp_all_finite(n, f1)))) break;
         if ((h0 *= 0.01) < cp_min_step(t, t + interval)) return status ? status : CP_NONFINITE;
     }
     if (status) return status;
@@ -187,7 +180,7 @@ static int one_step(const tableau *tb, const cp_system *sys, double t, double t_
                 m->tmp[i] = m->y[i] + dy * h;
             }
             status = eval(sys, t + tb->c[s] * h, m->tmp, K + s * n, stats);
-            if (trial_rejects(status)) trial_failure = status;
+            if (cp_trial_rejects(status)) trial_failure = status;
             else if (status) return status;
         }
         if (!trial_failure) {
@@ -197,7 +190,7 @@ static int one_step(const tableau *tb, const cp_system *sys, double t, double t_
                 m->y_new[i] = m->y[i] + h * dy;
             }
             status = eval(sys, t_new, m->y_new, K + tb->stages * n, stats);
-            if (trial_rejects(status)) trial_failure = status;
+            if (cp_trial_rejects(status)) trial_failure = status;
             else if (status) return status;
         }
         if (!trial_failure) {
