@@ -123,14 +123,20 @@ class SceneVariables:
         return _names(self.core_parameter_scalars())
 
     def hoist_acceleration_names(self) -> list[str]:
-        """What the core reads after the parameters and inputs (no variable holds them): each
-        rope's l<i>'', the rate of its v_hoist<i>, which the native FMUs interpolate (0 where
-        the inputs are held); then each elastic rope's tension T_law<i> and taut stretch
-        s_taut<i> (max(r - l, 0)), which the core's rope law (runtime/csrc/core/elastic.c)
-        computes from the state before every evaluation of the equations."""
-        return [f"a_hoist{i}" for i in self.ropes()] + [
-            f"{name}{i}" for i in self.elastic_ropes() for name in ("T_law", "s_taut")
-        ]
+        """Each rope's l<i>'', the rate of its v_hoist<i>, which the native FMUs interpolate (0
+        where the inputs are held)."""
+        return [f"a_hoist{i}" for i in self.ropes()]
+
+    def rope_law_names(self) -> list[str]:
+        """Each elastic rope's tension T_law<i> and taut stretch s_taut<i> (max(r - l, 0)), which
+        the core's rope law (runtime/csrc/core/dynamics.c's cp_rope_law) computes from the state
+        before every evaluation of the equations."""
+        return [f"{name}{i}" for i in self.elastic_ropes() for name in ("T_law", "s_taut")]
+
+    def core_extra_names(self) -> list[str]:
+        """What the core reads after the parameters and inputs, which no variable holds: the
+        ropes' l'', then the elastic ropes' law."""
+        return self.hoist_acceleration_names() + self.rope_law_names()
 
     def state_scalars(self) -> list[Scalar]:
         """The generalized coordinates q: alpha, beta (angles), then each elastic rope's reach

@@ -4,7 +4,7 @@ Intermediate definitions are emitted in order, then the final expressions after
 common-subexpression elimination. States and parameters are read from the arrays
 x and p in the order of Scene.state_names() and Scene.core_parameter_names(); outputs
 that need the accelerations u' (the pivot force) read them from dx = x'. After the parameters,
-p holds each rope's l'' (Scene.hoist_acceleration_names).
+p holds each rope's l'' and each elastic rope's law (Scene.core_extra_names).
 
 Every quantity is a `cp_real` (runtime/csrc/core/real.h): double in the core and the FMU, double
 complex where directional.c compiles the same model.c for complex-step derivatives. So the
@@ -199,7 +199,7 @@ def _elastic_ropes(scene: Scene) -> list[str]:
     if not elastic:
         return []
     states, params = scene.state_names(), scene.core_parameter_names()
-    core = params + scene.hoist_acceleration_names()
+    core = params + scene.core_extra_names()
     below = []  # the masses hanging from each elastic rope, its link's and those below, and -1
     for i in elastic:
         names = (f"{mass}{j}" for j in range(i, scene.n) for mass in ("m", "M"))

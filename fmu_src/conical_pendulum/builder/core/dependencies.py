@@ -34,7 +34,7 @@ def dependencies(scene: Scene) -> Dependencies:
 
 
 def _symbolic(scene: Scene, eqs) -> Dependencies:
-    core = scene.core_parameter_names() + scene.hoist_acceleration_names()  # _law resolves the latter
+    core = scene.core_parameter_names() + scene.core_extra_names()  # _law resolves the latter
     knowns = {s: s.name for s in eqs.states} | dict(zip(eqs.params, core))
     rates = set(eqs.rates)
     closure: dict = {}  # symbol -> the knowns (and rates u') it depends on

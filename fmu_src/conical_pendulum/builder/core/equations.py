@@ -55,7 +55,7 @@ ZERO, UNIT_X, UNIT_Z = Vec([0, 0, 0]), Vec([1, 0, 0]), Vec([0, 0, 1])
 class Equations:
     """M(x, p) u' = F(x, p), with intermediate definitions evaluated in order.
 
-    p holds the parameters, then the inputs, then the ropes' l'' (Scene.hoist_acceleration_names);
+    p holds the parameters, then the inputs, then the ropes' l'' and the elastic ropes' law (Scene.core_extra_names);
     outputs may depend on u' (`rates`)."""
 
     scene: Scene
@@ -232,7 +232,7 @@ class _Symbols:
 
 def _core_p_names(scene: Scene) -> list[str]:
     """Everything the core reads from p, in its order."""
-    return scene.core_parameter_names() + scene.hoist_acceleration_names()
+    return scene.core_parameter_names() + scene.core_extra_names()
 
 
 def _symbols(scene: Scene) -> _Symbols:
