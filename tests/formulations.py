@@ -20,8 +20,9 @@ def assert_formulations_agree(links, options: dict, seed: int, input_range: floa
         x = rng.uniform(-1, 1, len(scene.state_names()))
         for i in scene.ropes():
             x[scene.state_names().index(f"l{i}")] = rng.uniform(1.0, 20.0)
+        names = scene.state_names()
         for i in scene.elastic_ropes():  # taut or slack by up to 20 cm
-            x[scene.state_names().index(f"r{i}")] = x[scene.state_names().index(f"l{i}")] + rng.uniform(-0.2, 0.2)
+            x[names.index(f"r{i}")] = x[names.index(f"l{i}")] + rng.uniform(-0.2, 0.2)
         p = np.array(scene.parameters())
         p[len(scene.parameter_names()) :] = rng.uniform(-input_range, input_range, len(scene.input_names()))
         acc = rng.uniform(-2, 2, len(scene.ropes()))
