@@ -22,8 +22,8 @@ generalized coordinate of its own (speed v_r<i>): the bob slides along the rope'
 -v_r e_y, a partial velocity -e_y, and the rope pulls it back with its tension T, a generalized
 force -T on v_r (on the angles' speeds the pull on the bob and on the rope's top cancel). T
 follows the rope's law, which is not analytic (zero when slack): the core computes it from
-the state (runtime/csrc/core/elastic.c) and hands it in p with the taut stretch s+ = max(r - l,
-0), so these equations stay analytic. The rope's elastic energy EA s+^2 / (2 l) is in the
+the state (cp_rope_law in runtime/csrc/core/dynamics.c) and hands it in p with the taut
+stretch s+ = max(r - l, 0), so these equations stay analytic. The rope's elastic energy EA s+^2 / (2 l) is in the
 energy; its damping's work, (EA s+ / l - T) (v_r - v_hoist), in the book W_rope; and its
 winch's power is -(T + EA s+^2 / (2 l^2)) v_hoist: the tension's work on the rope paid out,
 and the strain energy it carries off the drum.
