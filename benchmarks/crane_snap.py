@@ -27,6 +27,7 @@ from fmpy import read_model_description
 from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.scene import load_scene
+from elastic_rope import static_reach
 from results_csv import write_rows
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -84,9 +85,7 @@ def main():
     scene = load_scene(SCENE)
     path = (args.out or Path(tempfile.mkdtemp())) / "CraneElastic.fmu"
     build_fmu(scene, path, backend="native")
-    rope = scene.links[0]
-    reach = rope.length * (1 + (HOOK + LOAD) * G / rope.rope_stiffness)  # at rest, stretched
-    start = {"solver": 2, "rtol": 1e-10, "atol": 1e-10, "r0": reach}
+    start = {"solver": 2, "rtol": 1e-10, "atol": 1e-10, "r0": static_reach(scene, HOOK, LOAD)}
     start |= dict.fromkeys(("alpha0", "alpha1", "beta0", "beta1"), 0.0)
     run = run_fmu(path, STOP, INTERVAL, start, step_finished=masses(path))
     t, tension, stretch = run["time"], run["T_rope0"], run["stretch0"]

@@ -13,11 +13,11 @@ from scipy.integrate import solve_ivp
 
 from conical_pendulum import Link, Scene, SceneError
 from conical_pendulum.analysis.compare import compare
-from conical_pendulum.analysis.fmpy_runs import run_fmu
 from conical_pendulum.analysis.simulate import simulate
 from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.core import dependencies
 from conical_pendulum.builder.core.equations import derive
+from fmu_helpers import assert_model_exchange_follows
 from formulations import assert_formulations_agree
 
 G = 9.8
@@ -313,19 +313,9 @@ def test_its_fmus_follow_the_reference_and_keep_the_books(built_fmu, backend, fm
 
 @pytest.mark.parametrize("fmi_version", [2, 3])
 def test_model_exchange_follows_the_reference(built_fmu, fmi_version):
-    result = run_fmu(
-        built_fmu(SWUNG, backend="native", fmi_version=fmi_version),
-        stop_time=5.0,
-        fmi_type="ModelExchange",
-        relative_tolerance=1e-10,
-        start_values=SWINGING,
+    assert_model_exchange_follows(
+        built_fmu(SWUNG, backend="native", fmi_version=fmi_version), SWUNG, SWINGING, 5.0
     )
-    inputs = {k: v for k, v in SWINGING.items() if k in SWUNG.input_names()}
-    state = {k: v for k, v in SWINGING.items() if k in SWUNG.state_names()}
-    reference = simulate(SWUNG, result["time"], parameters=inputs, state=state, rtol=1e-12, atol=1e-12)
-    for name in SWUNG.state_names():
-        scale = max(1.0, np.abs(reference[name]).max())
-        assert np.abs(result[name] - reference[name]).max() < 1e-6 * scale, name
 
 
 def joint_state(position, velocity):

@@ -26,7 +26,7 @@ from conical_pendulum.builder.core.codegen import generate
 from conical_pendulum.builder.core.equations import derive
 from conical_pendulum.builder.core.kane import kanes_method
 from conical_pendulum.scene import load_scene, scene_from_dict
-from fmu_helpers import INSTANCES, Instance, Instance3
+from fmu_helpers import INSTANCES, Instance, Instance3, assert_model_exchange_follows
 from formulations import assert_formulations_agree
 from test_directional import Model
 from test_interpolation import assert_derivatives_match_differences, continuous_outputs
@@ -381,19 +381,7 @@ def test_its_fmus_follow_the_reference_and_keep_the_books(hoisted_fmu, backend, 
 
 
 def test_model_exchange_follows_the_reference(hoisted_fmu):
-    run = run_fmu(
-        hoisted_fmu("native"),
-        stop_time=10.0,
-        fmi_type="ModelExchange",
-        relative_tolerance=1e-10,
-        start_values=HOISTING,
-    )
-    inputs = {k: v for k, v in HOISTING.items() if k in HOISTED.input_names()}
-    state = {k: v for k, v in HOISTING.items() if k in HOISTED.state_names()}
-    reference = simulate(HOISTED, run["time"], parameters=inputs, state=state, rtol=1e-12, atol=1e-12)
-    for name in HOISTED.state_names():  # angles and rates of order one, lengths in m, books in kJ
-        scale = max(1.0, np.abs(reference[name]).max())
-        assert np.abs(run[name] - reference[name]).max() < 1e-6 * scale, name
+    assert_model_exchange_follows(hoisted_fmu("native"), HOISTED, HOISTING, 10.0)
 
 
 @pytest.mark.parametrize(
