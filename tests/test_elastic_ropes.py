@@ -277,14 +277,15 @@ def test_a_stiffness_given_to_a_link_that_is_no_rope_is_refused():
         Scene(links=(Link(rope_stiffness=1e6),))
 
 
-def test_an_elastic_rope_adds_its_reach_its_numbers_and_its_stretch():
+def test_an_elastic_rope_adds_its_reach_its_numbers_its_stretch_and_what_its_steps_saw():
     scene = Scene(links=(elastic(zeta=0.2), Link()))
     assert scene.state_names()[:10] == [
         "alpha0", "alpha1", "beta0", "beta1", "r0", "omega0", "omega1", "delta0", "delta1", "v_r0",
     ]  # fmt: skip
     assert scene.work_names() == ["W_hoist", "W_rope"]
     assert {"EA0", "zeta_rope0"} <= set(scene.parameter_names())
-    assert scene.output_names()[-3:] == ["T_rope0", "P_hoist0", "stretch0"]
+    assert scene.output_names()[-4:] == ["T_rope0", "P_hoist0", "stretch0", "taut_margin0"]
+    assert [s.name for s in scene.rope_event_scalars()] == ["T_rope_peak0", "snaps0", "taut0"]
     assert dict(zip(scene.state_names(), scene.state_defaults()))["r0"] == 10.0  # taut, unstretched
     inextensible = Scene(links=(Link(has_mass=False, rope=True, rope_min=1.0, rope_max=30.0), Link()))
     assert inextensible.key() != scene.key() and "r0" not in inextensible.state_names()

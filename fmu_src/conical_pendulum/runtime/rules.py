@@ -123,7 +123,11 @@ QUANTITIES = {
     "c_cart": ("non-negative", "a damping coefficient"),
     "M_x": ("non-negative", "an apparent mass"),
     "F_x_order": ("hold-order", ""),
-    "h": ("non-negative", "the solver's carried step"),  # no variable: what an FMU state carries
+    "h": ("non-negative", "the solver's carried step"),
+    # what the integration saw of an elastic rope: restored in FMU states, checked there
+    "T_rope_peak": ("non-negative", "a tension"),
+    "snaps": ("statistic", "a count"),
+    "taut": ("switch", ""),  # no variable: what an FMU state carries
 }
 
 # The scene's link fields and their rules: those that are parameters follow the parameter's.

@@ -27,8 +27,14 @@ APPARENT_MASS = ("M_pivot_xx", "M_pivot_xy", "M_pivot_xz", "M_pivot_yy", "M_pivo
 WORKS = ("W_damping", "W_drag", "W_external", "W_pivot", "W_hoist", "W_load", "W_rope")
 # A rope's: its tension [N] and its winch's power [W] (-tension * v_hoist)
 ROPE_OUTPUTS = ("T_rope", "P_hoist")
-# An elastic rope's: its stretch r - l [m] (< 0: slack)
-ELASTIC_OUTPUTS = ("stretch",)
+# An elastic rope's: its stretch r - l [m] (< 0: slack), and its taut margin [N], the tension
+# it would carry if a rope could push (> 0: taut), whose sign changes are its slack and snap
+# events (an elastic rope's event indicator)
+ELASTIC_OUTPUTS = ("stretch", "taut_margin")
+# What the integration saw of an elastic rope, which no function of the state gives: its
+# largest tension since the last communication point, its snaps (slack to taut) since the
+# start, and whether it is taut (1) or slack (0)
+ROPE_EVENTS = ("T_rope_peak", "snaps", "taut")
 SEED_ANGLE = math.radians(10.0)
 
 
@@ -128,10 +134,10 @@ class SceneVariables:
         return [f"a_hoist{i}" for i in self.ropes()]
 
     def rope_law_names(self) -> list[str]:
-        """Each elastic rope's tension T_law<i> and taut stretch s_taut<i> (max(r - l, 0)), which
-        the core's rope law (runtime/csrc/core/dynamics.c's cp_rope_law) computes from the state
-        before every evaluation of the equations."""
-        return [f"{name}{i}" for i in self.elastic_ropes() for name in ("T_law", "s_taut")]
+        """Each elastic rope's tension T_law<i>, taut stretch s_taut<i> (max(r - l, 0)) and taut
+        margin margin<i>, which the core's rope law (runtime/csrc/core/dynamics.c's
+        cp_rope_law) computes from the state before every evaluation of the equations."""
+        return [f"{name}{i}" for i in self.elastic_ropes() for name in ("T_law", "s_taut", "margin")]
 
     def core_extra_names(self) -> list[str]:
         """What the core reads after the parameters and inputs, which no variable holds: the
@@ -203,9 +209,13 @@ class SceneVariables:
         # each rope's tension and its winch's power (after the pivot's: the core finds those
         # at fixed places)
         scalars += [Scalar(stem, i) for stem in ROPE_OUTPUTS for i in self.ropes()]
-        # and each elastic rope's stretch
+        # and each elastic rope's stretch and taut margin
         scalars += [Scalar(stem, i) for stem in ELASTIC_OUTPUTS for i in self.elastic_ropes()]
         return scalars
+
+    def rope_event_scalars(self) -> list[Scalar]:
+        """What the integration saw of each elastic rope (ROPE_EVENTS), in the core's order."""
+        return [Scalar(stem, i) for stem in ROPE_EVENTS for i in self.elastic_ropes()]
 
     def output_names(self) -> list[str]:
         return _names(self.output_scalars())

@@ -20,7 +20,7 @@ import sympy as sm
 from sympy.printing.c import C99CodePrinter
 
 from ...runtime.rules import STATISTICS
-from ...scene import APPARENT_MASS, FREE_FORCE, WORKS, Scene
+from ...scene import APPARENT_MASS, FREE_FORCE, ROPE_EVENTS, WORKS, Scene
 from .. import c_literals as c
 from .equations import Equations, joint_kinematics
 from .equations import needed as _needed
@@ -204,12 +204,19 @@ def _elastic_ropes(scene: Scene) -> list[str]:
     for i in elastic:
         names = (f"{mass}{j}" for j in range(i, scene.n) for mass in ("m", "M"))
         below += [params.index(name) for name in names if name in params] + [-1]
+    outputs = scene.output_names()
     return [
         c.define("CP_NELASTIC", len(elastic)),
+        "/* Each elastic rope's taut margin among the outputs from CP_MARGIN_OUTPUT on; what the",
+        "   integration saw of them (ROPE_EVENTS: CP_NELASTIC values each, in this order). */",
+        c.define("CP_MARGIN_OUTPUT", outputs.index(f"taut_margin{elastic[0]}")),
+        *(c.define(f"CP_ROPE_EVENT_{stem.upper()}", k) for k, stem in enumerate(ROPE_EVENTS)),
+        c.define("CP_NROPE_EVENT", len(scene.rope_event_scalars())),
         "/* Each elastic rope (Scene.elastic_ropes' order): its place among the ropes, where its",
         "   reach r<i> and v_r<i> = r<i>' are in x, its EA<i> and zeta_rope<i> in p, and its law's",
-        "   T_law<i> (s_taut<i> after it) in the core's p; then the masses hanging from each, their",
-        "   places in p, each rope's list ended by -1 (its damping ratio is of their stretch). */",
+        "   T_law<i> (s_taut<i>, margin<i> after it) in the core's p; then the masses hanging from",
+        "   each, their places in p, each rope's list ended by -1 (its damping ratio is of their",
+        "   stretch). */",
         *(
             f"static const int cp_elastic_{name}[CP_NELASTIC] = {c.initializer(places)};"
             for name, places in (

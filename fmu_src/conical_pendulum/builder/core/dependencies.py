@@ -88,7 +88,7 @@ def _symbolic(scene: Scene, eqs) -> Dependencies:
 def _law(scene: Scene) -> Dependencies:
     """What the core's p holds beyond the variables, by what it depends on: each rope's l''
     (the rate of an input: nothing a variable holds), and each elastic rope's law (T_law,
-    s_taut: dynamics.c's cp_rope_law), from its length, reach and their rates, its EA and
+    s_taut, margin: dynamics.c's cp_rope_law), from its length, reach and their rates, its EA and
     damping, and the masses hanging from it."""
     law = {f"a_hoist{i}": frozenset() for i in scene.ropes()}
     parameters = set(scene.parameter_names())
@@ -97,6 +97,7 @@ def _law(scene: Scene) -> Dependencies:
         rope = {f"l{i}", f"r{i}", f"v_r{i}", f"v_hoist{i}", f"EA{i}", f"zeta_rope{i}"}
         law[f"T_law{i}"] = frozenset(rope | masses)
         law[f"s_taut{i}"] = frozenset({f"l{i}", f"r{i}"})
+        law[f"margin{i}"] = law[f"T_law{i}"]
     return law
 
 
@@ -166,6 +167,8 @@ def _chain(scene: Scene) -> Dependencies:
             result[scalar.name] = motion
         elif scalar.stem == "stretch":
             result[scalar.name] = frozenset({f"r{i}", f"l{i}"})
+        elif scalar.stem == "taut_margin":
+            result[scalar.name] = _law(scene)[f"margin{i}"]
     names = scene.state_names()
     dim = scene.dof()
     result |= {f"der({names[k]})": frozenset({names[k + dim]}) for k in range(dim)}

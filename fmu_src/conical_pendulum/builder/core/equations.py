@@ -534,7 +534,8 @@ def _outputs(scene: Scene, sym: _Symbols, sums: _Sums, bobs: list, poses: list) 
     if scene.coupling:
         outputs += list(sums.support_force)
     stretches = [sym.reaches[i] - sym.lengths[i] for i in sym.elastic]
-    return outputs + sums.tensions + sums.hoist_power + stretches
+    margins = [sym.params[f"margin{i}"] for i in sym.elastic]  # the law's (cp_rope_law)
+    return outputs + sums.tensions + sums.hoist_power + stretches + margins
 
 
 def derive(scene: Scene) -> Equations:

@@ -263,6 +263,28 @@ DESCRIBED = {
         "m",
         "stretch of elastic rope {link}, r{link} - l{link}: > 0 taut, <= 0 slack [{unit}]",
     ),
+    "taut_margin": Described(
+        "N",
+        "taut margin of elastic rope {link}: the tension it would carry if a rope could push, "
+        "EA{link} stretch{link} / l{link} plus its damping while the stretch shrinks; > 0 taut, "
+        "<= 0 slack. Its zeros are the rope's snap and slack events: Co-Simulation ends an "
+        "internal step on them, Model Exchange declares it an event indicator [{unit}]",
+    ),
+    "T_rope_peak": Described(
+        "N",
+        "largest tension of elastic rope {link} since the last communication point, found on "
+        "the solver's dense output between its steps: the snap load a master sampling T_rope"
+        "{link} misses (Model Exchange, which has no steps of its own: T_rope{link}) [{unit}]",
+    ),
+    "snaps": Described(
+        "1",
+        "times elastic rope {link} went from slack to taut since the start (Co-Simulation: the "
+        "located events inside each step; Model Exchange: the events the host handled)",
+    ),
+    "taut": Described(
+        "1",
+        "1 while elastic rope {link} is taut (taut_margin{link} > 0), 0 while slack; changes at its events",
+    ),
     "W_rope": Described(
         "J",
         "work done on the chain by the elastic ropes' damping since the start (<= 0: with the "
@@ -424,6 +446,10 @@ def _outputs(scene, settings):  # what each depends on, read from the model (bui
     return _described(scene.output_scalars(), None, lambda s: _in_order(scene, found[s.name]))
 
 
+def _rope_events(scene, settings):  # what the integration saw, not functions of the knowns
+    return _described(scene.rope_event_scalars())
+
+
 def _statistics(scene, settings):  # counts of what the solver did, not functions of the knowns
     return [Member(Scalar(name), None, text, unit="1") for name, text in STATISTICS.items()]
 
@@ -457,13 +483,15 @@ def _derivatives(scene, settings):  # what each depends on, read from the model 
 
 # The value-reference order of every FMU: Reals, then Integers, then (native FMU, Model
 # Exchange) the state derivatives. The Reals are one array in both FMUs: the core's p
-# (parameters, then inputs), its state and outputs, the statistics, the real settings.
+# (parameters, then inputs), its state and outputs, the statistics, what the integration saw
+# of the elastic ropes, the real settings.
 GROUPS = [
     Group("parameters", "Real", "parameter", "fixed", None, "PARAMETER", _parameters),
     Group("inputs", "Real", "input", "continuous", None, "INPUT", _inputs),
     Group("states", "Real", "output", "continuous", "exact", "STATE", _states),
     Group("outputs", "Real", "output", "continuous", "calculated", "OUTPUT", _outputs),
     Group("statistics", "Real", "output", "discrete", "calculated", "STATISTICS", _statistics),
+    Group("rope_events", "Real", "output", "discrete", "calculated", "ROPE_EVENTS", _rope_events),
     Group("real_settings", "Real", "parameter", "fixed", None, "SETTINGS", _settings(False), named=True),
     Group(
         "integer_settings",

@@ -762,7 +762,8 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
 #endif
 #ifdef CP_NROPE
     out += 9 * (CP_PIVOT_INDEX >= 0);  /* F_free and M_app: dynamics.c's */
-    /* each rope's tension, then its winch's power, then each elastic rope's stretch */
+    /* each rope's tension, then its winch's power, then each elastic rope's stretch and taut
+       margin */
     cp_real T[CP_NROPE];
     tensions(p, links, (const cp_real(*)[3])hang, T);
     for (int k = 0; k < CP_NROPE; k++) *out++ = T[k];
@@ -770,6 +771,7 @@ void cp_outputs(const cp_real *x, const cp_real *p, const cp_real *dx, cp_real *
 #endif
 #ifdef CP_NELASTIC
     for (int e = 0; e < CP_NELASTIC; e++) *out++ = x[cp_elastic_reach[e]] - x[cp_rope_state[cp_elastic_rope[e]]];
+    for (int e = 0; e < CP_NELASTIC; e++) *out++ = p[cp_elastic_law[e] + 2];
 #endif
 }
 

@@ -18,11 +18,14 @@ cdef extern from "status.h":
 cdef extern from "solvers.h":
     ctypedef int (*cp_rhs_fn)(void *ctx, double t, const double *x, double *dx) noexcept nogil
     ctypedef int (*cp_jac_fn)(void *ctx, double t, const double *x, double *J) noexcept nogil
+    ctypedef struct cp_watch:
+        pass
     ctypedef struct cp_system:
         int dim
         cp_rhs_fn rhs
         void *ctx
         cp_jac_fn jac
+        const cp_watch *watch
     ctypedef struct cp_stats:
         long long nfev, naccept, nreject, njev, nlu, nswitch
     ctypedef struct cp_newton:
@@ -169,6 +172,7 @@ cdef void _system(cp_system *system, cp_model *model, const double *p, cp_stats 
     system.rhs = cp_held_rhs
     system.ctx = model
     system.jac = cp_held_jac
+    system.watch = NULL
     stats.nfev = stats.naccept = stats.nreject = stats.njev = stats.nlu = stats.nswitch = 0
 
 

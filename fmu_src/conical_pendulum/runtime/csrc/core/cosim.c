@@ -91,6 +91,130 @@ static int interpolated_jac(void *ctx, double t, const double *x, double *J)
     return model_jacobian(model_at(ctx, t), x, J);
 }
 
+#ifdef CP_NELASTIC
+/* The watch on the elastic ropes over one communication step (t_from, t_to] (solvers.h's
+ * cp_watch): the model's p at any time, the flight whose steps it sees, and what it has seen
+ * so far (rope_events' layout: CP_ROPE_EVENT_* rows of CP_NELASTIC). */
+typedef struct {
+    interpolated *in;
+    int moving;
+    cp_flight *flight;
+    double t_from, t_to;
+    double seen[CP_NROPE_EVENT];
+} watcher;
+
+#define SEEN(w, what, e) ((w)->seen[CP_ROPE_EVENT_##what * CP_NELASTIC + (e)])
+
+/* The core's p at t, with the ropes' law at x. */
+static void law_at(watcher *w, double t, const double *x, double *p)
+{
+    memcpy(p, w->moving ? model_at(w->in, t)->p : w->in->model.p, CP_PSIZE * sizeof(double));
+    cp_rope_law(x, p);
+}
+
+/* The events: each rope's taut margin (cp_rope_law). */
+static int margins(void *ctx, double t, const double *x, double *g)
+{
+    double p[CP_PSIZE];
+    law_at(ctx, t, x, p);
+    for (int e = 0; e < CP_NELASTIC; e++) g[e] = p[cp_elastic_law[e] + 2];
+    return CP_OK;
+}
+
+/* Each rope's tension rate at (t, x), x' = f there. */
+static void slopes(watcher *w, double t, const double *x, const double *f, double *rates)
+{
+    double p[CP_PSIZE];
+    law_at(w, t, x, p);
+    cp_rope_tension_rates(x, f, p, rates);
+}
+
+/* Whether a tension rising (or not known: 0) at a step's start and falling at its end peaks
+ * inside it. */
+static int may_peak(double start, double end)
+{
+    return start >= 0 && end < 0;
+}
+
+static int wants_dense(void *ctx, double t1, const double *x1, const double *f1)
+{
+    watcher *w = ctx;
+    double rates[CP_NELASTIC];
+    slopes(w, t1, x1, f1, rates);
+    for (int e = 0; e < CP_NELASTIC; e++)
+        if (may_peak(w->flight->ropes[e].slope, rates[e])) return 1;
+    return 0;
+}
+
+/* Rope e's tension at t inside the step (its dense output). */
+static double tension_at(watcher *w, const cp_step *step, const double *rows, double t, int e)
+{
+    double x[CP_NSTATE], p[CP_PSIZE];
+    cp_step_state(step, rows, CP_NSTATE, t, x);
+    law_at(w, t, x, p);
+    return p[cp_elastic_law[e]];
+}
+
+/* Rope e's largest tension inside the step, by golden section on its dense output down to a
+ * billionth of the step (the peak's value then exact to rounding: flat there). */
+static void golden_peak(watcher *w, const cp_step *step, const double *rows, int e,
+                        cp_rope_watch *rope)
+{
+    const double ratio = 0.5 * (sqrt(5.0) - 1.0), small = 1e-9 * (step->t1 - step->t0);
+    double a = step->t0, b = step->t1, c = b - ratio * (b - a), d = a + ratio * (b - a);
+    double fc = tension_at(w, step, rows, c, e), fd = tension_at(w, step, rows, d, e);
+    while (b - a > small) {
+        if (fc > fd) {
+            b = d, d = c, fd = fc;
+            c = b - ratio * (b - a);
+            fc = tension_at(w, step, rows, c, e);
+        } else {
+            a = c, c = d, fc = fd;
+            d = a + ratio * (b - a);
+            fd = tension_at(w, step, rows, d, e);
+        }
+    }
+    rope->peak_time = fc > fd ? c : d;
+    rope->peak = fmax(fc, fd);
+}
+
+/* What a step shows inside (t_from, t_to]: the tension at its end and its peak inside it,
+ * where they fall there, and a snap at its end (its start slack, its end taut). */
+static void see(watcher *w, const cp_step *step, const double *rows)
+{
+    if (!(step->t1 > step->t0)) return;
+    double g0[CP_NELASTIC], p[CP_PSIZE];
+    margins(w, step->t0, rows + CP_ROW_X0 * CP_NSTATE, g0);
+    law_at(w, step->t1, rows + CP_ROW_X1 * CP_NSTATE, p);
+    const int end_inside = step->t1 > w->t_from && step->t1 <= w->t_to;
+    for (int e = 0; e < CP_NELASTIC; e++) {
+        const cp_rope_watch *rope = &w->flight->ropes[e];
+        if (end_inside) {
+            SEEN(w, T_ROPE_PEAK, e) = fmax(SEEN(w, T_ROPE_PEAK, e), p[cp_elastic_law[e]]);
+            SEEN(w, SNAPS, e) += g0[e] <= 0 && p[cp_elastic_law[e] + 2] > 0;
+        }
+        if (rope->peak > 0 && rope->peak_time > w->t_from && rope->peak_time <= w->t_to)
+            SEEN(w, T_ROPE_PEAK, e) = fmax(SEEN(w, T_ROPE_PEAK, e), rope->peak);
+    }
+}
+
+static void accepted(void *ctx, const cp_step *step, const double *rows)
+{
+    watcher *w = ctx;
+    double rates[CP_NELASTIC];
+    slopes(w, step->t1, rows + CP_ROW_X1 * CP_NSTATE, rows + CP_ROW_F1 * CP_NSTATE, rates);
+    for (int e = 0; e < CP_NELASTIC; e++) {
+        cp_rope_watch *rope = &w->flight->ropes[e];
+        const int peaks = step->dense && may_peak(rope->slope, rates[e]);
+        rope->peak = 0.0;
+        rope->peak_time = step->t0;
+        if (peaks) golden_peak(w, step, rows, e, rope);
+        rope->slope = rates[e];
+    }
+    see(w, step, rows);
+}
+#endif
+
 /* The polynomials' start: p with the inputs where the flight's integration started, and
  * their rates there; p0 the core's p there (cp_input_at). Whether any input moves. */
 static int polynomials(const cp_flight *f, const double *p, double *p0, double (*rates)[2])
@@ -168,6 +292,7 @@ static void restart(cp_flight *f, cp_newton *newton, const double *p, const doub
         f->step.calm_steps = was.calm_steps;
     }
     newton->current_jac = 0;
+    for (int e = 0; e < CP_NWATCHED; e++) f->ropes[e] = (cp_rope_watch){0.0, t, 0.0};
     f->live = 1;
     f->reserved = 0;
     f->t_point = f->t_inputs = t;
@@ -238,7 +363,7 @@ static int integrate(const cp_settings *s, cp_flight *trial, cp_newton *newton, 
 int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input_rates)[2],
                      double *x, double *y, double t, double dt, double t_stop, cp_flight *flight,
                      cp_matrices *matrices, double *work, double stats[CP_NSTAT],
-                     cp_failure *failure, double *reached)
+                     double *rope_events, cp_failure *failure, double *reached)
 {
     cp_flight trial = *flight;  /* taken only where the step gets somewhere */
     const int why = continues(&trial, s, p, input_rates, t);
@@ -249,7 +374,19 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
     if (moving) in.model.p = in.p_at;
     cp_system system = {CP_NSTATE, moving ? interpolated_rhs : cp_held_rhs,
                         moving ? (void *)&in : (void *)&in.model,
-                        moving ? interpolated_jac : cp_held_jac};
+                        moving ? interpolated_jac : cp_held_jac, NULL};
+#ifdef CP_NELASTIC
+    watcher w = {&in, moving, &trial, t, t + dt, {0}};
+    const cp_watch watch = {CP_NELASTIC, margins, wants_dense, accepted, &w};
+    double start[CP_PSIZE];
+    law_at(&w, t, x, start);
+    for (int e = 0; e < CP_NELASTIC; e++) {
+        SEEN(&w, T_ROPE_PEAK, e) = start[cp_elastic_law[e]];
+        SEEN(&w, SNAPS, e) = rope_events ? rope_events[CP_ROPE_EVENT_SNAPS * CP_NELASTIC + e] : 0;
+    }
+    see(&w, &trial.step, &trial.rows[0][0]);  /* the step in flight's part after t */
+    system.watch = &watch;
+#endif
     cp_stats counts = {0, 0, 0, 0, 0, 0};
     double *x_new = work + CP_WORK_SIZE(CP_NSTATE), *y_new = x_new + CP_NSTATE;
     double t_reached = t, p_at[CP_PSIZE];
@@ -275,6 +412,19 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
         } else if (cp_all_finite(CP_NOUTPUT, y_new)) {
             memcpy(x, x_new, CP_NSTATE * sizeof(double));
             memcpy(y, y_new, CP_NOUTPUT * sizeof(double));
+#ifdef CP_NELASTIC
+            for (int e = 0; e < CP_NELASTIC; e++) {  /* where the state got to */
+                const double tension = y_new[CP_TENSION_OUTPUT + cp_elastic_rope[e]];
+                const int taut = y_new[CP_MARGIN_OUTPUT + e] > 0;
+                SEEN(&w, T_ROPE_PEAK, e) = fmax(SEEN(&w, T_ROPE_PEAK, e), tension);
+                /* RK4 steps over the events: a snap between its points */
+                SEEN(&w, SNAPS, e) += s->method == CP_RK4 && start[cp_elastic_law[e] + 2] <= 0 && taut;
+                SEEN(&w, TAUT, e) = taut;
+            }
+            if (rope_events) memcpy(rope_events, w.seen, sizeof w.seen);
+#else
+            (void)rope_events;
+#endif
             trial.t_point = t_reached;
             /* an early return restarts where it stopped; RK4 at every point */
             trial.live &= status == CP_OK && s->method != CP_RK4;
@@ -318,7 +468,7 @@ int cp_cosim_step(const cp_settings *s, const double *p, double *x, double *y, d
         flight.step.fsal = 1;
     }
     int status = cp_cosim_advance(&on_points, p, held, x, y, t, dt, INFINITY, &flight, matrices,
-                                  work, stats, failure, NULL);
+                                  work, stats, NULL, failure, NULL);
     *h = flight.step.h;
     *fsal = s->method != CP_RK4 && flight.step.fsal;
     if (*fsal) memcpy(work, flight.rows[CP_ROW_F1], CP_NSTATE * sizeof(double));

@@ -35,6 +35,22 @@ typedef struct {
 /* Doubles of work a step needs: the solvers', then the state at t and the new outputs. */
 #define CP_STEP_WORK_SIZE (CP_WORK_SIZE(CP_NSTATE) + CP_NSTATE + CP_NOUTPUT)
 
+/* What the integration sees of the elastic ropes besides the state (the scene's ROPE_EVENTS:
+ * each one's largest tension since the last point, its snaps, whether it is taut; codegen's
+ * CP_ROPE_EVENT_* say where), and what it keeps of each between steps (cp_flight's ropes). */
+#ifdef CP_NELASTIC
+#define CP_NWATCHED CP_NELASTIC
+#else
+#define CP_NWATCHED 0
+#define CP_NROPE_EVENT 0
+#endif
+
+/* An elastic rope as the watch left it (cosim.c): its tension's rate at the end of the step
+ * in flight, and the largest tension inside that step, when and what (0: none found). */
+typedef struct {
+    double slope, peak_time, peak;
+} cp_rope_watch;
+
 /* The integration a co-simulation carries from one communication point to the next: plain
  * data, which an FMU state copies and serializes byte for byte. With across_points, the
  * adaptive solvers take their own steps whatever the points: a point inside the step in flight is
@@ -57,6 +73,7 @@ typedef struct {
     double rows[CP_FLIGHT_ROWS][CP_NSTATE];
     double t_inputs;    /* where the inputs' polynomials start: the integration's start */
     double inputs[CP_NINPUT + 1][3];  /* each input there: u, u', u'' (+1: C has no empty array) */
+    cp_rope_watch ropes[CP_NWATCHED + 1];  /* each elastic rope's, at the step in flight */
 } cp_flight;
 
 /* Advance the co-simulation from the communication point t (x, y: the state and outputs there)
@@ -73,11 +90,16 @@ typedef struct {
  * computed (RK45 and DOP853: the last accepted step; RK4: the last completed substep) and the
  * outputs there are finite, or as they were at t, and the flight restarts there. *reached
  * (when not NULL) is the time of x on return: t + dt on success; failure->kept says it too.
+ * The elastic ropes' slack and snap events are located inside the step (solvers.h's
+ * cp_watch; the adaptive solvers); rope_events (CP_NROPE_EVENT values, or NULL) become what
+ * the integration saw of each rope up to where x got: its largest tension since t (at t, at
+ * every step's end, and inside the steps where its rate changes sign, by golden section on
+ * their dense output), its snaps (slack to taut) counted on, whether it is taut there.
  * work: CP_STEP_WORK_SIZE doubles of scratch. */
 int cp_cosim_advance(const cp_settings *settings, const double *p, const double (*input_rates)[2],
                      double *x, double *y, double t, double dt, double t_stop, cp_flight *flight,
                      cp_matrices *matrices, double *work, double stats[CP_NSTAT],
-                     cp_failure *failure, double *reached);
+                     double *rope_events, cp_failure *failure, double *reached);
 
 /* The inputs as the flight's integration has them at t: their values into p's input entries
  * (p: CP_NPARAM values, the parameters untouched) and their first and second derivatives into

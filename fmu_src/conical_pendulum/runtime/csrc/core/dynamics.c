@@ -85,23 +85,60 @@ static int expanded_rates(cp_model *model, const cp_real *x, cp_real *dx, cp_rea
 }
 #endif
 
+#ifdef CP_NELASTIC
+/* Elastic rope e's spring and damper at (x, p): its stiffness EA / l, its damping coefficient
+ * c = 2 zeta sqrt(EA / l m) (masses from the list at *j, moved past its -1), its stretch
+ * and the stretch's rate. */
+typedef struct {
+    cp_real stiffness, damping, stretch, rate;
+} rope_terms;
+
+static rope_terms terms_of(const cp_real *x, const cp_real *p, int e, int *j)
+{
+    const int k = cp_elastic_rope[e];
+    cp_real hanging = 0.0;
+    for (; cp_elastic_masses[*j] >= 0; ++*j) hanging += p[cp_elastic_masses[*j]];
+    ++*j;
+    const cp_real length = x[cp_rope_state[k]], stiffness = p[cp_elastic_stiffness[e]] / length;
+    rope_terms r = {stiffness, 2.0 * p[cp_elastic_damping[e]] * sqrt(stiffness * hanging),
+                    x[cp_elastic_reach[e]] - length, x[cp_elastic_rate[e]] - p[cp_rope_hoist[k]]};
+    return r;
+}
+#endif
+
 void cp_rope_law(const cp_real *x, cp_real *p)
 {
 #ifdef CP_NELASTIC
-    for (int e = 0, j = 0; e < CP_NELASTIC; e++, j++) {
-        const int k = cp_elastic_rope[e];
-        cp_real hanging = 0.0;
-        for (; cp_elastic_masses[j] >= 0; j++) hanging += p[cp_elastic_masses[j]];
-        const cp_real length = x[cp_rope_state[k]], stiffness = p[cp_elastic_stiffness[e]] / length;
-        const cp_real damping = 2.0 * p[cp_elastic_damping[e]] * sqrt(stiffness * hanging);
-        const cp_real stretch = x[cp_elastic_reach[e]] - length;
-        const cp_real pull = stiffness * stretch + damping * (x[cp_elastic_rate[e]] - p[cp_rope_hoist[k]]);
-        const int taut = CP_RE(stretch) > 0;
-        p[cp_elastic_law[e]] = taut && CP_RE(pull) > 0 ? pull : 0.0;
-        p[cp_elastic_law[e] + 1] = taut ? stretch : 0.0;
+    for (int e = 0, j = 0; e < CP_NELASTIC; e++) {
+        const rope_terms r = terms_of(x, p, e, &j);
+        const cp_real pull = r.stiffness * r.stretch + r.damping * r.rate;
+        /* > 0 exactly where the rope is stretched and pulls: the pull, or while stretching
+           the spring's part, <= 0 where it is slack */
+        const cp_real margin = CP_RE(r.rate) < 0 ? pull : r.stiffness * r.stretch;
+        p[cp_elastic_law[e]] = CP_RE(margin) > 0 ? pull : 0.0;
+        p[cp_elastic_law[e] + 1] = CP_RE(r.stretch) > 0 ? r.stretch : 0.0;
+        p[cp_elastic_law[e] + 2] = margin;
     }
 #else
     (void)x, (void)p;
+#endif
+}
+
+void cp_rope_tension_rates(const cp_real *x, const cp_real *dx, const cp_real *p, cp_real *rates)
+{
+#ifdef CP_NELASTIC
+    for (int e = 0, j = 0; e < CP_NELASTIC; e++) {
+        const int k = cp_elastic_rope[e];
+        const rope_terms r = terms_of(x, p, e, &j);
+        const cp_real length = x[cp_rope_state[k]], paid = dx[cp_rope_state[k]] / length;
+        const cp_real accel = dx[cp_elastic_rate[e]] - p[CP_NPARAM + k];  /* s'' = r'' - l'' */
+        /* (EA / l)' = -EA l' / l^2, c' = -c l' / (2 l) */
+        rates[e] = CP_RE(p[cp_elastic_law[e] + 2]) > 0
+                       ? r.stiffness * (r.rate - paid * r.stretch) + r.damping * (accel - 0.5 * paid * r.rate)
+                       : 0.0;
+    }
+#else
+    (void)x, (void)dx, (void)p, (void)rates;
 #endif
 }
 

@@ -20,7 +20,7 @@
 #define CP_NHOIST_ACC 0
 #endif
 #if defined(CP_NELASTIC)
-#define CP_PSIZE (CP_NPARAM + CP_NROPE + 2 * CP_NELASTIC)
+#define CP_PSIZE (CP_NPARAM + CP_NROPE + 3 * CP_NELASTIC)
 #elif defined(CP_NROPE)
 #define CP_PSIZE (CP_NPARAM + CP_NROPE)
 #else
@@ -46,10 +46,17 @@ int cp_rhs(void *ctx, const cp_real *x, cp_real *dx);
 /* Each elastic rope's law at the state x into p's entries for it (the core's p, CP_PSIZE
  * values): its tension T = EA s / l + c s' while the rope is taut (stretch s = r - l > 0)
  * and pulls, else 0 (a rope cannot push, even stretched while it recoils faster than its
- * damping lets it pull), c = 2 zeta sqrt(EA / l m) with m the mass hanging from it; and its
- * taut stretch max(s, 0), whose elastic energy the equations count. Nothing without elastic
- * ropes. Not analytic at the switches: its branches look at real parts (real.h). */
+ * damping lets it pull), c = 2 zeta sqrt(EA / l m) with m the mass hanging from it; its
+ * taut stretch max(s, 0), whose elastic energy the equations count; and its taut margin,
+ * EA s / l + c min(s', 0), continuous in the state and > 0 exactly where the rope is taut:
+ * the function whose roots are its slack and snap events. Nothing without elastic ropes. Not
+ * analytic at the switches: its branches look at real parts (real.h). */
 void cp_rope_law(const cp_real *x, cp_real *p);
+
+/* Each elastic rope's tension's time derivative T' at the state x with x' = dx (p: the core's
+ * p with the law filled by cp_rope_law, l'' among it): 0 while slack. Where the tension peaks
+ * inside a step, T' changes sign (cosim.c's watch). */
+void cp_rope_tension_rates(const cp_real *x, const cp_real *dx, const cp_real *p, cp_real *rates);
 
 #if CP_RECURSIVE
 /* cp_rhs of the recursive formulation (chain.c). */

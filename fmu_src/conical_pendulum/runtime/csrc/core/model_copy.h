@@ -17,6 +17,7 @@
 #define CP_COPY_PASTE(name, suffix) CP_COPY_PASTE_(name, suffix)
 #define cp_rhs CP_COPY_PASTE(cp_rhs, CP_COPY_SUFFIX)
 #define cp_rope_law CP_COPY_PASTE(cp_rope_law, CP_COPY_SUFFIX)
+#define cp_rope_tension_rates CP_COPY_PASTE(cp_rope_tension_rates, CP_COPY_SUFFIX)
 #define cp_chain_rhs CP_COPY_PASTE(cp_chain_rhs, CP_COPY_SUFFIX)
 #define cp_eval_outputs CP_COPY_PASTE(cp_eval_outputs, CP_COPY_SUFFIX)
 #define cp_mass_forcing CP_COPY_PASTE(cp_mass_forcing, CP_COPY_SUFFIX)

@@ -283,6 +283,75 @@ static int estimator_order(int method)
     return method == CP_RK45 ? 4 : method == CP_RADAU ? 3 : 7;
 }
 
+/* The watch's rows after the solver's and cp_dense_grid's: the step before the one taken,
+ * then the event functions at the step's start and end. */
+#define SAVED_ROWS (CP_CARVED_ROWS + CP_FLIGHT_ROWS)
+#define EVENT_ROWS (SAVED_ROWS + CP_FLIGHT_ROWS)
+
+/* Whether g's sign says its switch is on (cp_watch). */
+static int on(double g)
+{
+    return g > 0;
+}
+
+/* The watch's event functions at (t0, x0) and (t1, x1) into the event rows of work; whether
+ * any sign differs. */
+static int events_differ(const cp_system *sys, double t0, const double *x0, double t1,
+                         const double *x1, double *work)
+{
+    const cp_watch *w = sys->watch;
+    if (!w || !w->n_events) return 0;
+    double *g0 = work + EVENT_ROWS * sys->dim, *g1 = g0 + sys->dim;
+    w->events(w->ctx, t0, x0, g0);
+    w->events(w->ctx, t1, x1, g1);
+    for (int k = 0; k < w->n_events; k++)
+        if (on(g0[k]) != on(g1[k])) return 1;
+    return 0;
+}
+
+/* Whether an accepted step from (t0, x0) to (t1, x1), x' = f1 there, needs its dense output
+ * for the watch: an event inside it, or what the watch looks for. */
+static int watched_inside(const cp_system *sys, double t0, const double *x0, double t1,
+                          const double *x1, const double *f1, double *work)
+{
+    const cp_watch *w = sys->watch;
+    if (!w) return 0;
+    return events_differ(sys, t0, x0, t1, x1, work)
+           || (w->wants_dense && w->wants_dense(w->ctx, t1, x1, f1));
+}
+
+/* The earliest time inside the step in flight (dense) at which an event function has the
+ * sign it has at the step's end, its sign at the start differing: bisection on the dense
+ * output down to adjacent doubles, so the root lies within an ulp before it. step->t1 when
+ * no sign differs. The event rows hold the functions at the step's ends (events_differ). */
+static double earliest_switch(const cp_system *sys, const cp_step *step, const double *rows,
+                              double *work)
+{
+    const cp_watch *w = sys->watch;
+    const int n = sys->dim;
+    double *g0 = work + EVENT_ROWS * n, *g1 = g0 + n;
+    double *x = work, *g = work + n;  /* carved rows the taken step no longer needs */
+    double found = step->t1;
+    for (int k = 0; k < w->n_events; k++) {
+        if (on(g0[k]) == on(g1[k])) continue;
+        const int from = on(g0[k]);
+        double before = step->t0, after = found;  /* a root of g_k before found, if any */
+        cp_step_state(step, rows, n, after, x);
+        w->events(w->ctx, after, x, g);
+        if (on(g[k]) == from) continue;  /* k switches after an earlier one */
+        for (;;) {
+            const double mid = before + 0.5 * (after - before);
+            if (mid <= before || mid >= after) break;
+            cp_step_state(step, rows, n, mid, x);
+            w->events(w->ctx, mid, x, g);
+            if (on(g[k]) == from) before = mid;
+            else after = mid;
+        }
+        found = after;
+    }
+    return found;
+}
+
 /* explicit_step's answer for a step that would answer t_target from an interpolant it cannot
  * trust: not taken, to be taken again ending on t_target. */
 #define RETAKE_ON_POINT (-1)
@@ -316,7 +385,9 @@ static int explicit_step(int method, const cp_system *sys, cp_step *step, double
         stats->nreject++;
         return RETAKE_ON_POINT;
     }
-    if (crosses) {
+    const int dense = crosses || watched_inside(sys, step->t1, m.y, t_new, m.y_new,
+                                                m.K + tb->stages * n, work);
+    if (dense) {
         double *dense = rows + CP_ROW_DENSE * n;
         if (method == CP_RK45) rk45_interpolant(n, &m, dense);
         else if ((status = dop853_interpolant(sys, step->t1, h, &m, dense, stats))) return status;
@@ -327,7 +398,7 @@ static int explicit_step(int method, const cp_system *sys, cp_step *step, double
     step->t0 = step->t1;
     step->t1 = t_new;
     step->h = h_abs;
-    step->dense = crosses;
+    step->dense = dense;
     step->method = method;
     return CP_OK;
 }
@@ -343,6 +414,43 @@ static int looks_stiff(cp_step *step, int past)
         step->stiff_steps = 0;
     }
     return step->stiff_steps >= CP_STIFF_STEPS;
+}
+
+/* The largest step DOP853 takes under CP_AUTO back from Radau: inside its trusted bound on
+ * the Jacobian's modes. */
+static double explicit_cap(int method, const cp_newton *newton, double max_step)
+{
+    return method == CP_AUTO && newton->jac_valid && newton->rho > 0
+               ? fmin(max_step, CP_AUTO_BOUND / newton->rho)
+               : max_step;
+}
+
+/* One accepted step of use (the method in use under method) from the end of the step in
+ * flight, none ending after t_limit; *stiffness the explicit pair's estimate. */
+static int take(int method, int use, const cp_system *sys, cp_step *step, double *rows,
+                cp_newton *newton, double *matrices, double t_target, double t_limit,
+                double rtol, double atol, double max_step, long long max_steps,
+                long long *attempts, double *work, estimate *stiffness, cp_stats *stats)
+{
+    int n = sys->dim, status;
+    if (use == CP_RADAU) {
+        status = cp_radau_step(sys, step, rows, newton, matrices, t_limit, rtol, atol, max_step,
+                               max_steps, attempts, work, stats);
+        if (status) return status;
+        return cp_all_finite(n, rows + CP_ROW_X1 * n) ? CP_OK : CP_NONFINITE;
+    }
+    const double trust = method == CP_AUTO ? CP_AUTO_BOUND : INFINITY;
+    const double cap = explicit_cap(method, newton, max_step);
+    status = explicit_step(use, sys, step, rows, t_target, t_limit, trust, rtol, atol, cap,
+                           max_steps, attempts, work, stiffness, stats);
+    if (status == RETAKE_ON_POINT) {  /* the stiffness test counts the step not taken */
+        estimate shortened;
+        status = explicit_step(use, sys, step, rows, t_target, fmin(t_target, t_limit), INFINITY,
+                               rtol, atol, cap, max_steps, attempts, work, &shortened, stats);
+    }
+    if (status == CP_TOO_MANY_STEPS && step->stiff_steps >= CP_STIFF_STEPS)
+        return CP_STIFF;  /* the steps were bounded by stability, not accuracy */
+    return status;
 }
 
 int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, cp_newton *newton,
@@ -365,13 +473,31 @@ int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, cp_n
                               estimator_order(first), m.tmp, m.err, m.scale, stats, &step->h);
         if (status) return status;
     }
+    const cp_watch *watch = sys->watch;
+    double *saved = work + SAVED_ROWS * n;  /* the step before the one taken, with a watch */
     while (step->t1 < t_target) {
         const int use = method == CP_AUTO ? step->next : method;
+        const cp_step before = *step;
+        if (watch) memcpy(saved, rows, CP_FLIGHT_ROWS * n * sizeof(double));
+        estimate stiffness = {0.0, 0.0};
+        status = take(method, use, sys, step, rows, newton, matrices, t_target, t_limit, rtol,
+                      atol, max_step, max_steps, attempts, work, &stiffness, stats);
+        if (status) return status;
+        if (watch && watch->n_events
+            && events_differ(sys, step->t0, rows + CP_ROW_X0 * n, step->t1, rows + CP_ROW_X1 * n, work)) {
+            const double t_switch = earliest_switch(sys, step, rows, work);
+            if (t_switch < step->t1) {  /* taken again, to end on the switch */
+                *step = before;
+                memcpy(rows, saved, CP_FLIGHT_ROWS * n * sizeof(double));
+                step->h = t_switch - step->t1;
+                stats->naccept--;
+                stats->nreject++;
+                status = take(method, use, sys, step, rows, newton, matrices, t_target, t_switch,
+                              rtol, atol, max_step, max_steps, attempts, work, &stiffness, stats);
+                if (status) return status;
+            }
+        }
         if (use == CP_RADAU) {
-            status = cp_radau_step(sys, step, rows, newton, matrices, t_limit, rtol, atol,
-                                   max_step, max_steps, attempts, work, stats);
-            if (status) return status;
-            if (!cp_all_finite(n, x1)) return CP_NONFINITE;
             step->stiffness = (step->t1 - step->t0) * newton->rho;
             step->calm_steps = step->stiffness < CP_CALM_BOUND ? step->calm_steps + 1 : 0;
             if (method == CP_AUTO && step->calm_steps >= CP_CALM_STEPS) {
@@ -379,36 +505,22 @@ int cp_cover(int method, const cp_system *sys, cp_step *step, double *rows, cp_n
                 step->calm_steps = step->stiff_steps = 0;
                 stats->nswitch++;
             }
-            continue;
+        } else {
+            step->stiffness = stiffness.size;
+            const tableau *tb = use == CP_RK45 ? &RK45_TABLEAU : &DOP853_TABLEAU;
+            /* auto: a fast decay, or a step held at the cap while accuracy asks for more */
+            const double cap = explicit_cap(method, newton, max_step);
+            const int held = step->t1 - step->t0 >= cap && step->h > cap;
+            const int past = method == CP_AUTO ? stiffness.decay > CP_AUTO_BOUND || held
+                                               : stiffness.size > tb->stiff_bound;
+            if (looks_stiff(step, past) && method == CP_AUTO) {
+                step->next = CP_RADAU;  /* stiff: the implicit solver from here */
+                step->calm_steps = step->stiff_steps = 0;
+                newton->current_jac = 0;
+                stats->nswitch++;
+            }
         }
-        estimate stiffness = {0.0, 0.0};
-        const double trust = method == CP_AUTO ? CP_AUTO_BOUND : INFINITY;
-        /* back from Radau, DOP853 stays inside its trusted bound on the Jacobian's modes */
-        const double cap = method == CP_AUTO && newton->jac_valid && newton->rho > 0
-                               ? fmin(max_step, CP_AUTO_BOUND / newton->rho)
-                               : max_step;
-        status = explicit_step(use, sys, step, rows, t_target, t_limit, trust, rtol, atol, cap,
-                               max_steps, attempts, work, &stiffness, stats);
-        if (status == RETAKE_ON_POINT) {  /* the stiffness test counts the step not taken */
-            estimate shortened;
-            status = explicit_step(use, sys, step, rows, t_target, t_target, INFINITY, rtol, atol,
-                                   cap, max_steps, attempts, work, &shortened, stats);
-        }
-        if (status == CP_TOO_MANY_STEPS && step->stiff_steps >= CP_STIFF_STEPS)
-            return CP_STIFF;  /* the steps were bounded by stability, not accuracy */
-        if (status) return status;
-        step->stiffness = stiffness.size;
-        const tableau *tb = use == CP_RK45 ? &RK45_TABLEAU : &DOP853_TABLEAU;
-        /* auto: a fast decay, or a step held at the cap while accuracy asks for more */
-        const int held = step->t1 - step->t0 >= cap && step->h > cap;
-        const int past = method == CP_AUTO ? stiffness.decay > CP_AUTO_BOUND || held
-                                           : stiffness.size > tb->stiff_bound;
-        if (looks_stiff(step, past) && method == CP_AUTO) {
-            step->next = CP_RADAU;  /* stiff: the implicit solver from here */
-            step->calm_steps = step->stiff_steps = 0;
-            newton->current_jac = 0;
-            stats->nswitch++;
-        }
+        if (watch && watch->accepted) watch->accepted(watch->ctx, step, rows);
     }
     return CP_OK;
 }

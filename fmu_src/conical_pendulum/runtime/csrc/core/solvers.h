@@ -16,12 +16,37 @@ typedef int (*cp_rhs_fn)(void *ctx, double t, const double *x, double *dx);
  * side does. The implicit solver's only use of it. */
 typedef int (*cp_jac_fn)(void *ctx, double t, const double *x, double *J);
 
+typedef struct cp_step cp_step;
+
+/* What a caller watches along an integration (cp_system's watch; NULL: nothing): plain
+ * callbacks on its own ctx.
+ * - Events: n_events functions g(t, x) (events writes them into g), each a switch of the
+ *   right-hand side where its sign changes (> 0 against <= 0). A step whose ends differ in a
+ *   sign is taken again to end on the earliest root, located on the step's dense output by
+ *   bisection to the first time the function has its new sign (the step's end within a few
+ *   units in the last place of the root): no step straddles a switch, so the error control
+ *   and the interpolants see a smooth right-hand side, and the next step starts on the
+ *   switch's far side. Two roots inside one step (a sign that changes and changes back) go
+ *   unseen, as in every event finder. RK4 steps over them.
+ * - wants_dense: whether an accepted step ending at (t1, x1), with x' = f1 there, needs its
+ *   dense output for what the caller looks for inside it (may be NULL).
+ * - accepted: called once per step taken, in order, the step final (its interpolant in rows
+ *   where step->dense). */
+typedef struct {
+    int n_events;  /* at most the system's dim */
+    int (*events)(void *ctx, double t, const double *x, double *g);
+    int (*wants_dense)(void *ctx, double t1, const double *x1, const double *f1);
+    void (*accepted)(void *ctx, const cp_step *step, const double *rows);
+    void *ctx;
+} cp_watch;
+
 typedef struct {
     int dim;
     cp_rhs_fn rhs;   /* returns CP_OK, or a status >= 10 that stops the integration; a trial
                         stage's CP_NONFINITE rejects the step instead (the step shrinks) */
     void *ctx;
     cp_jac_fn jac;   /* for CP_RADAU and CP_AUTO */
+    const cp_watch *watch;  /* NULL: nothing watched */
 } cp_system;
 
 /* Counts of one call; 64 bits everywhere (long is 32 bits on Windows). */
@@ -90,9 +115,11 @@ static inline double cp_min_step(double t0, double t1)
     return 10 * (nextafter(t, INFINITY) - t);
 }
 
-/* Doubles of scratch memory the solvers need for a system of size dim (cp_dense_grid keeps
- * its step in flight in it too). */
-#define CP_WORK_SIZE(dim) (32 * (dim))
+/* Doubles of scratch memory the solvers need for a system of size dim: a step's own rows
+ * (CP_CARVED_ROWS), cp_dense_grid's step in flight (CP_FLIGHT_ROWS), and with a watch the
+ * step before the one taken (CP_FLIGHT_ROWS, to take it again) and two rows of event
+ * functions. */
+#define CP_WORK_SIZE(dim) (44 * (dim))
 
 /* CP_OK, or why a step by dt from t cannot be taken with these settings, whatever the
  * state: more than max_steps steps of at most max_step (CP_TOO_MANY_STEPS), or, for an
@@ -119,7 +146,7 @@ int cp_rk4(const cp_system *sys, double t, double *x, double dt, double max_step
  * across the times a caller asks for (cp_cover) and answer each from the step that holds it,
  * by its dense output, while the integration itself continues from the step's end only. Plain
  * data; its vectors are CP_FLIGHT_ROWS rows of dim doubles the caller keeps beside it. */
-typedef struct {
+struct cp_step {
     double t0, t1;  /* the step's start and end (equal: no step yet, the integration starts at t1) */
     double h;       /* the step size proposed after it (<= 0: chosen as scipy does) */
     int fsal;       /* the CP_ROW_F1 row holds x' at t1 */
@@ -131,7 +158,7 @@ typedef struct {
     double h_old, err_old;  /* Radau: the step size proposed before the last step and its
                                error norm (0: none) */
     double stiffness;  /* the last step's h |lambda| (explicit: Hairer's estimate; Radau: h rho(J)) */
-} cp_step;
+};
 
 /* The rows: x at t0 and t1, x' at t1, then the interpolant's coefficients (DOP853's 7 rows of
  * F, RK45's 4 rows of Q, Radau's 3 rows of Q, as scipy's dense outputs hold them). */

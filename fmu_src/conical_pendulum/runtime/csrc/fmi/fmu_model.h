@@ -47,8 +47,15 @@
  * of their dimension, fmi3_glue.c reads from the model's generated fmi3_arrays.h
  * (builder/fmi/fmi3.py): the pendulum's per-link arrays and n_links; the cart has neither.
  *
- * Not in the contract: Boolean and String variables, event indicators and events (neither
- * model has any; the FMI layer refuses them). */
+ * Events: Model Exchange's state events only. model_sizes.n_event_indicator indicators
+ * (model_get_event_indicators: the pendulum's elastic ropes' taut margins; the cart has none),
+ * which the host watches for sign changes; at an event it handles (NewDiscreteStates,
+ * UpdateDiscreteStates) the FMI layer calls model_event_update. No time events, no step events
+ * (CompletedIntegratorStep never asks for one), no events in Co-Simulation, whose steps locate
+ * the ropes' switches inside the model.
+ *
+ * Not in the contract: Boolean and String variables (neither model has any; the FMI layer
+ * refuses them). */
 #ifndef CP_FMU_MODEL_H
 #define CP_FMU_MODEL_H
 
@@ -75,7 +82,7 @@ typedef struct {
     size_t data_size;        /* sizeof(ModelData) */
     int n_real, n_integer;   /* Real and Integer variables held (the derivatives apart) */
     int n_state;             /* continuous states x, Model Exchange's nx */
-    int n_event_indicator;   /* 0: the contract has no events yet */
+    int n_event_indicator;   /* Model Exchange's event indicators (model_get_event_indicators) */
     unsigned vr_state;       /* the value reference of x[0]; x[k] is vr_state + k */
     unsigned vr_derivative;  /* the value reference of der(x[0]); der(x[k]) is vr_derivative + k */
 } ModelSizes;
@@ -120,6 +127,15 @@ void model_set_stop_time(ModelData *m, double stop_time);
 /* Leaving initialization: the experiment's tolerance applied to the model's settings, what
  * was carried forgotten, the outputs computed at the start. */
 void model_initialize(ModelData *m);
+
+/* Model Exchange's event indicators at the current values (n_event_indicator of them): the
+ * pendulum's elastic ropes' taut margins, whose sign changes are their slack and snap events. */
+void model_get_event_indicators(ModelData *m, double z[]);
+
+/* An event the host handles (Model Exchange's event mode, NewDiscreteStates or
+ * UpdateDiscreteStates): the discrete outputs take what the state shows there (the
+ * pendulum's elastic ropes: taut, snaps, the tension). */
+void model_event_update(ModelData *m);
 
 /* ---- the variable table ---- */
 

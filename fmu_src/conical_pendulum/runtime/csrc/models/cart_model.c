@@ -104,6 +104,16 @@ void model_initialize(ModelData *m)
     m->force = m->r[CP_VR_F_X];
 }
 
+void model_get_event_indicators(ModelData *m, double z[])  /* none: n_event_indicator is 0 */
+{
+    (void)m, (void)z;
+}
+
+void model_event_update(ModelData *m)  /* nothing discrete changes at an event */
+{
+    (void)m;
+}
+
 /* ---- the variable table ---- */
 
 ModelStatus model_get_real(ModelData *m, unsigned vr, double *value, double time, char *message,

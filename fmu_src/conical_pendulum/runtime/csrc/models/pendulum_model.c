@@ -44,11 +44,12 @@ struct ModelData {
 };
 
 const ModelSizes model_sizes = {sizeof(ModelData), CP_NREAL, CP_VR_DERIVATIVE - CP_NREAL,
-                                CP_NSTATE, 0, CP_VR_STATE, CP_VR_DERIVATIVE};
+                                CP_NSTATE, CP_NWATCHED, CP_VR_STATE, CP_VR_DERIVATIVE};
 
 #define X(m) ((m)->r + CP_VR_STATE)
 #define Y(m) ((m)->r + CP_VR_OUTPUT)
 #define STATS(m) ((m)->r + CP_VR_STATISTICS)
+#define ROPE_EVENTS(m) ((m)->r + CP_VR_ROPE_EVENTS)
 
 static const char *const tolerance_name = "tolerance (from setupExperiment)";
 
@@ -206,11 +207,47 @@ void model_set_stop_time(ModelData *m, double stop_time)
     m->stop_time = stop_time;
 }
 
+/* What the elastic ropes show at the model's state, at an event (initialization, Model
+ * Exchange's event mode; Co-Simulation's steps see theirs inside, cosim.h): the tension
+ * there as the largest since the last, whether taut, and, with count, a snap where a rope
+ * slack at the last event is taut now. */
+static void see_ropes(ModelData *m, int count)
+{
+#ifdef CP_NELASTIC
+    update_outputs(m);
+    double *seen = ROPE_EVENTS(m);
+    for (int e = 0; e < CP_NELASTIC; e++) {
+        const int taut = Y(m)[CP_MARGIN_OUTPUT + e] > 0;
+        double *was_taut = &seen[CP_ROPE_EVENT_TAUT * CP_NELASTIC + e];
+        seen[CP_ROPE_EVENT_SNAPS * CP_NELASTIC + e] += count && !*was_taut && taut;
+        *was_taut = taut;
+        seen[CP_ROPE_EVENT_T_ROPE_PEAK * CP_NELASTIC + e] = Y(m)[CP_TENSION_OUTPUT + cp_elastic_rope[e]];
+    }
+#else
+    (void)m, (void)count;
+#endif
+}
+
 void model_initialize(ModelData *m)
 {
     if (m->tolerance > 0 && !m->rtol_set) m->r[CP_VR_RTOL] = m->tolerance;
     invalidate(m);
+    see_ropes(m, 0);
+}
+
+void model_get_event_indicators(ModelData *m, double z[])
+{
+#ifdef CP_NELASTIC
     update_outputs(m);
+    memcpy(z, Y(m) + CP_MARGIN_OUTPUT, CP_NELASTIC * sizeof z[0]);
+#else
+    (void)m, (void)z;
+#endif
+}
+
+void model_event_update(ModelData *m)
+{
+    see_ropes(m, 1);
 }
 
 /* ---- the variable table ---- */
@@ -544,7 +581,8 @@ ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_ret
     cp_failure failure;
     double reached = t;
     int status = cp_cosim_advance(&settings, m->r, (const double(*)[2])m->input_rates, X(m), Y(m),
-                                  t, dt, m->stop_time, &m->flight, &m->matrices, m->work, STATS(m), &failure,
+                                  t, dt, m->stop_time, &m->flight, &m->matrices, m->work, STATS(m),
+                                  ROPE_EVENTS(m), &failure,
                                   early_return_allowed ? &reached : NULL);
     if (last_successful_time) *last_successful_time = status == CP_OK ? t + dt : reached;
     /* valid where the state moved (cosim.c computed them there); at t, computed again */
@@ -615,6 +653,16 @@ static const char *flight_invalid(const ModelData *m, char *message, size_t size
             snprintf(name, sizeof name, "step in flight: row %d, entry %d", row, k);
             if (cp_real_refusal(name, f->rows[row][k], &cp_rules[CP_FINITE_RULE], "", message, size))
                 return message;
+        }
+    }
+    for (int e = 0; e < CP_NWATCHED; e++) {
+        const cp_rope_watch *rope = &f->ropes[e];
+        if (!(isfinite(rope->slope) && isfinite(rope->peak_time) && rope->peak >= 0
+              && isfinite(rope->peak))) {
+            snprintf(message, size, "step in flight: elastic rope %d's watch: slope = %.17g, "
+                     "peak_time = %.17g, peak = %.17g: must be finite, the peak >= 0", e,
+                     rope->slope, rope->peak_time, rope->peak);
+            return message;
         }
     }
     for (int k = 0; k < CP_NINPUT; k++)
