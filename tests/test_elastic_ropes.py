@@ -19,7 +19,7 @@ from conical_pendulum.analysis.simulate import simulate
 from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.core import dependencies
 from conical_pendulum.builder.core.equations import derive
-from fmu_helpers import assert_model_exchange_follows
+from fmu_helpers import Instance, assert_model_exchange_follows
 from formulations import assert_formulations_agree
 
 G = 9.8
@@ -226,6 +226,24 @@ def test_a_bouncing_load_follows_the_closed_form_through_its_located_snaps(built
     assert np.array_equal(run["snaps0"], np.maximum(meetings, 0)) and run["snaps0"][-1] == 21
     kept = run["energy"] - run["W_hoist"]
     assert np.ptp(kept) < 1e-9 * 100.0 * G * 10.0
+
+
+@pytest.mark.parametrize("backend", ["pythonfmu", "native"])
+def test_an_fmu_state_holds_what_the_steps_saw_of_the_rope(built_fmu, backend):
+    """Saved between the snap and the peak, the state replays the next steps bit for bit,
+    the peak the watch finds inside them included."""
+    fmu = Instance(built_fmu(BOUNCING, backend=backend), start_values={**AT_REST, "r0": 9.5})
+    watched = ("T_rope_peak0", "snaps0", "taut0", "r0", "v_r0")
+    for _ in range(17):  # to 0.34 s: taut since 0.319 s, peaking at 0.37 s
+        fmu.step(0.02)
+    state, t = fmu.get_state(), fmu.time
+    straight = [(fmu.step(0.02), fmu.get(*watched))[1] for _ in range(3)]
+    fmu.set_state(state)
+    fmu.time = t
+    assert [(fmu.step(0.02), fmu.get(*watched))[1] for _ in range(3)] == straight
+    assert max(peak for peak, *_ in straight) > fmu.get("T_rope0")[0]
+    fmu.free_state(state)
+    fmu.close()
 
 
 def frequencies(formulation, m=50.0, length=8.0, stiffness=2e5):

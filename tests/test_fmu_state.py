@@ -93,7 +93,9 @@ class NativeState:
         self.data = bytes(data)
         after_r = self.MODEL + 8 * len(reals)
         flight = after_r + 32  # cosim.h's cp_flight, its cp_step after live, reserved, t_point
-        matrices = flight + 88 + 8 * (10 * n_state + 1 + 3 * (n_input + 1))  # cosim.h's cp_matrices
+        n_elastic = sum(v.name.startswith("taut_margin") for v in instance.md.modelVariables)
+        # cosim.h's cp_matrices, after the flight's rows, t_inputs, inputs and ropes' watch
+        matrices = flight + 88 + 8 * (10 * n_state + 1 + 3 * (n_input + 1) + 3 * (n_elastic + 1))
         tail = size - 8 * n_state - 8
         self.offsets = {name: at for name, at, _ in self.OWN} | {
             "solver": after_r,
