@@ -27,7 +27,7 @@ def model_description(described: Description) -> bytes:
             "generationTool": "conical_pendulum.builder.packaging.native",
             "generationDateAndTime": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "variableNamingConvention": "structured",
-            "numberOfEventIndicators": "0",
+            "numberOfEventIndicators": str(len(event_indicators(records))),
         },
     )
     common = {
@@ -64,6 +64,12 @@ def model_description(described: Description) -> bytes:
     _model_structure(ET.SubElement(root, "ModelStructure"), records, index)
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def event_indicators(records: list[Variable]) -> list[Variable]:
+    """Model Exchange's event indicators, in the order the model gives them
+    (model_get_event_indicators): each elastic rope's taut margin, an output."""
+    return [v for v in records if v.group == "outputs" and v.quantity == "taut_margin"]
 
 
 def default_experiment(root: ET.Element, described: Description) -> None:

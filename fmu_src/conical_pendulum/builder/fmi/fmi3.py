@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from ...runtime.rules import RULES
 from .. import c_literals as c
 from .contract import LOG_CATEGORIES, MAX_DERIVATIVE_ORDER, Description, Standard
-from .fmi2 import default_experiment
+from .fmi2 import default_experiment, event_indicators
 from .units import TIME, attributes, declared, enumerations, unit_definitions
 from .variables import Variable, describe, model_structure
 
@@ -117,8 +117,9 @@ def _description(variable: Fmi3Variable) -> str:
 
 def model_description(described: Description) -> bytes:
     """modelDescription.xml (FMI 3.0) for both interfaces of the model: the same variables and
-    value references as its FMI 2.0 native FMU; no clocks, no events, no event mode; the
-    structural parameter only where there are arrays (arrays_header)."""
+    value references as its FMI 2.0 native FMU; no clocks, no event mode in Co-Simulation, the
+    elastic ropes' taut margins Model Exchange's event indicators; the structural parameter
+    only where there are arrays (arrays_header)."""
     model, records = described.model, described.records
     root = ET.Element(
         "fmiModelDescription",
@@ -246,15 +247,18 @@ def _values(variable: Fmi3Variable) -> tuple[str, dict[str, str]]:
 def _model_structure(
     element: ET.Element, records: list[Variable], variables_: list[Fmi3Variable], vr
 ) -> None:
-    """ModelStructure by value reference: builder.fmi.variables.model_structure's unknowns."""
+    """ModelStructure by value reference: builder.fmi.variables.model_structure's unknowns, and
+    the event indicators (outputs, with their dependencies)."""
     structure = model_structure(records)
-    # FMI 3.0's order: Output, ContinuousStateDerivative, InitialUnknown, each by value
-    # reference; an array is an unknown where its first element is, and depends on what any
-    # of its elements does (providesPerElementDependencies is false)
+    indicators = {v.name for v in event_indicators(records)}
+    # FMI 3.0's order: Output, ContinuousStateDerivative, ClockedState (none), InitialUnknown,
+    # EventIndicator, each by value reference; an array is an unknown where its first element
+    # is, and depends on what any of its elements does (providesPerElementDependencies is false)
     for tag, unknowns in (
         ("Output", structure.outputs),
         ("ContinuousStateDerivative", structure.derivatives),
         ("InitialUnknown", structure.initial_unknowns),
+        ("EventIndicator", [u for u in structure.outputs if u.variable.name in indicators]),
     ):
         listed = {u.variable.name: u for u in unknowns}
         for variable in variables_:

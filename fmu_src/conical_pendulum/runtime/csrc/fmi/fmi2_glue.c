@@ -351,9 +351,9 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
     FmiInstance *inst = CHECKED(c, fmi2NewDiscreteStates);
     if (!inst) return fmi2Error;
     if (!eventInfo) return REFUSE(inst, "fmi2NewDiscreteStates: eventInfo is NULL");
-    memset(eventInfo, 0, sizeof *eventInfo);  /* no events: nothing to wait for */
+    memset(eventInfo, 0, sizeof *eventInfo);  /* no iteration, no time event: nothing to wait for */
     /* a value set in event mode may have jumped a book (a rope's winch, a load's mass) */
-    eventInfo->valuesOfContinuousStatesChanged = model_states_jumped(inst->model) ? fmi2True : fmi2False;
+    eventInfo->valuesOfContinuousStatesChanged = fmi_event_update(inst) ? fmi2True : fmi2False;
     return fmi2OK;
 }
 
@@ -392,9 +392,8 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx)
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
 {
-    (void)eventIndicators;
     return (fmi2Status)fmi_get_event_indicators(CHECKED(c, fmi2GetEventIndicators),
-                                                "fmi2GetEventIndicators", ni);
+                                                "fmi2GetEventIndicators", eventIndicators, ni);
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)

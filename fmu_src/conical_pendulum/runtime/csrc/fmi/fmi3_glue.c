@@ -8,8 +8,9 @@
  * model's diagnosis; messages go through the host's logMessage callback. Nothing is allocated
  * after instantiation but what a host asks for (FMU states).
  *
- * What this FMU does not have, as its model description says: no clocks and no events (no
- * event indicators, hasEventMode="false", providesEvaluateDiscreteStates="false"), no
+ * What this FMU does not have, as its model description says: no clocks, no events in
+ * Co-Simulation (hasEventMode="false"; Model Exchange's state events are the model's event
+ * indicators, an elastic rope's taut margin), providesEvaluateDiscreteStates="false", no
  * Scheduled Execution, no configuration modes (no tunable structural parameters), variables of
  * the types Float64, Int32 and Enumeration (as Int64) only (the others are refused) and, for a model with arrays, the
  * UInt64 structural parameter of their dimension (fmi3_arrays.h, generated for every model: an
@@ -582,10 +583,10 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *discreteStatesN
     if (!discreteStatesNeedUpdate || !terminateSimulation || !nominalsOfContinuousStatesChanged
         || !valuesOfContinuousStatesChanged || !nextEventTimeDefined || !nextEventTime)
         return REFUSE(inst, "fmi3UpdateDiscreteStates: a pointer is NULL");
-    /* no events: nothing to wait for; a value set in event mode may have jumped a book (a
-     * rope's winch, a load's mass) */
+    /* no iteration, no time event: nothing to wait for; a value set in event mode may have
+     * jumped a book (a rope's winch, a load's mass) */
     *discreteStatesNeedUpdate = *terminateSimulation = *nominalsOfContinuousStatesChanged = fmi3False;
-    *valuesOfContinuousStatesChanged = model_states_jumped(inst->model) ? fmi3True : fmi3False;
+    *valuesOfContinuousStatesChanged = fmi_event_update(inst) ? fmi3True : fmi3False;
     *nextEventTimeDefined = fmi3False;
     *nextEventTime = 0.0;
     return fmi3OK;
@@ -784,9 +785,9 @@ fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64 derivat
 }
 fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 eventIndicators[], size_t nEventIndicators)
 {
-    (void)eventIndicators;
     return (fmi3Status)fmi_get_event_indicators(CHECKED(c, fmi3GetEventIndicators),
-                                                "fmi3GetEventIndicators", nEventIndicators);
+                                                "fmi3GetEventIndicators", eventIndicators,
+                                                nEventIndicators);
 }
 fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64 continuousStates[],
                                    size_t nContinuousStates)

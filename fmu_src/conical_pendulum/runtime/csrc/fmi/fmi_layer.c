@@ -426,11 +426,23 @@ FmiStatus fmi_get_nominals(FmiInstance *inst, const char *function, double x_nom
     return FMI_OK;
 }
 
-FmiStatus fmi_get_event_indicators(FmiInstance *inst, const char *function, size_t ni)
+FmiStatus fmi_get_event_indicators(FmiInstance *inst, const char *function, double z[], size_t ni)
 {
     if (!inst) return FMI_ERROR;
-    return ni ? fmi_error(inst, "%s: %s = %zu, but this FMU has none", function,
-                          inst->standard->n_indicators_argument, ni) : FMI_OK;
+    if (ni != (size_t)model_sizes.n_event_indicator)
+        return fmi_error(inst, "%s: %s = %zu, but the number of event indicators is %d",
+                         function, inst->standard->n_indicators_argument, ni,
+                         model_sizes.n_event_indicator);
+    if (!ni) return FMI_OK;  /* z may be NULL: nothing to fill */
+    if (!z) return fmi_error(inst, "%s: eventIndicators is NULL", function);
+    model_get_event_indicators(inst->model, z);
+    return FMI_OK;
+}
+
+int fmi_event_update(FmiInstance *inst)
+{
+    model_event_update(inst->model);
+    return model_states_jumped(inst->model);
 }
 
 /* ---- FMU states ----------------------------------------------------------------------------- */

@@ -5,9 +5,9 @@
  * types and state table (the states each function may be called in) and the functions only its
  * standard has; for what both standards do alike (the check of an instance's state, logging,
  * SetDebugLogging, Reset, the experiment, leaving initialization, Real and Integer access by
- * scalar, directional derivatives, the Model Exchange states and derivatives, the FMU states:
- * get, set, free, serialize and the check of a restored one) its entry point is a thin wrapper over a function here, which it
- * hands its own function's name.
+ * scalar, directional derivatives, the Model Exchange states, derivatives, event indicators and
+ * event update, the FMU states: get, set, free, serialize and the check of a restored one) its
+ * entry point is a thin wrapper over a function here, which it hands its own function's name.
  *
  * Plain C on the model contract (fmu_model.h): no FMI header, no fmu_config.h. A layer
  * describes its standard once (FmiStandard: state bits and names, the words of its messages,
@@ -15,8 +15,8 @@
  * FMI 2.0's and FMI 3.0's alike (OK 0, Warning 1, Discard 2, Error 3), so a layer casts them.
  * The functions a wrapper hands fmi_checked's result take NULL (a call refused in its state)
  * and return FMI_ERROR for it; the helpers (fmi_log, fmi_error, fmi_discard, fmi_get_real,
- * fmi_check_real, fmi_derivative) need an instance. Nothing is allocated but an instance's
- * FMU states, with the allocator the layer gives. */
+ * fmi_check_real, fmi_derivative, fmi_event_update) need an instance. Nothing is allocated but
+ * an instance's FMU states, with the allocator the layer gives. */
 #ifndef FMI_LAYER_H
 #define FMI_LAYER_H
 
@@ -209,7 +209,8 @@ FmiStatus fmi_get_output_derivative(FmiInstance *inst, const char *function, uns
 
 FmiStatus fmi_set_time(FmiInstance *inst, const char *function, double time);
 /* CompletedIntegratorStep: refused if either output pointer (enterEventMode,
- * terminateSimulation) is NULL; the layer writes false into both on FMI_OK (no events). */
+ * terminateSimulation) is NULL; the layer writes false into both on FMI_OK (no step events:
+ * the host finds the state events from the event indicators). */
 FmiStatus fmi_completed_integrator_step(FmiInstance *inst, const char *function,
                                         const void *enter_event_mode,
                                         const void *terminate_simulation);
@@ -218,7 +219,15 @@ FmiStatus fmi_set_continuous_states(FmiInstance *inst, const char *function, con
 FmiStatus fmi_get_continuous_states(FmiInstance *inst, const char *function, double x[], size_t nx);
 FmiStatus fmi_get_derivatives(FmiInstance *inst, const char *function, double dx[], size_t nx);
 FmiStatus fmi_get_nominals(FmiInstance *inst, const char *function, double x_nominal[], size_t nx);
-FmiStatus fmi_get_event_indicators(FmiInstance *inst, const char *function, size_t ni);
+/* The event indicators (model_get_event_indicators: an elastic rope's taut margin, whose sign
+ * change is its slack or snap event) into z: refused unless ni is model_sizes.n_event_indicator
+ * (naming both) and, for ni > 0, z is an array. */
+FmiStatus fmi_get_event_indicators(FmiInstance *inst, const char *function, double z[], size_t ni);
+/* An event the host handles (FMI 2.0's NewDiscreteStates, FMI 3.0's UpdateDiscreteStates):
+ * the model's discrete outputs updated (model_event_update); whether a value set in event mode
+ * jumped the continuous states (valuesOfContinuousStatesChanged). Nothing needs another
+ * iteration. */
+int fmi_event_update(FmiInstance *inst);
 
 /* ---- FMU states ------------------------------------------------------------------------------
  * An FMU state is the machine and then the model's data (model_sizes.data_size bytes), plain

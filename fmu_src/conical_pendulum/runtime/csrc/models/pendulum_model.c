@@ -210,15 +210,18 @@ void model_set_stop_time(ModelData *m, double stop_time)
 /* What the elastic ropes show at the model's state, at an event (initialization, Model
  * Exchange's event mode; Co-Simulation's steps see theirs inside, cosim.h): the tension
  * there as the largest since the last, whether taut, and, with count, a snap where a rope
- * slack at the last event is taut now. */
+ * slack at the last event is taut now. A host's root finder may stop exactly on a root (the
+ * margin 0 to the last bit, fmpy's CVode at a snap): at an event, a margin of 0 is the
+ * switch the host stopped for, so the rope takes its other mode there. */
 static void see_ropes(ModelData *m, int count)
 {
 #ifdef CP_NELASTIC
     update_outputs(m);
     double *seen = ROPE_EVENTS(m);
     for (int e = 0; e < CP_NELASTIC; e++) {
-        const int taut = Y(m)[CP_MARGIN_OUTPUT + e] > 0;
         double *was_taut = &seen[CP_ROPE_EVENT_TAUT * CP_NELASTIC + e];
+        const double margin = Y(m)[CP_MARGIN_OUTPUT + e];
+        const int taut = margin > 0 || (count && margin == 0 && !*was_taut);
         seen[CP_ROPE_EVENT_SNAPS * CP_NELASTIC + e] += count && !*was_taut && taut;
         *was_taut = taut;
         seen[CP_ROPE_EVENT_T_ROPE_PEAK * CP_NELASTIC + e] = Y(m)[CP_TENSION_OUTPUT + cp_elastic_rope[e]];
