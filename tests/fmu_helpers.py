@@ -8,6 +8,7 @@ import json
 import shutil
 import zipfile
 
+import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 from fmpy.fmi3 import FMU3Model, FMU3Slave
@@ -238,10 +239,13 @@ INSTANCES = {2: Instance, 3: Instance3}
 
 def assert_model_exchange_follows(path, scene, start: dict, stop_time: float) -> None:
     """The FMU's Model Exchange through fmpy's CVode at 1e-10 against the native reference at
-    1e-12 from the same start values: every state within 1e-6 of max(1, its largest size)."""
+    1e-12 from the same start values: every state within 1e-6 of max(1, its largest size). An
+    event (an elastic rope's snap) is a second row at its time, which fmpy records after it:
+    the states are continuous there, so the row after is left out."""
     run = run_fmu(
         path, stop_time=stop_time, fmi_type="ModelExchange", relative_tolerance=1e-10, start_values=start
     )
+    run = run[np.unique(run["time"], return_index=True)[1]]
     inputs = {k: v for k, v in start.items() if k in scene.input_names()}
     state = {k: v for k, v in start.items() if k in scene.state_names()}
     reference = simulate(scene, run["time"], parameters=inputs, state=state, rtol=1e-12, atol=1e-12)

@@ -19,7 +19,7 @@ cdef extern from "solvers.h":
     ctypedef int (*cp_rhs_fn)(void *ctx, double t, const double *x, double *dx) noexcept nogil
     ctypedef int (*cp_jac_fn)(void *ctx, double t, const double *x, double *J) noexcept nogil
     ctypedef struct cp_watch:
-        pass
+        int n_events
     ctypedef struct cp_system:
         int dim
         cp_rhs_fn rhs
@@ -82,6 +82,7 @@ cdef extern from "cosim.h":
                       cp_matrices *matrices, double *stats, cp_failure *failure) noexcept nogil
     int cp_held_rhs(void *ctx, double t, const double *x, double *dx) noexcept nogil
     int cp_held_jac(void *ctx, double t, const double *x, double *J) noexcept nogil
+    const cp_watch *cp_held_watch(void *model, cp_watch *watch) noexcept nogil
     int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failure) noexcept nogil
 
 cdef extern from "fmu_model.h":
@@ -273,7 +274,8 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     dense output: (array, nfev).
 
     One integration over the whole grid, as solve_ivp(method="DOP853", t_eval=times)
-    does, with no Python per step; counts (a dict), when given, receives every count
+    does, with no Python per step, its steps ending on the elastic ropes' switches as the
+    FMUs' do (cosim.h's cp_held_watch); counts (a dict), when given, receives every count
     (nfev, naccept, nreject, njev, nlu, nswitch: the automatic choice's switches). Raises CoreError or RuntimeError on failure.
     """
     if method not in ("rk45", "dop853", "radau", "auto"):
@@ -294,7 +296,9 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     cdef cp_model model
     cdef cp_system system
     cdef cp_stats stats
+    cdef cp_watch watch
     _system(&system, &model, &p[0], &stats)
+    system.watch = cp_held_watch(&model, &watch)  # the elastic ropes' switches, located
     cdef int status
     with nogil:
         status = cp_dense_grid(solver, &system, &times[0], times.shape[0], &out[0, 0], rtol,

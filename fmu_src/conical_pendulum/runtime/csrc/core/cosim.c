@@ -112,12 +112,29 @@ static void law_at(watcher *w, double t, const double *x, double *p)
     cp_rope_law(x, p);
 }
 
-/* The events: each rope's taut margin (cp_rope_law). */
+/* Each rope's taut margin (cp_rope_law) from p, the law filled. */
+static void taut_margins(const double *p, double *g)
+{
+    for (int e = 0; e < CP_NELASTIC; e++) g[e] = p[cp_elastic_law[e] + 2];
+}
+
+/* The events: the taut margins at (t, x). */
 static int margins(void *ctx, double t, const double *x, double *g)
 {
     double p[CP_PSIZE];
     law_at(ctx, t, x, p);
-    for (int e = 0; e < CP_NELASTIC; e++) g[e] = p[cp_elastic_law[e] + 2];
+    taut_margins(p, g);
+    return CP_OK;
+}
+
+/* ... of a held model (ctx a cp_model). */
+static int held_margins(void *ctx, double t, const double *x, double *g)
+{
+    double p[CP_PSIZE];
+    (void)t;
+    memcpy(p, ((cp_model *)ctx)->p, sizeof p);
+    cp_rope_law(x, p);
+    taut_margins(p, g);
     return CP_OK;
 }
 
@@ -214,6 +231,17 @@ static void accepted(void *ctx, const cp_step *step, const double *rows)
     see(w, step, rows);
 }
 #endif
+
+const cp_watch *cp_held_watch(void *model, cp_watch *watch)
+{
+#ifdef CP_NELASTIC
+    *watch = (cp_watch){CP_NELASTIC, held_margins, NULL, NULL, model};
+    return watch;
+#else
+    (void)model, (void)watch;
+    return NULL;
+#endif
+}
 
 /* The polynomials' start: p with the inputs where the flight's integration started, and
  * their rates there; p0 the core's p there (cp_input_at). Whether any input moves. */

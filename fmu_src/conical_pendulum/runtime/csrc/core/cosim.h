@@ -128,6 +128,12 @@ int cp_held_rhs(void *ctx, double t, const double *x, double *dx);
 /* Its exact Jacobian (cp_jac_fn), a column per state by complex step (directional.h). */
 int cp_held_jac(void *ctx, double t, const double *x, double *J);
 
+/* Its elastic ropes' switches as the watch of an integration of it (model a cp_model; solvers.h's
+ * cp_watch: their taut margins as events, nothing else watched), filled into watch; NULL
+ * where the scene has no elastic rope. The core's own integrations (core.pyx's
+ * integrate_grid) locate the switches as the FMUs' steps do. */
+const cp_watch *cp_held_watch(void *model, cp_watch *watch);
+
 /* The inputs of p (CP_NPARAM values, the inputs last) tau after the point where they are p's,
  * each on its Taylor polynomial u + u' tau + u'' tau^2 / 2 (rates[k] = {u', u''}), into p_at,
  * the core's p (dynamics.h: CP_PSIZE values, the parameters copied, each rope's l'' the rate
