@@ -261,6 +261,19 @@ def _header(scene: Scene, nparam: int, noutput: int, needs_rates: bool, lines: l
     )
 
 
+def _places(what: str, noun: str, links: list[int], n: int, order: str) -> list[str]:
+    """The recursive header's cp_link_<what>: each of the n links' place among links, the
+    links that are a <noun> (no line without any)."""
+    if not links:
+        return []
+    return [
+        f"/* Each link's {noun} (its place in {order}). */",
+        f"static const int cp_link_{what}[CP_NLINK] = "
+        + c.initializer(links.index(i) if i in links else -1 for i in range(n))
+        + ";",
+    ]
+
+
 def _index(names: list[str], name: str) -> int:
     return names.index(name) if name in names else -1
 
@@ -292,26 +305,8 @@ def generate_recursive(scene: Scene) -> dict[str, str]:
         [
             "#define CP_RECURSIVE 1",
             c.define("CP_NLINK", scene.n),
-            *(
-                [
-                    "/* Each link's rope (its place in Scene.ropes' order; -1: its length is fixed). */",
-                    "static const int cp_link_rope[CP_NLINK] = "
-                    + c.initializer(ropes.index(i) if i in ropes else -1 for i in range(scene.n))
-                    + ";",
-                ]
-                if ropes
-                else []
-            ),
-            *(
-                [
-                    "/* Each link's elastic rope (its place in Scene.elastic_ropes' order; -1: none). */",
-                    "static const int cp_link_elastic[CP_NLINK] = "
-                    + c.initializer(elastic.index(i) if i in elastic else -1 for i in range(scene.n))
-                    + ";",
-                ]
-                if elastic
-                else []
-            ),
+            *_places("rope", "rope", ropes, scene.n, "Scene.ropes' order; -1: its length is fixed"),
+            *_places("elastic", "elastic rope", elastic, scene.n, "Scene.elastic_ropes' order; -1: none"),
             c.define("CP_G_INDEX", index("g")),
             c.define("CP_PIVOT_INDEX", pivot),
             *([c.define("CP_DAMPING_INDEX", index("c", 0))] if scene.joint_damping else []),
