@@ -11,6 +11,7 @@ import pytest
 from conftest import SEED
 from conical_pendulum.analysis.fmpy_runs import simulate_fmu
 from required_tools import require_omsimulator
+from test_elastic_ropes import BOUNCING, G
 
 STOP, STEP = "10", "0.01"
 COMPARED = ["alpha0", "beta2", "omega1", "bob2_x", "energy"]
@@ -73,3 +74,44 @@ def test_the_fmi3_fmu_with_scalars_runs_in_omsimulator(omsimulator, built_fmu, n
     for name in COMPARED:
         scale = np.abs(reference[name]).max()
         np.testing.assert_allclose(rows[name], reference[name], rtol=0, atol=1e-11 * scale, err_msg=name)
+
+
+# A load dropped with 0.5 m of slack onto an elastic rope (tests/test_elastic_ropes.py's BOUNCING)
+DROP_SCRIPT = """
+oms_setTempDirectory("./tmp")
+oms_newModel("model")
+oms_addSystem("model.root", oms_system_sc)
+oms_addSubModel("model.root.drop", "{fmu}")
+oms_setResultFile("model", "drop.csv")
+oms_setStopTime("model", 0.4)
+oms_setVariableStepSize("model.root", 1e-6, 1e-12, 1e-3)
+oms_setTolerance("model.root", 1e-8)
+oms_instantiate("model")
+oms_setReal("model.root.drop.r0", 9.5)
+oms_setReal("model.root.drop.alpha0", 0)
+oms_setReal("model.root.drop.beta0", 0)
+oms_initialize("model")
+oms_simulate("model")
+oms_terminate("model")
+oms_delete("model")
+"""
+
+
+def test_omsimulator_locates_an_elastic_ropes_snap_from_its_event_indicator(omsimulator, built_fmu, tmp_path):
+    """Its Model Exchange (the FMI 2.0 FMU, its CVode at 1e-8) finds the snap where the taut
+    margin crosses 0: an event row at the closed form's sqrt(2 h / g) to its tolerance, the
+    snap counted and the rope taut after it (until the load bounces off at 0.425 s)."""
+    fmu = built_fmu(BOUNCING, backend="native", fmi_version=2)
+    (tmp_path / "drop.lua").write_text(DROP_SCRIPT.format(fmu=fmu))
+    run = subprocess.run(
+        [str(omsimulator), "drop.lua"], cwd=tmp_path, capture_output=True, text=True, check=False, timeout=600
+    )
+    assert "error:" not in run.stdout + run.stderr, run.stdout + run.stderr
+    rows = np.genfromtxt(tmp_path / "drop.csv", delimiter=",", names=True, deletechars="")
+
+    def column(name):  # the CSV names it model.root.drop.<name>
+        return rows[next(key for key in rows.dtype.names if key.endswith("." + name))]
+
+    event = rows["time"][np.flatnonzero(column("taut_margin0") == 0.0)[0]]  # the state on the root
+    assert abs(event - np.sqrt(2 * 0.5 / G)) < 1e-6
+    assert column("snaps0")[-1] == 1 and column("taut0")[-1] == 1
