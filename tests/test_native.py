@@ -497,15 +497,17 @@ def test_the_windows_binary_runs_under_wine(built_fmu, c_host, fmi_version, tmp_
     exe = c_hosts.compile_host(fmi_version, compiler, tmp_path / "fmi_host.exe", "-static-libgcc")
     shutil.copy2(dll, tmp_path / dll.name)
     args = c_hosts.host_arguments(fmi_version, both)
-    windows = subprocess.run(
-        [wine, str(exe), dll.name, *args],
-        cwd=tmp_path,
-        check=False,
-        capture_output=True,
-        text=True,
-        timeout=600,
-        env={"WINEDEBUG": "-all", "HOME": str(tmp_path), "WINEPREFIX": str(tmp_path / "wine")},
-    )
+    env = {"WINEDEBUG": "-all", "HOME": str(tmp_path), "WINEPREFIX": str(tmp_path / "wine")}
+    servers = set(Path("/tmp").glob("wine-*"))
+    try:
+        windows = subprocess.run(
+            [wine, str(exe), dll.name, *args], cwd=tmp_path, check=False, capture_output=True,
+            text=True, timeout=600, env=env,
+        )  # fmt: skip
+    finally:  # wine's server keeps a folder in /tmp whatever TMPDIR says: stopped, and removed
+        subprocess.run([str(Path(wine).parent / "wineserver"), "-k"], env=env, check=False, timeout=60)
+        for folder in set(Path("/tmp").glob("wine-*")) - servers:
+            shutil.rmtree(folder, ignore_errors=True)
     assert windows.returncode == 0, windows.stderr[-2000:]
     linux = subprocess.run(
         [str(c_host(fmi_version)), str(c_hosts.binary(fmi_version, folder)), *args],

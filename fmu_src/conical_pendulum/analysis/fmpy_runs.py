@@ -3,7 +3,6 @@ they end, and a logger that collects messages."""
 
 from __future__ import annotations
 
-import contextlib
 import shutil
 import tempfile
 from pathlib import Path
@@ -38,30 +37,20 @@ def logging_callbacks(on_message):
     return callbacks
 
 
-@contextlib.contextmanager
-def extracted(fmu_path):
-    """The FMU unzipped into a temporary folder, removed on leaving whatever happened (a folder
-    given is used as it is and kept)."""
+def simulate_fmu(fmu_path, **kwargs):
+    """fmpy.simulate_fmu on the FMU unzipped into a temporary folder, removed on leaving whatever
+    happened (a folder given is run as it is and kept): fmpy removes the folder it extracts to
+    only when the run completes, and leaves it behind whenever the FMU refuses and it raises."""
     import fmpy
 
     if Path(fmu_path).is_dir():
-        yield str(fmu_path)
-        return
+        return fmpy.simulate_fmu(str(fmu_path), **kwargs)
     folder = tempfile.mkdtemp(prefix="conical_pendulum_fmu_")
     try:
         fmpy.extract(str(fmu_path), folder)
-        yield folder
+        return fmpy.simulate_fmu(folder, **kwargs)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
-
-
-def simulate_fmu(fmu_path, **kwargs):
-    """fmpy.simulate_fmu on the FMU extracted (extracted()): fmpy removes the folder it extracts
-    to only when the run completes, and leaves it behind whenever the FMU refuses and it raises."""
-    import fmpy
-
-    with extracted(fmu_path) as folder:
-        return fmpy.simulate_fmu(folder, **kwargs)
 
 
 def run_fmu(fmu_path, stop_time=10.0, output_interval=1.0 / 60.0, start_values=None, **kwargs):
