@@ -454,3 +454,19 @@ def test_the_command(built_fmu, tmp_path):
         bad = command(*args)
         assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
         assert said in bad.stderr
+
+
+@pytest.mark.filterwarnings("error")
+def test_a_free_bodys_repeated_zero_eigenvalues_give_one_mode_per_direction():
+    """A double integrator in two planes (A a Jordan block per plane, as a chain's angles where
+    gravity holds nothing): numpy's eigenvectors for the fourfold 0 are two directions and two
+    near-copies, which carry only rounding once the directions are taken out. Two modes, one
+    per plane, no division by a vanished pivot."""
+    states = ["a", "b", "omega_a", "omega_b"]
+    A = np.array([[0.0, 0, 1, 0], [0, 0, 0, 1], [0, 0, 0, 0], [0, 0, 0, 0]])
+    empty = np.zeros(0)
+    model = LinearModel(
+        A, np.zeros((4, 0)), np.zeros((0, 4)), np.zeros((0, 0)), states, [], [],
+        np.zeros(4), empty, empty, np.zeros(4), 0.0, "directional", 0, "double integrator",
+    )  # fmt: skip
+    assert [mode.components for mode in model.modes()] == [(("a", 1.0),), (("b", 1.0),)]
