@@ -274,7 +274,8 @@ DESCRIBED = {
         "N",
         "largest tension of elastic rope {link} since the last communication point, found on "
         "the solver's dense output between its steps: the snap load a master sampling T_rope"
-        "{link} misses (Model Exchange, which has no steps of its own: T_rope{link}) [{unit}]",
+        "{link} misses (Model Exchange, which has no steps of its own: T_rope{link} at the last "
+        "event) [{unit}]",
     ),
     "snaps": Described(
         "1",
