@@ -506,8 +506,8 @@ def test_the_windows_binary_runs_under_wine(built_fmu, c_host, fmi_version, tmp_
         )  # fmt: skip
     finally:  # wine's server keeps a folder in /tmp whatever TMPDIR says: stopped, and removed
         subprocess.run([str(Path(wine).parent / "wineserver"), "-k"], env=env, check=False, timeout=60)
-        for folder in set(Path("/tmp").glob("wine-*")) - servers:
-            shutil.rmtree(folder, ignore_errors=True)
+        for server in set(Path("/tmp").glob("wine-*")) - servers:
+            shutil.rmtree(server, ignore_errors=True)
     assert windows.returncode == 0, windows.stderr[-2000:]
     linux = subprocess.run(
         [str(c_host(fmi_version)), str(c_hosts.binary(fmi_version, folder)), *args],

@@ -13,6 +13,7 @@ import subprocess
 import sys
 import threading
 import time
+import uuid
 from pathlib import Path
 
 import dask
@@ -44,6 +45,19 @@ pytestmark = pytest.mark.cluster  # Dask clusters, local ones or the command's o
 # with the solver settings it was found with (the defaults before DOP853 at 1e-11 across points)
 OLD_SOLVER = {"solver": 1, "rtol": 1e-8, "atol": 1e-8, "across_points": 0}
 DISCARDED_AT_1_5 = {"alpha0": 1.2, "delta2": 3.0, "max_steps": 25, **OLD_SOLVER}
+
+
+@pytest.fixture
+def tmp_path(tmp_path):
+    """pytest's folder for the test under a short name, a symlink in /tmp removed after: the
+    sweeps' processes take TMPDIR inside it, where multiprocessing's forkserver binds its Unix
+    socket (pymp-*/listener-*, at most 107 bytes), and pytest's own path outgrows that once
+    its run counter has three digits (/tmp/pytest-of-root/pytest-124/popen-gw0/test_every_run_
+    crashing_finish0/tmp/...: 108). What the processes write still lands in pytest's folder."""
+    alias = Path("/tmp") / f"cp-sweep-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+    alias.symlink_to(tmp_path, target_is_directory=True)
+    yield alias
+    alias.unlink()
 
 
 @pytest.fixture(scope="module", autouse=True)

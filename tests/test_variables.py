@@ -127,7 +127,11 @@ def test_fmu_config_h_takes_its_value_references_from_the_description():
     data = model_data(COUPLED, build_core(COUPLED), SETTINGS, "native")
     header = config_header(PENDULUM, data, described.records(data), "{guid}")
     records = data["variables"]
-    first = {v["group"]: v["value_reference"] for v in reversed(records)}
+    first, seen = {}, 0  # a group's first reference; an empty group's, where the next starts
+    for group in described.groups("native"):
+        members = [v["value_reference"] for v in records if v["group"] == group.name]
+        first[group.name] = members[0] if members else seen
+        seen = members[-1] + 1 if members else seen
     for group in described.groups("native"):
         assert f"#define CP_VR_{group.c_name} {first[group.name]}\n" in header
     assert f"#define CP_NREAL {first['integer_settings']}\n" in header
