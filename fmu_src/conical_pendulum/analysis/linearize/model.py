@@ -164,19 +164,22 @@ class LinearModel:
 
 def _separated(vectors: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
     """A basis of the columns' span in which each vector is zero at the others' largest
-    entries among `rows` (Gauss-Jordan with full pivoting on those rows). A defective
+    entries among `rows` (Gauss-Jordan with full pivoting on those rows; on all entries for a
+    vector that moves none of them, as the books' W_damping at lambda = 0). A defective
     eigenvalue's columns (a free body's repeated zeros: a Jordan block) are nearly parallel:
     what is left of them once the others are taken out is rounding, and is dropped."""
     basis = [vectors[:, k].copy() for k in range(vectors.shape[1])]
-    scale = max((np.abs(v[rows]).max() for v in basis), default=0.0)
+    scale = max((np.abs(v).max() for v in basis), default=0.0)
+    everything = np.arange(vectors.shape[0])
     for k in range(len(basis)):
         rest = basis[k:]
-        sizes = [np.abs(v[rows]).max() for v in rest]
-        if max(sizes) <= 1e-9 * scale:
+        if max(np.abs(v).max() for v in rest) <= 1e-9 * scale:
             return basis[:k]
+        sizes = [np.abs(v[rows]).max() for v in rest]
         best = int(np.argmax(sizes))
         basis[k], basis[k + best] = basis[k + best], basis[k]
-        pivot = rows[np.argmax(np.abs(basis[k][rows]))]
+        among = rows if sizes[best] > 1e-9 * scale else everything
+        pivot = among[np.argmax(np.abs(basis[k][among]))]
         for j in range(len(basis)):
             if j != k:
                 basis[j] = basis[j] - basis[j][pivot] / basis[k][pivot] * basis[k]
