@@ -56,9 +56,12 @@ def scipy_radau(core, x0, p, times, tol):
     )
 
 
+REFERENCE_TOL = 1e-12
+
+
 def reference(core, x0, p, times):
     """scipy's Radau at rtol 1e-12: the answer the tolerances are measured against."""
-    return scipy_radau(core, x0, p, times, 1e-12).y.T
+    return scipy_radau(core, x0, p, times, REFERENCE_TOL).y.T
 
 
 # --- the implicit solver ---------------------------------------------------------------------
@@ -76,25 +79,50 @@ def test_the_jacobian_is_the_derivative_of_the_right_hand_side(light_core):
         np.testing.assert_allclose(J[:, j], column, rtol=1e-6, atol=1e-6 * np.abs(J).max())
 
 
+EPS = np.finfo(float).eps
+
+
+def newton_stops_out_of_roundings_reach(tol):
+    """Whether rounding cannot decide when a Newton iteration stops. scipy's Radau (and the
+    core's) stops it once rate / (1 - rate) ||dW / scale|| < newton_tol, newton_tol = max(10
+    eps / tol, min(0.03, sqrt(tol))); an increment's rounding, eps |x| on a scale of tol |x|,
+    is eps / tol in that norm. At tol = 1e-6 the threshold (1e-3) is 4.5e6 times that floor;
+    at 1e-10 (1e-5 against 2.2e-6) the last bits of the LU's solves decide, and those are
+    the machine's: scipy's LAPACK picks its kernels by CPU."""
+    newton_tol = max(10 * EPS / tol, min(0.03, tol**0.5))
+    return newton_tol > 1e3 * EPS / tol
+
+
 @pytest.mark.parametrize("c", [None, *DAMPINGS], ids=["seed", *(f"c={c:g}" for c in DAMPINGS)])
 @pytest.mark.parametrize("tol", [1e-6, 1e-10])
 def test_radau_steps_as_scipys_radau_does(seed_core, light_core, c, tol):
-    """The same algorithm on the same exact Jacobian: the Jacobians and factorizations scipy
-    makes, its right-hand sides (a Newton iteration more or less where a convergence test
-    lands within rounding of its threshold: numpy's sums and LAPACK's factors round unlike
-    the core's), and its answer at every time to far below the tolerance."""
+    """The same algorithm on the same exact Jacobian. Where rounding cannot stop a Newton
+    iteration (newton_stops_out_of_roundings_reach): the Jacobians and factorizations scipy
+    makes, its right-hand sides to 0.5 % (a rate test landing within rounding of its
+    threshold), and its answer to far below the tolerance. Where it can (tol = 1e-10): an
+    iteration more or less now and then, each moving the next step sizes, so the counts within
+    10 % (measured on the seed: 58 factorizations against scipy's 54 on one CPU, against 58 on
+    another) and an answer as accurate as scipy's against the reference at 1e-12: within
+    twice scipy's error and the reference's own tolerance (measured: within 0.4 % of it)."""
     core, scene = (seed_core, SEED) if c is None else (light_core, LIGHT)
     p = np.array(SEED.parameters()) if c is None else light_parameters(c)
     x0, times = np.array(scene.initial_state(START)), np.linspace(0.0, 5.0, 101)
     counts = {}
     states, _ = core.integrate_grid(x0, p, times, tol, tol, method="radau", counts=counts)
     sol = scipy_radau(core, x0, p, times, tol)
-    assert (counts["njev"], counts["nlu"]) == (sol.njev, sol.nlu)
-    assert abs(counts["nfev"] - sol.nfev) <= 0.005 * sol.nfev
-    # the same iterations: the same answer to rounding; an iteration more or less: two answers
-    # of the same tolerance (measured: 0.11 tol apart at c = 1, tol = 1e-10)
-    bound = 1e-3 * tol if counts["nfev"] == sol.nfev else 0.2 * tol
-    np.testing.assert_allclose(states, sol.y.T, rtol=0, atol=bound)
+    if newton_stops_out_of_roundings_reach(tol):
+        assert (counts["njev"], counts["nlu"]) == (sol.njev, sol.nlu)
+        assert abs(counts["nfev"] - sol.nfev) <= 0.005 * sol.nfev
+        # the same iterations: the same answer to rounding; an iteration more or less: two
+        # answers of the same tolerance (measured: 0.11 tol apart)
+        bound = 1e-3 * tol if counts["nfev"] == sol.nfev else 0.2 * tol
+        np.testing.assert_allclose(states, sol.y.T, rtol=0, atol=bound)
+        return
+    for name, theirs in (("njev", sol.njev), ("nlu", sol.nlu), ("nfev", sol.nfev)):
+        assert abs(counts[name] - theirs) <= 1 + 0.1 * theirs, (name, counts[name], theirs)
+    exact = reference(core, x0, p, times)
+    ours, scipys = np.abs(states - exact).max(), np.abs(sol.y.T - exact).max()
+    assert ours <= 2 * scipys + REFERENCE_TOL, (ours, scipys)
 
 
 @pytest.mark.parametrize("c", DAMPINGS)
