@@ -167,11 +167,12 @@ def temporary_folder(tmp_path_factory):
     """This process's TMPDIR (its programs' too), inside pytest's own folder: what a test's
     tools leave in it is seen by leaves_no_temporary_files, whichever test made it."""
     folder = tmp_path_factory.mktemp("tmpdir")
+    # the process's own multiprocessing folder (a local sweep cluster's fork server keeps its
+    # socket there), made now and outside pytest's folder: multiprocessing removes it when the
+    # process exits, after pytest has removed its folder of a passing run
+    multiprocessing.util.get_temp_dir()
     before = os.environ.get("TMPDIR")
     os.environ["TMPDIR"] = tempfile.tempdir = str(folder)
-    # the process's own multiprocessing folder (a local sweep cluster's fork server keeps its
-    # socket there), made now: multiprocessing removes it when the process exits
-    multiprocessing.util.get_temp_dir()
     yield folder
     tempfile.tempdir = None
     if before is None:
