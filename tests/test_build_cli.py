@@ -9,6 +9,7 @@ import fmpy
 import pytest
 
 from conical_pendulum.analysis.fmpy_runs import simulate_fmu
+from conical_pendulum.builder.fmu import fmu_scene
 from conical_pendulum.cli import main
 from conical_pendulum.commands import build as build_command
 
@@ -124,6 +125,25 @@ def test_each_kind_of_fmu_has_its_own_default_name(tmp_path, monkeypatch, capsys
         start_values={"l0": 8.0, "alpha0": 0.5, "solver": 2, "rtol": 1e-10},
     )
     assert result["alpha0"][0] == 0.5
+
+
+def test_a_scene_files_build_is_named_after_the_scene(tmp_path, monkeypatch, capsys):
+    """--scene FILE without --output writes dist/<file's name><kind>.fmu beside the seed's FMU;
+    a build that replaces an FMU of another scene says so, a rebuild of the same scene does not."""
+    monkeypatch.chdir(tmp_path)
+    Path("one_link.toml").write_text("[[link]]\nbob = { mass = 2.0, radius = 0.5 }\n")
+    assert main(["build", "--native", "--no-check"]) == 0, capsys.readouterr().err
+    seed = Path("dist/ConicalPendulum_native.fmu")
+    seed_bytes = seed.read_bytes()
+    capsys.readouterr()
+    assert main(["build", "--scene", "one_link.toml", "--native", "--no-check"]) == 0
+    assert "replacing" not in capsys.readouterr().out
+    assert fmu_scene("dist/one_link_native.fmu").n == 1 and seed.read_bytes() == seed_bytes
+    assert main(["build", "--scene", "one_link.toml", "--native", "--no-check"]) == 0  # the same scene
+    assert "replacing" not in capsys.readouterr().out
+    assert main(["build", "--links", "2", "--native", "--no-check"]) == 0  # another scene, the seed's name
+    assert f"{seed}: replacing the FMU of another scene" in capsys.readouterr().out
+    assert fmu_scene(seed).n == 2
 
 
 def test_the_run_is_named_after_its_fmu():

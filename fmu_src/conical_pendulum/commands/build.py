@@ -23,8 +23,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "DOP853 at 1e-12) against the native scipy integration of the same scene; the run goes to\n"
         "a CSV, a plot and an animation named after the FMU (dist/ConicalPendulum.csv, .png, .gif).\n"
         f"Exit status 1 when the angles disagree by more than the check's bound:\n{CHECK_BOUND}.\n"
-        "\nEach kind of FMU has its own default name, so one build does not overwrite another's:\n"
-        + "\n".join(f"  {flavour:<22} {path}" for flavour, path in DEFAULT_OUTPUTS.items())
+        "\nWithout --output, the FMU is named after the scene (its file's name; ConicalPendulum\n"
+        "without --scene) and the kind of FMU, so that no build overwrites another scene's or kind's:\n"
+        + "\n".join(f"  {flavour:<26} {default_output(kind, 'SCENE')}" for flavour, kind in KINDS.items())
+        + "\nA build that replaces an FMU of another scene says so."
     )
     scene = parser.add_argument_group("the scene")
     scene.add_argument(
@@ -65,8 +67,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--output",
         type=Path,
         metavar="PATH",
-        help="the FMU to write, ending in .fmu (by kind of FMU, as listed above; "
-        "dist/ConicalPendulum.fmu for the default pythonfmu FMU)",
+        help="the FMU to write, ending in .fmu (default: named after the scene and the kind of FMU, "
+        "as listed above; dist/ConicalPendulum.fmu for the seed's pythonfmu FMU)",
     )
     parser.add_argument(
         "--native",
@@ -104,21 +106,43 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-DEFAULT_OUTPUTS = {  # one name per kind of FMU: the README's builds, in turn, leave all three
-    "pythonfmu (default)": Path("dist/ConicalPendulum.fmu"),
-    "--native": Path("dist/ConicalPendulum_native.fmu"),
-    "--native --fmi 3": Path("dist/ConicalPendulum_fmi3.fmu"),
-    "--native --fmi 3 --scalars": Path("dist/ConicalPendulum_fmi3_scalars.fmu"),
+DEFAULT_NAME = "ConicalPendulum"  # the FMU of a scene the options describe (the seed's, by default)
+# each kind of FMU's suffix to the scene's name: the README's builds, in turn, leave all four
+KINDS = {
+    "pythonfmu (default)": "",
+    "--native": "_native",
+    "--native --fmi 3": "_fmi3",
+    "--native --fmi 3 --scalars": "_fmi3_scalars",
 }
 
 
-def default_output(native: bool, fmi: int, scalars: bool = False) -> Path:
-    """Where a build writes without --output: a name that says the kind of FMU."""
+def kind_of(native: bool, fmi: int, scalars: bool = False) -> str:
+    """The suffix of a build's kind of FMU (KINDS)."""
     if not native:
-        return DEFAULT_OUTPUTS["pythonfmu (default)"]
+        return KINDS["pythonfmu (default)"]
     if fmi == 2:
-        return DEFAULT_OUTPUTS["--native"]
-    return DEFAULT_OUTPUTS["--native --fmi 3 --scalars" if scalars else "--native --fmi 3"]
+        return KINDS["--native"]
+    return KINDS["--native --fmi 3 --scalars" if scalars else "--native --fmi 3"]
+
+
+def default_output(kind: str, scene_file: Path | str | None = None) -> Path:
+    """Where a build writes without --output: dist/, named after the scene file (DEFAULT_NAME
+    without one) and the kind of FMU."""
+    name = Path(scene_file).stem if scene_file else DEFAULT_NAME
+    return Path("dist") / f"{name}{kind}.fmu"
+
+
+def replaced_scene(output: Path, scene: Scene) -> str | None:
+    """What a build to `output` replaces, when that is an FMU of another scene (or no FMU of
+    this package); None when nothing or the same scene's FMU is there."""
+    if not output.exists():
+        return None
+    try:
+        if fmus.fmu_scene(output) == scene:
+            return None
+    except ValueError:
+        return f"{output}: replacing a file that is no pendulum FMU of this package"
+    return f"{output}: replacing the FMU of another scene (--output names a file of its own)"
 
 
 def run_files(fmu: Path) -> tuple[Path, Path, Path]:
@@ -181,7 +205,8 @@ def run(args) -> int:
         )
     if args.scalars and args.fmi != 3:
         raise UserError("--scalars: only the FMI 3.0 FMU has arrays; add --native --fmi 3")
-    output = args.output or default_output(args.native, args.fmi, args.scalars)
+    output = args.output or default_output(kind_of(args.native, args.fmi, args.scalars), args.scene)
+    replacing = replaced_scene(output, scene)  # before the build replaces it
     try:
         build = fmus.build_fmu(
             scene,
@@ -203,6 +228,8 @@ def run(args) -> int:
         f"{scene.n} links, {len(scene.parameter_names())} parameters, {len(scene.input_names())} inputs, "
         f"{len(scene.output_names())} calculated outputs; {'native, ' if args.native else ''}{'FMI 3.0, ' if args.fmi == 3 else ''}core {how}"
     )
+    if replacing:
+        print(replacing)
     if args.no_check:
         return 0
     comparison, ok = compare(build.path, scene)
