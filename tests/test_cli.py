@@ -75,6 +75,32 @@ def test_each_command_explains_its_options(name, options):
     assert "Traceback" not in run.stderr
 
 
+# what the extras (sweep, cosim, linear, test's pydy) add to the base install
+EXTRAS_PACKAGES = ("dask", "distributed", "pandas", "pyarrow", "ecospy", "libcosimpy", "control", "pydy")
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_each_commands_help_works_with_the_base_install(name):
+    """A user deciding whether to install an extra can read what the command does: --help
+    lists its options without the extras, and a command that needs one says which."""
+    hidden = "; ".join(f"sys.modules[{package!r}] = None" for package in EXTRAS_PACKAGES)
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            f"import sys; {hidden}; from conical_pendulum.cli import main; sys.exit(main([{name!r}, '--help']))",
+        ],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 0 and run.stdout.startswith(f"usage: conical-pendulum {name} "), run.stderr
+    assert "Traceback" not in run.stderr
+    if name == "sweep":
+        assert "--grid" in run.stdout and f"needs dask: {install_command('sweep')}" in run.stdout
+
+
 @pytest.mark.slow
 def test_build_checks_and_draws_the_run(tmp_path):
     """Without --no-check: the fmpy run against the native reference, then its CSV, plot and

@@ -92,8 +92,7 @@ COMMANDS = {
             "conical-pendulum sweep dist/ConicalPendulum.fmu --grid l0=5,10 --grid alpha0=0.1,0.2",
             "conical-pendulum sweep dist/ConicalPendulum.fmu --random l0=5:15 --samples 100",
         ),
-        "conical_pendulum.commands.sweep",
-        "sweep",
+        "conical_pendulum.commands.sweep",  # its --help without the extra; a sweep needs it
     ),
     "demo": Command(
         "co-simulate the pendulum on a cart in ecospy by two schemes, against one monolithic model",

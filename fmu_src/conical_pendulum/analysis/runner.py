@@ -42,6 +42,7 @@ from ..builder.packaging.native import COMPILERS, fmi_headers
 from ..errors import UserError
 
 SOURCE = Path(__file__).parent / "csrc" / "runner.c"
+LOOPS = ("runner", "fmpy")  # the communication loops a run can take: this module's, or fmpy's own
 RUN_DONE, RUN_FULL, RUN_FAILED = 0, 1, 2
 # the FMI functions the loop calls: runner.c's Run begins with them, and FAILED_* numbers them
 LOOP_FUNCTIONS = (

@@ -10,8 +10,8 @@ import sys
 import time
 from pathlib import Path
 
-from ..analysis import sweep as sweeps
-from ..errors import UserError
+from ..analysis.runner import LOOPS
+from ..errors import UserError, needs
 
 
 def _assignment(text: str, form: str) -> tuple[str, str]:
@@ -58,6 +58,8 @@ def seconds(text: str) -> float:
     return value
 
 
+EXTRA = "sweep"  # the pip extra holding what a sweep imports (Dask, pandas, pyarrow)
+
 EPILOG = """Variables: the FMU's parameters (l0, m0, M0, Ixx0, g, rtol, solver, ...) and state
 start values (alpha0, beta0, omega0, delta0, ...). The output is a folder of Parquet
 files (pandas.read_parquet, dask, duckdb read it), one row per run and time: run, the
@@ -71,7 +73,12 @@ Exit status: 0 when every run succeeded, 1 when some failed (they are in the out
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.description = "\n\n".join(sweeps.__doc__.split("\n\n")[:2])
+    try:  # the sweep package's own account of itself; without the sweep extra, what to install
+        from ..analysis import sweep as sweeps
+
+        parser.description = "\n\n".join(sweeps.__doc__.split("\n\n")[:2])
+    except ModuleNotFoundError as exc:
+        parser.description += f"\n\nThis copy cannot run it yet: it {needs(exc.name, EXTRA)}."
     parser.epilog = EPILOG
     parser.add_argument("fmu", type=Path, help="the FMU (FMI 2.0 co-simulation)")
     runs = parser.add_mutually_exclusive_group(required=True)
@@ -128,7 +135,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--batch", type=positive_int, help="runs per task (default: automatic)")
     parser.add_argument(
         "--loop",
-        choices=sweeps.LOOPS,
+        choices=LOOPS,
         default="runner",
         help="the communication loop: the compiled runner (default; fmpy's where it cannot "
         "be compiled) or fmpy's own; the same results",
@@ -167,6 +174,10 @@ def run(args) -> int:
     """0 when every run succeeded, 1 when some failed; UserError (exit 2) for bad options or
     when the sweep could not run."""
     check_options(args)
+    try:  # the sweep extra (Dask, pandas, pyarrow), imported when a sweep runs
+        from ..analysis import sweep as sweeps
+    except ModuleNotFoundError as exc:
+        raise UserError(needs(exc.name, EXTRA)) from None
     try:
         runs = (
             sweeps.grid(dict(args.grid))

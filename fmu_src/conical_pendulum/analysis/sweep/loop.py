@@ -8,7 +8,6 @@ import asyncio
 import contextlib
 import logging
 import math
-import sys
 import time
 import uuid
 import zipfile
@@ -23,7 +22,8 @@ from distributed import wait
 from distributed.scheduler import KilledWorker
 from fmpy import read_model_description
 
-from ...progress import bar
+from ...progress import Bar
+from ..runner import LOOPS
 from . import dataset
 from .cluster import NoWorkers, Workers, connect
 from .crashes import Deaths
@@ -33,7 +33,6 @@ from .runs import check_outputs, dataset_inputs, run_table
 from .worker import FmuPlugin, run_batch
 
 logger = logging.getLogger(__name__)
-LOOPS = ("runner", "fmpy")  # sweep()'s loop: analysis.runner's compiled loop, or fmpy's own
 WAIT_SECONDS = 1.0  # the longest the client waits for a batch before it looks at the workers
 
 
@@ -54,6 +53,7 @@ class Progress:
     def __init__(self, total: int, done: int, shown: bool):
         self.total, self.done, self.failed, self.shown = total, done, 0, shown
         self.start, self.done_before = time.perf_counter(), done
+        self.bar = Bar(total, "sweep")
 
     def add(self, runs: int, failed: int):
         self.done, self.failed = self.done + runs, self.failed + failed
@@ -61,8 +61,7 @@ class Progress:
 
     def stop(self):
         """Ends the bar's line when the sweep stops short."""
-        if self.shown and self.done < self.total:
-            print(file=sys.stderr)
+        self.bar.stop()
 
     def show(self):
         if not self.shown:
@@ -70,11 +69,8 @@ class Progress:
         seconds = time.perf_counter() - self.start
         rate = (self.done - self.done_before) / seconds if seconds > 0 else 0.0
         left = (self.total - self.done) / rate if rate > 0 else math.inf
-        bar(
-            self.done,
-            self.total,
-            "sweep",
-            f" runs, {self.failed} failed, {rate:.0f} runs/s, {_duration(left)} left  ",
+        self.bar.update(
+            self.done, f" runs, {self.failed} failed, {rate:.0f} runs/s, {_duration(left)} left  "
         )
 
 
