@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
-from ..progress import WIDTH, bar
+from ..progress import Bar
 from ..scene import WORKS
 
 NO_CHAIN = (
@@ -353,9 +353,10 @@ def animate(results: dict, path, fps: float = 30.0, size: float = 5.0) -> float:
         label.set_text(f"t = {t[k]:6.2f} s")
         return line, bobs, trail, label
 
-    def progress(i, total):  # redrawn when a # more shows, and at the end
-        if i + 1 == total or WIDTH * (i + 1) // total != WIDTH * i // total:
-            bar(i + 1, total, f"  rendering {path}")
+    rendering = Bar(len(frames), f"  rendering {path}")
+
+    def progress(i, total):
+        rendering.update(i + 1)
 
     animation = FuncAnimation(fig, draw, frames=frames, blit=False)
     animation.save(path, writer=PillowWriter(fps=fps), progress_callback=progress)
