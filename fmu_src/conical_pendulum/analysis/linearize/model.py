@@ -17,10 +17,12 @@ from ...errors import UserError, needs
 class Mode:
     """One eigenvalue of A (each complex pair once): natural frequency |lambda|, damping ratio
     -Re(lambda) / |lambda|, and the eigenvector's largest components by state name, scaled so
-    that the largest is 1."""
+    that the largest is 1. rounding: the size of the eigenvalue's rounding error (eigenvalues
+    are computed to about n eps ||A||): a real part below it is no damping, and reads 0."""
 
     eigenvalue: complex
     components: tuple[tuple[str, complex], ...]
+    rounding: float = 0.0
 
     @property
     def rad_per_s(self) -> float:
@@ -32,7 +34,9 @@ class Mode:
 
     @property
     def damping_ratio(self) -> float:
-        return -self.eigenvalue.real / self.rad_per_s if self.rad_per_s else 0.0
+        if not self.rad_per_s or abs(self.eigenvalue.real) <= self.rounding:
+            return 0.0
+        return -self.eigenvalue.real / self.rad_per_s
 
 
 @dataclass(frozen=True)
@@ -130,6 +134,7 @@ class LinearModel:
         planes) are given a basis in which each has zeros where the others are largest, so that
         they do not mix."""
         values, vectors = np.linalg.eig(self.A)
+        rounding = len(self.A) * np.finfo(float).eps * np.linalg.norm(self.A, 1) if len(self.A) else 0.0
         order = [k for k in np.argsort(np.abs(values), kind="stable") if values[k].imag >= 0]
         shown, everything = self._positions(), np.arange(len(self.states))
         found = []
@@ -144,7 +149,11 @@ class LinearModel:
                 scaled = vector / vector[largest[0]]
                 shown_here = [i for i in largest if abs(scaled[i]) > 1e-9]  # not rounding's noise
                 found.append(
-                    Mode(complex(value), tuple((self.states[i], complex(scaled[i])) for i in shown_here))
+                    Mode(
+                        complex(value),
+                        tuple((self.states[i], complex(scaled[i])) for i in shown_here),
+                        float(rounding),
+                    )
                 )
         return found
 
