@@ -21,7 +21,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model
 
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
-from conical_pendulum.runtime.rules import BadValue, check_value
+from conical_pendulum.runtime.rules import SOLVERS, BadValue, check_value
 from fmu_helpers import Instance
 
 DISCARD, ERROR, FATAL = 2, 3, 4
@@ -118,7 +118,7 @@ class NativeState:
             "jac_valid": matrices,
             "lu_valid": matrices + 8,
             "rho": matrices + 16,
-            "work": matrices + 24 + 8 * (4 * n_state**2 + 2 * n_state),
+            "work": matrices + 24 + 8 * (4 * n_state**2 + 4 * n_state + 1),
             "dx": tail,
             "dx_valid": tail + 8 * n_state,
             "outputs_valid": tail + 8 * n_state + 4,
@@ -319,7 +319,12 @@ def test_a_bad_state_is_refused_naming_it_and_changes_nothing(
             else "mode = 6: choose one of 0 (instantiated)"
         )
     message = message.format(value)
-    bad = state.with_field(field, value)
+    refused_and_unchanged(backend, fmu, twin, state, state.with_field(field, value), message)
+
+
+def refused_and_unchanged(backend, fmu, twin, state, bad, message):
+    """The bad state's bytes refused both ways in, naming `message`; the instance as it was
+    (it steps as its twin does) and reset works."""
     before = values(fmu)
     refusals = []  # (function, status)
     if backend == "native":  # both ways in: a state in memory, and bytes
@@ -355,6 +360,37 @@ def test_a_bad_state_is_refused_naming_it_and_changes_nothing(
     fmu.step(STEP)
     fmu.close()
     twin.close()
+
+
+# the seed's 12 states: its 6 angles are positions (alpha0' = omega0, ...), so Radau factors
+# the 6 x 6 systems of the rest; the first angle's velocity is state 6
+FACTORS_CASES = [
+    ("NaN step size", "h", math.nan, "Jacobian: the factors' step size is nan: must be > 0"),
+    (
+        "a position's slot",
+        "slot",
+        5.0,
+        "Jacobian: the factors' structure at state 0 (velocity 6, slot 5) is not its Jacobian's (6, -1)",
+    ),
+    ("a pivot past the system", "pivots", 7.0, "Jacobian: pivot 0 is 7: must be a row from 0 to 5"),
+]
+
+
+@pytest.mark.parametrize("what, field, value, message", FACTORS_CASES, ids=[c[0] for c in FACTORS_CASES])
+def test_factors_not_of_their_jacobian_are_refused(backend, path, what, field, value, message):
+    """Radau's factors in a state are on the structure their Jacobian has, for a step size,
+    with pivots inside the system factored (solvers.h's CP_NEWTON_SIZE layout)."""
+    start = {"alpha0": 0.6, "delta1": 0.4, "solver": SOLVERS.index("radau")}
+    fmu, twin = (Instance(path, name=name, start_values=start) for name in ("instance", "twin"))
+    for _ in range(STEPS_BEFORE):
+        fmu.step(STEP)
+        twin.step(STEP)
+    state = codec(backend, fmu, serialized_state(fmu))
+    assert state.get("lu_valid") == 1
+    n = sum(v.causality == "output" and v.initial == "exact" for v in fmu.md.modelVariables)  # states
+    block = state.offsets["jac_valid"] + 24  # cp_matrices' block, after its cp_newton
+    at = block + 8 * {"pivots": 4 * n * n, "slot": 4 * n * n + 3 * n, "h": 4 * n * n + 4 * n}[field]
+    refused_and_unchanged(backend, fmu, twin, state, state.overwritten(at, struct.pack("<d", value)), message)
 
 
 def test_a_co_simulation_state_is_no_model_exchange_state(native_seed_fmu):

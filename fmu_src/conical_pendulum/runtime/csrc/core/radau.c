@@ -6,7 +6,14 @@
  * kept while the step size stays (a change below 20 % is not made) and the iteration
  * converges; J itself is evaluated only when an iteration with the kept one fails to converge
  * or converges slowly (rate > 1e-3 after more than two iterations). A stage whose right-hand
- * side is not finite fails the iteration, which halves the step, as scipy's does. */
+ * side is not finite fails the iteration, which halves the step, as scipy's does.
+ *
+ * The Newton matrices shift I - J are factored on the system's structure (radau5's treatment
+ * of second-order systems): where J says x_i' = x_v (a position i, its row of J a single 1 at
+ * its velocity v), the equation shift a_i - b_v = r_i gives a_i = (r_i + b_v) / shift, and the
+ * rest of the system, without the positions, is solved alone: a mechanical system's matrices
+ * are half as large, a factorization an eighth of the work, a solve a quarter. The answer is
+ * the full system's to rounding; a system without positions is factored whole, as before. */
 #include <complex.h>
 #include <float.h>
 #include <math.h>
@@ -36,11 +43,12 @@ static const double P[3][3] = {{10.048809399827414, -25.62959144707664, 15.58078
 #define MAX_FACTOR 10.0
 
 /* The matrices block (CP_NEWTON_SIZE): J, the real factors, the complex factors (two doubles
- * an entry), the two pivot vectors (whole numbers). */
+ * an entry), the two pivot vectors (whole numbers), the structure the factors are on
+ * (cp_newton_structure's velocity and slot) and the step size they are for. */
 typedef struct {
     double *J, *lu_real;
     double complex *lu_complex;
-    double *pivots_real, *pivots_complex;
+    double *pivots_real, *pivots_complex, *velocity, *slot, *h;
 } matrices;
 
 static matrices carve_matrices(int n, double *block)
@@ -51,53 +59,134 @@ static matrices carve_matrices(int n, double *block)
     mx.lu_complex = (double complex *)(block + 2 * n * n);
     mx.pivots_real = block + 4 * n * n;
     mx.pivots_complex = mx.pivots_real + n;
+    mx.velocity = mx.pivots_complex + n;
+    mx.slot = mx.velocity + n;
+    mx.h = mx.slot + n;
     return mx;
 }
 
-/* shift I - J into a, factored in place by partial pivoting (LAPACK's getrf without
- * blocking), and the solve of a x = b in place: for real and for complex matrices alike
- * (type, and its magnitude for the pivot's choice). A zero pivot is left as it is: the solve
- * gives inf, and the Newton iteration fails on it. */
+int cp_newton_structure(int n, const double *J, double *velocity, double *slot)
+{
+    for (int i = 0; i < n; i++) {  /* rows that are a single 1 off the diagonal */
+        int one = -1, others = 0;
+        for (int j = 0; j < n && others == 0; j++) {
+            const double entry = J[i * n + j];
+            if (entry == 1.0 && one < 0 && j != i) one = j;
+            else if (entry != 0.0) others = 1;
+        }
+        velocity[i] = others ? -1 : one;
+    }
+    for (int i = 0; i < n; i++) {  /* a position's velocity must stay in the rest: in turn, */
+        const int v = (int)velocity[i];  /* those before i decided, those after i candidates */
+        if (v >= 0 && velocity[v] >= 0) velocity[i] = -1;
+    }
+    int r = 0;
+    for (int i = 0; i < n; i++) slot[i] = velocity[i] >= 0 ? -1 : r++;
+    return r;
+}
+
+/* shift I - J on the structure (velocity, slot; r the rest's size) into a, r x r, factored
+ * in place by partial pivoting (LAPACK's getrf without blocking); and the solve of
+ * (shift I - J) x = b in place, through the factors (scratch: r of type): for real and for
+ * complex matrices alike (type, and its magnitude for the pivot's choice). The pivots past r
+ * are their own rows. A zero pivot is left as it is: the solve gives inf, and the Newton
+ * iteration fails on it. */
 #define LU_FUNCTIONS(factor_name, solve_name, type, magnitude)                              \
-    static void factor_name(int n, type shift, const double *J, type *a, double *pivots)     \
+    static void factor_name(int n, int r, type shift, const double *J, const double *velocity, \
+                            const double *slot, type *a, double *pivots)                     \
     {                                                                                        \
-        for (int i = 0; i < n * n; i++) a[i] = -J[i];                                        \
-        for (int i = 0; i < n; i++) a[i * n + i] += shift;                                   \
-        for (int k = 0; k < n; k++) {                                                        \
+        for (int i = 0; i < n; i++) {                                                        \
+            const int row = (int)slot[i];                                                    \
+            if (row < 0) continue;                                                           \
+            for (int j = 0; j < n; j++)                                                      \
+                if (slot[j] >= 0) a[row * r + (int)slot[j]] = -J[i * n + j];                 \
+            a[row * r + row] += shift;                                                       \
+            for (int j = 0; j < n; j++)  /* a position's column, through a_j = b_v / shift */ \
+                if (velocity[j] >= 0 && J[i * n + j] != 0.0)                                 \
+                    a[row * r + (int)slot[(int)velocity[j]]] -= J[i * n + j] / shift;        \
+        }                                                                                    \
+        for (int k = r; k < n; k++) pivots[k] = k;                                           \
+        for (int k = 0; k < r; k++) {                                                        \
             int p = k;                                                                       \
-            for (int i = k + 1; i < n; i++)                                                  \
-                if (magnitude(a[i * n + k]) > magnitude(a[p * n + k])) p = i;                \
+            for (int i = k + 1; i < r; i++)                                                  \
+                if (magnitude(a[i * r + k]) > magnitude(a[p * r + k])) p = i;                \
             pivots[k] = p;                                                                   \
-            for (int j = 0; p != k && j < n; j++) {                                          \
-                type s = a[k * n + j];                                                       \
-                a[k * n + j] = a[p * n + j];                                                 \
-                a[p * n + j] = s;                                                            \
+            for (int j = 0; p != k && j < r; j++) {                                          \
+                type s = a[k * r + j];                                                       \
+                a[k * r + j] = a[p * r + j];                                                 \
+                a[p * r + j] = s;                                                            \
             }                                                                                \
-            if (a[k * n + k] == 0.0) continue;                                               \
-            for (int i = k + 1; i < n; i++) {                                                \
-                type l = a[i * n + k] /= a[k * n + k];                                       \
-                for (int j = k + 1; j < n; j++) a[i * n + j] -= l * a[k * n + j];            \
+            if (a[k * r + k] == 0.0) continue;                                               \
+            for (int i = k + 1; i < r; i++) {                                                \
+                type l = a[i * r + k] /= a[k * r + k];                                       \
+                for (int j = k + 1; j < r; j++) a[i * r + j] -= l * a[k * r + j];            \
             }                                                                                \
         }                                                                                    \
     }                                                                                        \
-    static void solve_name(int n, const type *a, const double *pivots, type *b)              \
+    static void solve_name(int n, int r, type shift, const double *J, const double *velocity, \
+                           const double *slot, const type *a, const double *pivots, type *b,  \
+                           type *c)                                                          \
     {                                                                                        \
-        for (int k = 0; k < n; k++) {                                                        \
+        for (int i = 0; i < n; i++) {  /* the rest's right-hand side, the positions' r_j in */ \
+            if (slot[i] < 0) continue;                                                       \
+            type s = b[i];                                                                   \
+            for (int j = 0; r < n && j < n; j++)                                             \
+                if (velocity[j] >= 0 && J[i * n + j] != 0.0) s += J[i * n + j] * b[j] / shift; \
+            c[(int)slot[i]] = s;                                                             \
+        }                                                                                    \
+        for (int k = 0; k < r; k++) {                                                        \
             int p = (int)pivots[k];                                                          \
-            type s = b[k];                                                                   \
-            b[k] = b[p];                                                                     \
-            b[p] = s;                                                                        \
+            type s = c[k];                                                                   \
+            c[k] = c[p];                                                                     \
+            c[p] = s;                                                                        \
         }                                                                                    \
-        for (int i = 1; i < n; i++)                                                          \
-            for (int j = 0; j < i; j++) b[i] -= a[i * n + j] * b[j];                         \
-        for (int i = n - 1; i >= 0; i--) {                                                   \
-            for (int j = i + 1; j < n; j++) b[i] -= a[i * n + j] * b[j];                     \
-            b[i] /= a[i * n + i];                                                            \
+        for (int i = 1; i < r; i++)                                                          \
+            for (int j = 0; j < i; j++) c[i] -= a[i * r + j] * c[j];                         \
+        for (int i = r - 1; i >= 0; i--) {                                                   \
+            for (int j = i + 1; j < r; j++) c[i] -= a[i * r + j] * c[j];                     \
+            c[i] /= a[i * r + i];                                                            \
         }                                                                                    \
+        for (int i = 0; i < n; i++)                                                          \
+            if (slot[i] >= 0) b[i] = c[(int)slot[i]];                                        \
+        for (int i = 0; i < n; i++)                                                          \
+            if (velocity[i] >= 0) b[i] = (b[i] + b[(int)velocity[i]]) / shift;               \
     }
 
 LU_FUNCTIONS(lu_real, solve_real, double, fabs)
 LU_FUNCTIONS(lu_complex, solve_complex, double complex, cabs)
+
+/* The shifts of the two Newton matrices for the step size h. */
+static double real_shift(double h)
+{
+    return MU_REAL / h;
+}
+
+static double complex complex_shift(double h)
+{
+    return (MU_COMPLEX_RE + MU_COMPLEX_IM * I) / h;
+}
+
+/* The size of the Newton systems the factors are on: the states that are no position. */
+static int rest_size(int n, const matrices *mx)
+{
+    int r = 0;
+    for (int i = 0; i < n; i++) r += mx->slot[i] >= 0;
+    return r;
+}
+
+/* b = (MU_REAL / h - J)^-1 b and b = (MU_COMPLEX / h - J)^-1 b, through the kept factors, for
+ * the h they were made for (scratch: 2 n doubles). */
+static void solve_with_real(int n, const matrices *mx, double *b, double *scratch)
+{
+    solve_real(n, rest_size(n, mx), real_shift(*mx->h), mx->J, mx->velocity, mx->slot, mx->lu_real,
+               mx->pivots_real, b, scratch);
+}
+
+static void solve_with_complex(int n, const matrices *mx, double complex *b, double *scratch)
+{
+    solve_complex(n, rest_size(n, mx), complex_shift(*mx->h), mx->J, mx->velocity, mx->slot,
+                  mx->lu_complex, mx->pivots_complex, b, (double complex *)scratch);
+}
 
 /* The largest |eigenvalue| of J, estimated by twenty power iterations from a fixed start
  * (growth over the last ten): the automatic choice's measure of how stiff the scene is. */
@@ -211,8 +300,8 @@ static int collocation(const cp_system *sys, double t, const double *y, double h
                        + f2 * (TI[1][2] + TI[2][2] * I)
                        - m_complex * (m->W[n + i] + m->W[2 * n + i] * I);
         }
-        solve_real(n, mx->lu_real, mx->pivots_real, m->err);
-        solve_complex(n, mx->lu_complex, mx->pivots_complex, m->fc);
+        solve_with_real(n, mx, m->err, m->dW);
+        solve_with_complex(n, mx, m->fc, m->dW);
         for (int i = 0; i < n; i++) {
             m->dW[i] = m->err[i];
             m->dW[n + i] = creal(m->fc[i]);
@@ -238,8 +327,11 @@ static int collocation(const cp_system *sys, double t, const double *y, double h
 
 static void factor(int n, double h, const matrices *mx, cp_newton *nw, cp_stats *stats)
 {
-    lu_real(n, MU_REAL / h, mx->J, mx->lu_real, mx->pivots_real);
-    lu_complex(n, (MU_COMPLEX_RE + MU_COMPLEX_IM * I) / h, mx->J, mx->lu_complex, mx->pivots_complex);
+    const int r = cp_newton_structure(n, mx->J, mx->velocity, mx->slot);
+    *mx->h = h;
+    lu_real(n, r, real_shift(h), mx->J, mx->velocity, mx->slot, mx->lu_real, mx->pivots_real);
+    lu_complex(n, r, complex_shift(h), mx->J, mx->velocity, mx->slot, mx->lu_complex,
+               mx->pivots_complex);
     stats->nlu += 2;
     nw->lu_valid = 1;
 }
@@ -311,7 +403,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
             m.tmp[i] = ze;  /* ZE, kept for a second estimate */
             m.err[i] = f[i] + ze;
         }
-        solve_real(n, mx.lu_real, mx.pivots_real, m.err);
+        solve_with_real(n, &mx, m.err, m.dW);
         for (int i = 0; i < n; i++)
             m.scale[i] = atol + fmax(fabs(y[i]), fabs(m.y_new[i])) * rtol;
         error_norm = cp_rms(n, m.err, m.scale);
@@ -322,7 +414,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
             status = cp_eval(sys, t, at, fe, stats);
             if (status && !cp_trial_rejects(status)) return status;
             for (int i = 0; i < n; i++) m.err[i] = fe[i] + m.tmp[i];
-            solve_real(n, mx.lu_real, mx.pivots_real, m.err);
+            solve_with_real(n, &mx, m.err, m.dW);
             error_norm = status ? NAN : cp_rms(n, m.err, m.scale);
         }
         if (error_norm > 1 || isnan(error_norm)) {

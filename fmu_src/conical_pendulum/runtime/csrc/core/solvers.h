@@ -84,7 +84,8 @@ double cp_stiffness_bound(int method);
 
 /* The implicit solver's matrices, kept between steps and across communication points (in an
  * FMU's state): flags here, the numbers in a block of CP_NEWTON_SIZE(dim) doubles beside it
- * (J, the real and complex factors, their pivots as whole numbers). */
+ * (J, the real and complex factors, their pivots as whole numbers, the structure they are on
+ * as cp_newton_structure's velocity and slot, and the step size they are for). */
 typedef struct {
     int jac_valid;    /* the block's J is a Jacobian of the system */
     int current_jac;  /* ... evaluated at the start of the step in flight */
@@ -92,7 +93,14 @@ typedef struct {
     int reserved;     /* 0 (the padding, named so that a state's bytes are all defined) */
     double rho;       /* J's spectral radius, estimated when J was evaluated */
 } cp_newton;
-#define CP_NEWTON_SIZE(dim) (4 * (dim) * (dim) + 2 * (dim))
+#define CP_NEWTON_SIZE(dim) (4 * (dim) * (dim) + 4 * (dim) + 1)
+
+/* The structure of the Newton systems, read off the Jacobian J (dim n) of x' = f(x): state i
+ * is a position when x_i' = x_v (its row of J a single 1 at v != i) and v is no position
+ * (decided in turn); velocity[i] = v for a position, -1 for the others, which slot numbers
+ * 0, 1, ... in order (-1 for a position). Returns the others' count, the size of the systems
+ * Radau factors (radau.c): half the states of a mechanical system. */
+int cp_newton_structure(int n, const double *J, double *velocity, double *slot);
 
 static inline int cp_all_finite(int n, const double *v)
 {

@@ -678,9 +678,11 @@ static const char *flight_invalid(const ModelData *m, char *message, size_t size
     return NULL;
 }
 
-/* NULL if the implicit solver's matrices can be used (cosim.h's cp_matrices): the flags 0 or 1,
- * the spectral radius a number >= 0, J finite where it is valid, the factors finite and their
- * pivots rows at or below their own where they are valid (of a valid J); or the message. */
+/* NULL if the implicit solver's matrices can be used (cosim.h's cp_matrices, solvers.h's
+ * CP_NEWTON_SIZE): the flags 0 or 1, the spectral radius a number >= 0, J finite where it is
+ * valid; where the factors are valid (of a valid J), they are finite, on the structure J has
+ * (cp_newton_structure), for a step size > 0, and their pivots are rows at or below their own
+ * within the factored system (their own past it); or the message. */
 static const char *matrices_invalid(const ModelData *m, char *message, size_t size)
 {
     const cp_newton *nw = &m->matrices.newton;
@@ -706,11 +708,28 @@ static const char *matrices_invalid(const ModelData *m, char *message, size_t si
                      k, block[k]);
             return message;
         }
-    for (int k = 0; nw->lu_valid && k < 2 * n; k++) {
-        const double pivot = block[4 * n * n + k];
-        if (!(pivot >= k % n && pivot < n && pivot == floor(pivot))) {
+    if (!nw->lu_valid) return NULL;
+    const double *pivots = block + 4 * n * n, *velocity = pivots + 2 * n, *slot = velocity + n;
+    const double h = slot[n];
+    double own_velocity[CP_NSTATE], own_slot[CP_NSTATE];
+    const int r = cp_newton_structure(n, block, own_velocity, own_slot);
+    for (int k = 0; k < n; k++)
+        if (velocity[k] != own_velocity[k] || slot[k] != own_slot[k]) {
+            snprintf(message, size, "Jacobian: the factors' structure at state %d (velocity %.17g, "
+                     "slot %.17g) is not its Jacobian's (%.17g, %.17g)",
+                     k, velocity[k], slot[k], own_velocity[k], own_slot[k]);
+            return message;
+        }
+    if (!(isfinite(h) && h > 0)) {
+        snprintf(message, size, "Jacobian: the factors' step size is %.17g: must be > 0", h);
+        return message;
+    }
+    for (int k = 0; k < 2 * n; k++) {
+        const double pivot = pivots[k];
+        const int row = k % n, last = row < r ? r - 1 : row;
+        if (!(pivot >= row && pivot <= last && pivot == floor(pivot))) {
             snprintf(message, size, "Jacobian: pivot %d is %.17g: must be a row from %d to %d",
-                     k, pivot, k % n, n - 1);
+                     k, pivot, row, last);
             return message;
         }
     }
