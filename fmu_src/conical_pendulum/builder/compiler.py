@@ -36,11 +36,19 @@ CORE_CSRC = CSRC / "core"  # the model's numerics: the compiled core's C, and th
 CORE_SOURCES = ("model.c", "dynamics.c", "solvers.c", "radau.c", "diagnosis.c", "cosim.c", "chain.c")
 MODEL_SOURCES = ("rules.c", "variable_table.c", "pendulum_model.c")
 MODEL_FILES = ("fmu_model.h", "variable_table.h", "variable_table.c", "pendulum_model.c")  # not in core/
-# The model compiled again in complex arithmetic (directional and output derivatives), which
-# pendulum_model.c links to and the pythonfmu slave calls only for the implicit solver's
-# Jacobians (its FMU declares no derivatives): compiled without optimization, a tenth of the
-# time at -O2 (about 0.7 s against 8.6 s for the seed; the native FMU compiles its own at -O2).
-UNOPTIMIZED_SOURCES = ("directional.c", "second_directional.c")
+# The model compiled again in complex arithmetic, which pendulum_model.c links to.
+# directional.c (first derivatives by complex step) gives the implicit solver's exact
+# Jacobians, which the pythonfmu slave's Radau and `auto` call on stiff scenes: it compiles
+# at -O2 with the rest, as the native FMU compiles it. At -O0 (before issue 55) a Jacobian
+# took 2.6 to 3.4 times as long (20 and 50 links); -O2 adds some 4 s to the seed's cold
+# build and 0.5 s to a recursive chain's (benchmarks/stiff_long_chains.py's docs section:
+# docs/performance.md#build-time-of-the-optimized-derivatives).
+DERIVATIVE_SOURCES = ("directional.c",)
+# second_directional.c (the outputs' second derivatives, fmi2GetRealOutputDerivatives of
+# order 2) is linked but never called by the slave, whose FMU declares no output
+# derivatives: -O0, which compiles it in a tenth of the time (0.5 s against 7 s for the
+# seed; the native FMU, which calls it, compiles its own at -O2).
+UNOPTIMIZED_SOURCES = ("second_directional.c",)
 GENERATOR_SOURCES = [
     *(HERE / "core" / name for name in ("kane.py", "equations.py", "codegen.py", "cache.py")),
     HERE / "compiler.py",
@@ -153,7 +161,7 @@ def _compile(name: str, work: Path) -> None:
     for source, target in zip(UNOPTIMIZED_SOURCES, unoptimized):
         command = [compiler, "-O0", "-g0", "-fPIC", "-I", str(work), "-c", str(work / source)]
         subprocess.run([*command, "-o", str(target)], check=True)
-    sources = [f"{name}.pyx", *CORE_SOURCES, *MODEL_SOURCES]
+    sources = [f"{name}.pyx", *CORE_SOURCES, *MODEL_SOURCES, *DERIVATIVE_SOURCES]
     extension = Extension(
         name,
         [str(work / s) for s in sources],
