@@ -15,7 +15,7 @@ import fcntl
 import functools
 import hashlib
 import json
-import multiprocessing.util
+import multiprocessing.process
 import os
 import platform
 import shlex
@@ -167,13 +167,16 @@ def temporary_folder(tmp_path_factory):
     """This process's TMPDIR (its programs' too), inside pytest's own folder: what a test's
     tools leave in it is seen by leaves_no_temporary_files, whichever test made it."""
     folder = tmp_path_factory.mktemp("tmpdir")
-    # the process's own multiprocessing folder (a local sweep cluster's fork server keeps its
-    # socket there), made now and outside pytest's folder: multiprocessing removes it when the
-    # process exits, after pytest has removed its folder of a passing run
-    multiprocessing.util.get_temp_dir()
     before = os.environ.get("TMPDIR")
     os.environ["TMPDIR"] = tempfile.tempdir = str(folder)
+    # the process's own multiprocessing folder (a local sweep cluster's fork server keeps its
+    # socket there), made now, inside pytest's folder, and given to multiprocessing as its own
+    # (its config's tempdir): get_temp_dir() would register its removal at exit, which fails
+    # once pytest has removed its folder of a passing run, and an xdist worker skips it
+    sockets = tmp_path_factory.mktemp("multiprocessing")
+    multiprocessing.process.current_process()._config["tempdir"] = str(sockets)
     yield folder
+    multiprocessing.process.current_process()._config["tempdir"] = None
     tempfile.tempdir = None
     if before is None:
         del os.environ["TMPDIR"]
