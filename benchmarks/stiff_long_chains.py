@@ -21,8 +21,8 @@ a cable or a hanging hose modelled as a damped chain. Two measurements (issue 55
    The two runs of a tolerance follow each other, so their wall times share the machine's load
    (take ratios within one run). A run is stopped after --budget seconds of wall time (the
    time it reached is reported). The error is the largest of the angles (alpha_i, beta_i, in
-   rad) at the outputs against the core's Radau at rtol = atol = 1e-12 (integrate_grid), which
-   scipy's Radau agrees with step for step (tests/test_stiff.py). "As accurate": for each FMU
+   rad) at the outputs against the core's Radau at rtol = atol = 1e-12 (integrate_grid), whose
+   error against scipy's Radau tests/test_stiff.py bounds. "As accurate": for each FMU
    run the cheapest CVode run of the same rung whose error is at most the FMU's.
 2. The Jacobian d(x')/d(x) against Pinocchio's analytical derivatives
    (pinocchio.computeABADerivatives: dq''/dq, dq''/dv and M^-1, Carpentier and Mansard, RSS
