@@ -94,9 +94,8 @@ class NativeState:
         after_r = self.MODEL + 8 * len(reals)
         flight = after_r + 32  # cosim.h's cp_flight, its cp_step after live, reserved, t_point
         n_elastic = sum(v.name.startswith("taut_margin") for v in instance.md.modelVariables)
-        # cosim.h's cp_matrices, after the flight's rows, t_inputs, inputs and ropes' watch
-        matrices = flight + 88 + 8 * (10 * n_state + 1 + 3 * (n_input + 1) + 3 * (n_elastic + 1))
-        tail = size - 8 * n_state - 8
+        # cosim.h's cp_jacobian_record, after the flight's rows, t_inputs, inputs and ropes' watch
+        record = flight + 88 + 8 * (10 * n_state + 1 + 3 * (n_input + 1) + 3 * (n_elastic + 1))
         self.offsets = {name: at for name, at, _ in self.OWN} | {
             "solver": after_r,
             "max_steps": after_r + 4,
@@ -115,13 +114,11 @@ class NativeState:
             "stiff_steps": flight + 56,
             "h_old": flight + 64,
             "rows": flight + 88,
-            "jac_valid": matrices,
-            "lu_valid": matrices + 8,
-            "rho": matrices + 16,
-            "work": matrices + 24 + 8 * (4 * n_state**2 + 4 * n_state + 1),
-            "dx": tail,
-            "dx_valid": tail + 8 * n_state,
-            "outputs_valid": tail + 8 * n_state + 4,
+            "jac_valid": record,
+            "lu_valid": record + 8,
+            "rho": record + 16,
+            "factors_h": record + 24,
+            "jacobian_x": record + 32,  # the state it was evaluated at, then the core's p
         }
         self.fields = {name: kind for name, _, kind in self.OWN} | {
             "solver": "i",
@@ -137,13 +134,9 @@ class NativeState:
             "stiff_steps": "i",
             "jac_valid": "i",
             "lu_valid": "i",
-            "dx_valid": "i",
-            "outputs_valid": "i",
         }
-        work = (tail - self.offsets["work"]) / 8
-        assert work == int(work) and work >= 32 * n_state, "ModelData's layout is not the one assumed"
-        # the meaningful part: all but the solvers' scratch
-        self.meaningful = np.r_[0 : self.offsets["work"], tail:size]
+        # every byte means something: the solvers' matrices and scratch are the instance's own
+        self.meaningful = np.arange(size)
         reals_now, integers_now = values(instance)  # taken where the state was
         assert (
             [self.get(name) for name in reals],
@@ -362,35 +355,54 @@ def refused_and_unchanged(backend, fmu, twin, state, bad, message):
     twin.close()
 
 
-# the seed's 12 states: its 6 angles are positions (alpha0' = omega0, ...), so Radau factors
-# the 6 x 6 systems of the rest; the first angle's velocity is state 6
-FACTORS_CASES = [
-    ("NaN step size", "h", math.nan, "Jacobian: the factors' step size is nan: must be > 0"),
-    (
-        "a position's slot",
-        "slot",
-        5.0,
-        "Jacobian: the factors' structure at state 0 (velocity 6, slot 5) is not its Jacobian's (6, -1)",
-    ),
-    ("a pivot past the system", "pivots", 7.0, "Jacobian: pivot 0 is 7: must be a row from 0 to 5"),
-]
-
-
-@pytest.mark.parametrize("what, field, value, message", FACTORS_CASES, ids=[c[0] for c in FACTORS_CASES])
-def test_factors_not_of_their_jacobian_are_refused(backend, path, what, field, value, message):
-    """Radau's factors in a state are on the structure their Jacobian has, for a step size,
-    with pivots inside the system factored (solvers.h's CP_NEWTON_SIZE layout)."""
+def radau_pair(path):
+    """Two instances a few Radau steps into the seed scenario, its factors in use."""
     start = {"alpha0": 0.6, "delta1": 0.4, "solver": SOLVERS.index("radau")}
     fmu, twin = (Instance(path, name=name, start_values=start) for name in ("instance", "twin"))
     for _ in range(STEPS_BEFORE):
         fmu.step(STEP)
         twin.step(STEP)
+    return fmu, twin
+
+
+RECORD_CASES = [
+    ("NaN step size", "factors_h", math.nan, "Jacobian: the factors' step size is nan: must be > 0"),
+    (
+        "NaN where it was evaluated",
+        "jacobian_x",
+        math.nan,
+        "Jacobian: entry 0 of the state it was evaluated at is nan: must be finite",
+    ),
+]
+
+
+@pytest.mark.parametrize("what, field, value, message", RECORD_CASES, ids=[c[0] for c in RECORD_CASES])
+def test_a_jacobian_record_that_cannot_be_remade_is_refused(backend, path, what, field, value, message):
+    """A state holds where Radau's Jacobian was evaluated and the step size of its factors
+    (cosim.h's cp_jacobian_record), from which they are made again: both must be numbers."""
+    fmu, twin = radau_pair(path)
     state = codec(backend, fmu, serialized_state(fmu))
     assert state.get("lu_valid") == 1
-    n = sum(v.causality == "output" and v.initial == "exact" for v in fmu.md.modelVariables)  # states
-    block = state.offsets["jac_valid"] + 24  # cp_matrices' block, after its cp_newton
-    at = block + 8 * {"pivots": 4 * n * n, "slot": 4 * n * n + 3 * n, "h": 4 * n * n + 4 * n}[field]
-    refused_and_unchanged(backend, fmu, twin, state, state.overwritten(at, struct.pack("<d", value)), message)
+    refused_and_unchanged(backend, fmu, twin, state, state.with_field(field, value), message)
+
+
+def test_radau_matrices_are_made_again_bit_for_bit_where_a_state_is_restored(backend, path):
+    """The matrices stay out of the state: a state restored in another instance, and in its
+    own after it went on, steps as the instance it was taken from, statistics and all."""
+    fmu, twin = radau_pair(path)
+    data, t = serialized_state(fmu), fmu.time
+    assert codec(backend, fmu, data).get("lu_valid") == 1
+    straight = stepped(fmu)
+    restore(fmu, data)
+    fmu.time = t
+    assert stepped(fmu) == straight
+    other = Instance(path, name="other", start_values={"solver": SOLVERS.index("rk4")})
+    other.step(STEP)
+    restore(other, data)
+    other.time = t
+    assert stepped(other) == straight
+    for instance in (fmu, twin, other):
+        instance.close()
 
 
 def test_a_co_simulation_state_is_no_model_exchange_state(native_seed_fmu):

@@ -30,7 +30,7 @@ cdef extern from "solvers.h":
         long long nfev, naccept, nreject, njev, nlu, nswitch
     ctypedef struct cp_newton:
         int jac_valid, current_jac, lu_valid, reserved
-        double rho
+        double rho, h
     int CP_RK4, CP_RK45, CP_DOP853, CP_RADAU, CP_AUTO
     int CP_WORK_SIZE(int dim)
     int CP_NEWTON_SIZE(int dim)
@@ -74,12 +74,15 @@ cdef extern from "cosim.h":
         int method
         double rtol, atol, max_step
         long long max_steps
-    ctypedef struct cp_matrices:
+    ctypedef struct cp_jacobian_record:
         cp_newton newton
+    ctypedef struct cp_matrices:
+        cp_jacobian_record made_for
     int CP_STEP_WORK_SIZE
     int cp_cosim_step(const cp_settings *settings, const double *p, double *x, double *y,
                       double t, double dt, double *h, double *work, int *fsal,
-                      cp_matrices *matrices, double *stats, cp_failure *failure) noexcept nogil
+                      cp_jacobian_record *jacobian, cp_matrices *matrices, double *stats,
+                      cp_failure *failure) noexcept nogil
     int cp_held_rhs(void *ctx, double t, const double *x, double *dx) noexcept nogil
     int cp_held_jac(void *ctx, double t, const double *x, double *J) noexcept nogil
     const cp_watch *cp_held_watch(void *model, cp_watch *watch) noexcept nogil
@@ -91,7 +94,7 @@ cdef extern from "fmu_model.h":
     ctypedef enum ModelStatus:
         MODEL_OK, MODEL_DISCARD, MODEL_REFUSED, MODEL_WARNING, MODEL_NO_VARIABLE
     ctypedef struct ModelSizes:
-        size_t data_size
+        size_t data_size, scratch_size
         int n_real, n_integer, n_state
     const ModelSizes model_sizes
     void model_reset(ModelData *m)
@@ -292,7 +295,7 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     cdef double[::1] matrices = np.zeros(CP_NEWTON_SIZE(CP_NSTATE))
     cdef cp_newton newton
     newton.jac_valid = newton.current_jac = newton.lu_valid = newton.reserved = 0
-    newton.rho = 0.0
+    newton.rho = newton.h = 0.0
     cdef cp_model model
     cdef cp_system system
     cdef cp_stats stats
@@ -352,7 +355,7 @@ cdef class Stepper:
     accepted and rejected steps, in runtime.rules.STATISTICS's order), used in place, so whoever owns them sees every step.
     """
     cdef public object values, params, stats
-    cdef double[::1] _values, _params, _stats, _work, _matrices
+    cdef double[::1] _values, _params, _stats, _work, _jacobian, _matrices
     cdef int _fsal
     cdef cp_settings _settings
     cdef cp_failure _failure
@@ -368,7 +371,9 @@ cdef class Stepper:
         _check(self._values, CP_NSTATE + CP_NOUTPUT, "state and outputs")
         _check(self._stats, CP_NSTAT, "statistics")
         self._work = np.zeros(CP_STEP_WORK_SIZE)
-        # the implicit solver's cp_matrices, zeroed (no Jacobian yet), aligned as a double
+        # the implicit solver's cp_jacobian_record and cp_matrices, zeroed (no Jacobian yet),
+        # aligned as a double
+        self._jacobian = np.zeros((sizeof(cp_jacobian_record) + sizeof(double) - 1) // sizeof(double))
         self._matrices = np.zeros((sizeof(cp_matrices) + sizeof(double) - 1) // sizeof(double))
         self.h = 0.0
         self._fsal = 0
@@ -406,8 +411,9 @@ cdef class Stepper:
         with nogil:
             status = cp_cosim_step(&self._settings, &self._params[0], &self._values[0],
                                    &self._values[CP_NSTATE], t, dt, &self.h, &self._work[0],
-                                   &self._fsal, <cp_matrices *>&self._matrices[0],
-                                   &self._stats[0], &self._failure)
+                                   &self._fsal, <cp_jacobian_record *>&self._jacobian[0],
+                                   <cp_matrices *>&self._matrices[0], &self._stats[0],
+                                   &self._failure)
         return status
 
     def step(self, int method, double t, double dt, double rtol, double atol, double max_step,
@@ -431,12 +437,13 @@ cdef class Model:
     A new Model is model_reset's: every variable at its start value. Value references are
     the FMU's (fmu_config.h); the slave checks that a variable is of the type asked for.
     """
-    cdef double[::1] _data  # the ModelData, aligned as a double (fmu_model.h)
+    cdef double[::1] _data  # the ModelData and its scratch, aligned as a double (fmu_model.h)
     cdef ModelData *m
     cdef char message[2048]
 
     def __cinit__(self):
-        self._data = np.zeros((model_sizes.data_size + sizeof(double) - 1) // sizeof(double))
+        self._data = np.zeros((model_sizes.data_size + model_sizes.scratch_size + sizeof(double) - 1)
+                              // sizeof(double))
         self.m = <ModelData *>&self._data[0]
         model_reset(self.m)
 
@@ -539,4 +546,5 @@ cdef class Model:
         np.asarray(candidate._data).view(np.uint8)[: model_sizes.data_size] = np.frombuffer(data, np.uint8)
         if model_invalid(candidate.m, self.message, sizeof(self.message)):
             raise Refusal(self.message.decode())
-        self._data[:] = candidate._data
+        own = np.asarray(self._data).view(np.uint8)  # the data taken, this instance's scratch kept
+        own[: model_sizes.data_size] = np.asarray(candidate._data).view(np.uint8)[: model_sizes.data_size]

@@ -37,11 +37,13 @@ void cp_input_direction(const double (*rates)[2], int order, double *dp)
 
 /* The model's right-hand side with interpolated inputs: the inputs at the stage's time. */
 typedef struct {
-    cp_model model;               /* model.p is p_at */
+    cp_model model;               /* model.p is p_at (moving), else the held inputs' p */
     const double *p;              /* the parameters and the inputs at t0 */
     const double (*rates)[2];
     double t0;
     double p_at[CP_PSIZE];
+    int moving;                   /* the inputs move (else held: model.p) */
+    cp_jacobian_record *record;   /* where recorded_jac notes its Jacobians */
 } interpolated;
 
 int cp_held_rhs(void *ctx, double t, const double *x, double *dx)
@@ -86,9 +88,33 @@ int cp_held_jac(void *ctx, double t, const double *x, double *J)
     return model_jacobian(ctx, x, J);
 }
 
-static int interpolated_jac(void *ctx, double t, const double *x, double *J)
+/* The Jacobian of cp_cosim_advance's model (ctx its interpolated, or that one's model, its
+ * first member), noted in its record with the state and the core's p it was evaluated at. */
+static int recorded_jac(void *ctx, double t, const double *x, double *J)
 {
-    return model_jacobian(model_at(ctx, t), x, J);
+    interpolated *in = ctx;
+    cp_model *model = in->moving ? model_at(in, t) : &in->model;
+    memcpy(in->record->x, x, sizeof in->record->x);
+    memcpy(in->record->p, model->p, sizeof in->record->p);
+    return model_jacobian(model, x, J);
+}
+
+/* The matrices made again for the record where they were made for another (cosim.h): J at
+ * the recorded point, and its factors for the recorded step size; a Jacobian that cannot be
+ * had there (a record from elsewhere) is forgotten, and the solver evaluates one where it
+ * needs it. Not counted: the step that made them counted them. */
+static void remake(cp_jacobian_record *record, cp_matrices *matrices)
+{
+    cp_newton *nw = &record->newton;
+    if (nw->jac_valid) {
+        cp_model model = {record->p, 1.0, -1};
+        if (model_jacobian(&model, record->x, matrices->block) != CP_OK
+            || !cp_all_finite(CP_NSTATE * CP_NSTATE, matrices->block))
+            nw->jac_valid = nw->current_jac = nw->lu_valid = 0;
+        else if (nw->lu_valid)
+            cp_newton_refactor(CP_NSTATE, nw, matrices->block);
+    }
+    matrices->made_for = *record;
 }
 
 #ifdef CP_NELASTIC
@@ -390,19 +416,21 @@ static int integrate(const cp_settings *s, cp_flight *trial, cp_newton *newton, 
 
 int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input_rates)[2],
                      double *x, double *y, double t, double dt, double t_stop, cp_flight *flight,
-                     cp_matrices *matrices, double *work, double stats[CP_NSTAT],
-                     double *rope_events, cp_failure *failure, double *reached)
+                     cp_jacobian_record *jacobian, cp_matrices *matrices, double *work,
+                     double stats[CP_NSTAT], double *rope_events, cp_failure *failure,
+                     double *reached)
 {
+    if (memcmp(&matrices->made_for, jacobian, sizeof *jacobian)) remake(jacobian, matrices);
     cp_flight trial = *flight;  /* taken only where the step gets somewhere */
     const int why = continues(&trial, s, p, input_rates, t);
-    if (why != CONTINUE) restart(&trial, &matrices->newton, p, input_rates, t, x);
+    if (why != CONTINUE) restart(&trial, &jacobian->newton, p, input_rates, t, x);
     double p0[CP_PSIZE], rates0[CP_NINPUT + 1][2];
     const int moving = polynomials(&trial, p, p0, rates0);
-    interpolated in = {{p0, 1.0, -1}, p0, (const double(*)[2])rates0, trial.t_inputs, {0}};
+    interpolated in = {{p0, 1.0, -1}, p0, (const double(*)[2])rates0, trial.t_inputs, {0},
+                       moving, jacobian};
     if (moving) in.model.p = in.p_at;
     cp_system system = {CP_NSTATE, moving ? interpolated_rhs : cp_held_rhs,
-                        moving ? (void *)&in : (void *)&in.model,
-                        moving ? interpolated_jac : cp_held_jac, NULL};
+                        moving ? (void *)&in : (void *)&in.model, recorded_jac, NULL};
 #ifdef CP_NELASTIC
     watcher w = {&in, moving, &trial, t, t + dt, {0}};
     const cp_watch watch = {CP_NELASTIC, margins, wants_dense, accepted, &w};
@@ -421,9 +449,10 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
     cp_failure rope_failure = {0};
     int status = CP_BAD_STEP;
     if (dt >= 0 && dt < INFINITY)
-        status = integrate(s, &trial, &matrices->newton, matrices->block, &system, x, t, dt,
+        status = integrate(s, &trial, &jacobian->newton, matrices->block, &system, x, t, dt,
                            t_stop, why == NEW_INPUTS, work, &counts, x_new, &t_reached,
                            reached != NULL);
+    matrices->made_for = *jacobian;
     stats[CP_STAT_N_RHS] += (double)counts.nfev;
     stats[CP_STAT_N_STEPS] += (double)counts.naccept;
     stats[CP_STAT_N_REJECTED] += (double)counts.nreject;
@@ -481,22 +510,22 @@ int cp_cosim_advance(const cp_settings *s, const double *p, const double (*input
 }
 
 int cp_cosim_step(const cp_settings *s, const double *p, double *x, double *y, double t,
-                  double dt, double *h, double *work, int *fsal, cp_matrices *matrices,
-                  double stats[CP_NSTAT], cp_failure *failure)
+                  double dt, double *h, double *work, int *fsal, cp_jacobian_record *jacobian,
+                  cp_matrices *matrices, double stats[CP_NSTAT], cp_failure *failure)
 {
     static const double held[CP_NINPUT + 1][2];
     cp_settings on_points = *s;
     cp_flight flight;
     memset(&flight, 0, sizeof flight);
     on_points.across_points = 0;
-    restart(&flight, &matrices->newton, p, held, t, x);
+    restart(&flight, &jacobian->newton, p, held, t, x);
     flight.step.h = *h;
     if (*fsal) {  /* work starts with x' at x */
         memcpy(flight.rows[CP_ROW_F1], work, CP_NSTATE * sizeof(double));
         flight.step.fsal = 1;
     }
-    int status = cp_cosim_advance(&on_points, p, held, x, y, t, dt, INFINITY, &flight, matrices,
-                                  work, stats, NULL, failure, NULL);
+    int status = cp_cosim_advance(&on_points, p, held, x, y, t, dt, INFINITY, &flight, jacobian,
+                                  matrices, work, stats, NULL, failure, NULL);
     *h = flight.step.h;
     *fsal = s->method != CP_RK4 && flight.step.fsal;
     if (*fsal) memcpy(work, flight.rows[CP_ROW_F1], CP_NSTATE * sizeof(double));

@@ -6,6 +6,7 @@
 #define CP_COSIM_H
 
 #include "diagnosis.h"
+#include "dynamics.h"
 #include "model.h"
 #include "solvers.h"
 
@@ -24,11 +25,22 @@ typedef struct {
 /* Whether t is the point (cp_same_point's rule, CP_SAME_POINT_ULPS). */
 int cp_same_point(double t, double point);
 
-/* The implicit solver's Jacobian and factors (solvers.h's cp_newton and its block), kept
- * beside the flight: any Jacobian serves the Newton iteration (it evaluates a new one where
- * the kept one fails), so a failed step that leaves them changed loses nothing. */
+/* The implicit solver's Jacobian and factors, kept beside the flight in two parts. The record,
+ * which an FMU state holds (O(n) doubles): solvers.h's cp_newton (its flags, and the step size
+ * of the factors) and where the Jacobian was evaluated, the state and the core's p. The
+ * matrices (solvers.h's block, 4n^2 + 4n doubles), which it does not: an instance's own, with
+ * the record they were made for; where that is not the record a step starts with (a state
+ * restored), they are made again from it, bit for bit as they were (cp_cosim_advance). Any
+ * Jacobian serves the Newton iteration (it evaluates a new one where the kept one fails), so a
+ * failed step that leaves them changed loses nothing. */
 typedef struct {
     cp_newton newton;
+    double x[CP_NSTATE];  /* the state J was evaluated at (newton.jac_valid) */
+    double p[CP_PSIZE];   /* ... with this core p (dynamics.h) */
+} cp_jacobian_record;
+
+typedef struct {
+    cp_jacobian_record made_for;  /* the record the block holds the matrices of */
     double block[CP_NEWTON_SIZE(CP_NSTATE)];
 } cp_matrices;
 
@@ -98,7 +110,8 @@ typedef struct {
  * work: CP_STEP_WORK_SIZE doubles of scratch. */
 int cp_cosim_advance(const cp_settings *settings, const double *p, const double (*input_rates)[2],
                      double *x, double *y, double t, double dt, double t_stop, cp_flight *flight,
-                     cp_matrices *matrices, double *work, double stats[CP_NSTAT],
+                     cp_jacobian_record *jacobian, cp_matrices *matrices, double *work,
+                     double stats[CP_NSTAT],
                      double *rope_events, cp_failure *failure, double *reached);
 
 /* The inputs as the flight's integration has them at t: their values into p's input entries
@@ -111,8 +124,8 @@ void cp_flight_inputs(const cp_flight *flight, double t, double *p, double (*rat
  * solver's memory between steps (the proposed step size; whether work starts with x' at x),
  * no stop time, no early return. */
 int cp_cosim_step(const cp_settings *settings, const double *p, double *x, double *y, double t,
-                  double dt, double *h, double *work, int *fsal, cp_matrices *matrices,
-                  double stats[CP_NSTAT], cp_failure *failure);
+                  double dt, double *h, double *work, int *fsal, cp_jacobian_record *jacobian,
+                  cp_matrices *matrices, double stats[CP_NSTAT], cp_failure *failure);
 
 /* Whether the ropes (if any) hold at time t in the state x with outputs y: each length in its
  * range (else CP_ROPE_RANGE), each tension not negative (else CP_ROPE_SLACK: a rope cannot

@@ -51,15 +51,15 @@ static const double P[3][3] = {{10.048809399827414, -25.62959144707664, 15.58078
 #define MAX_FACTOR 10.0
 
 /* The matrices block (CP_NEWTON_SIZE): J, the real factors, the complex factors (two doubles
- * an entry), the two pivot vectors (whole numbers), the structure the factors are on
- * (cp_newton_structure's velocity and slot) and the step size they are for. */
+ * an entry), the two pivot vectors (whole numbers) and the structure the factors are on
+ * (cp_newton_structure's velocity and slot); the step size they are for is the cp_newton's. */
 typedef struct {
     double *J, *lu_real;
     double complex *lu_complex;
     double *pivots_real, *pivots_complex, *velocity, *slot, *h;
 } matrices;
 
-static matrices carve_matrices(int n, double *block)
+static matrices carve_matrices(int n, double *block, cp_newton *nw)
 {
     matrices mx;
     mx.J = block;
@@ -69,7 +69,7 @@ static matrices carve_matrices(int n, double *block)
     mx.pivots_complex = mx.pivots_real + n;
     mx.velocity = mx.pivots_complex + n;
     mx.slot = mx.velocity + n;
-    mx.h = mx.slot + n;
+    mx.h = &nw->h;
     return mx;
 }
 
@@ -344,6 +344,13 @@ static void factor(int n, double h, const matrices *mx, cp_newton *nw, cp_stats 
     nw->lu_valid = 1;
 }
 
+void cp_newton_refactor(int n, cp_newton *nw, double *block)
+{
+    const matrices mx = carve_matrices(n, block, nw);
+    cp_stats uncounted = {0, 0, 0, 0, 0, 0};  /* no step's work: the step counted it */
+    factor(n, nw->h, &mx, nw, &uncounted);
+}
+
 int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *nw,
                   double *block, double t_end, double rtol, double atol, double max_step,
                   long long max_steps, long long *attempts, double *work, cp_stats *stats)
@@ -352,7 +359,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
     const size_t size = n * sizeof(double);
     double *x0 = rows + CP_ROW_X0 * n, *x1 = rows + CP_ROW_X1 * n, *f1 = rows + CP_ROW_F1 * n;
     double *Q = rows + CP_ROW_DENSE * n;
-    const matrices mx = carve_matrices(n, block);
+    const matrices mx = carve_matrices(n, block, nw);
     radau_memory m = carve(n, work);
     const double t = step->t1, *y = x1, *f = f1;
     const double newton_tol = fmax(10 * DBL_EPSILON / rtol, fmin(0.03, sqrt(rtol)));

@@ -82,18 +82,23 @@ enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2, CP_RADAU = 3, CP_AUTO = 4 };
  * CP_DOP853: the bound its stiffness test uses). */
 double cp_stiffness_bound(int method);
 
-/* The implicit solver's matrices, kept between steps and across communication points (in an
- * FMU's state): flags here, the numbers in a block of CP_NEWTON_SIZE(dim) doubles beside it
- * (J, the real and complex factors, their pivots as whole numbers, the structure they are on
- * as cp_newton_structure's velocity and slot, and the step size they are for). */
+/* The implicit solver's matrices, kept between steps and across communication points: flags
+ * here (in an FMU's state), the numbers in a block of CP_NEWTON_SIZE(dim) doubles beside it (J,
+ * the real and complex factors, their pivots as whole numbers and the structure they are on as
+ * cp_newton_structure's velocity and slot; not in an FMU's state: cosim.h). */
 typedef struct {
     int jac_valid;    /* the block's J is a Jacobian of the system */
     int current_jac;  /* ... evaluated at the start of the step in flight */
-    int lu_valid;     /* the factors are J's, for the step size they were made for */
+    int lu_valid;     /* the factors are J's, for the step size h */
     int reserved;     /* 0 (the padding, named so that a state's bytes are all defined) */
     double rho;       /* J's spectral radius, estimated when J was evaluated */
+    double h;         /* the step size the factors are for (lu_valid) */
 } cp_newton;
-#define CP_NEWTON_SIZE(dim) (4 * (dim) * (dim) + 4 * (dim) + 1)
+#define CP_NEWTON_SIZE(dim) (4 * (dim) * (dim) + 4 * (dim))
+
+/* The factors of the block's J (dim n) for the step size nw->h made again, as the step that
+ * made them made them (bit for bit), and nw->lu_valid set: a block restored from its J. */
+void cp_newton_refactor(int n, cp_newton *nw, double *block);
 
 /* The structure of the Newton systems, read off the Jacobian J (dim n) of x' = f(x): state i
  * is a position when x_i' = x_v (its row of J a single 1 at v != i) and v is no position

@@ -177,7 +177,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     (void)fmuResourceLocation;
     (void)visible;
     if (!functions || !functions->allocateMemory || !functions->freeMemory) return NULL;
-    Instance *inst = functions->allocateMemory(1, sizeof(Instance) + model_sizes.data_size);
+    Instance *inst = functions->allocateMemory(
+        1, sizeof(Instance) + model_sizes.data_size + model_sizes.scratch_size);
     if (!inst) return NULL;
     fmi_instance_init(&inst->fmi, &standard, fmuType == fmi2CoSimulation, loggingOn,
                       functions->allocateMemory, functions->freeMemory, (ModelData *)inst->model);

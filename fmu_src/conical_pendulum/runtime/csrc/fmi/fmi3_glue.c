@@ -188,7 +188,7 @@ static Instance *instantiate(const char *function, int co_simulation, fmi3String
                              const char *problem)
 {
     /* FMI 3.0 gives the FMU no memory callbacks: its own calloc, freed by fmi3FreeInstance. */
-    Instance *inst = calloc(1, sizeof(Instance) + model_sizes.data_size);
+    Instance *inst = calloc(1, sizeof(Instance) + model_sizes.data_size + model_sizes.scratch_size);
     if (!inst) return NULL;
     fmi_instance_init(&inst->fmi, &standard, co_simulation, loggingOn, calloc, free,
                       (ModelData *)inst->model);

@@ -24,7 +24,12 @@
  * Data. A model's instance data is a ModelData: opaque here, model_sizes.data_size bytes of
  * plain data (no pointers, no type aligned more strictly than a double) that the FMI layer
  * allocates, copies as a whole (FMU states) and serializes byte for byte; model_invalid
- * checks such bytes before any of them is taken. Nothing is allocated by a model.
+ * checks such bytes before any of them is taken. Right after them the FMI layer allocates
+ * model_sizes.scratch_size bytes more, which the model keeps of its own and no FMU state holds
+ * (what it can make again from the data, as the pendulum's Newton matrices, and scratch):
+ * every ModelData pointer a function takes is to data_size + scratch_size bytes, which
+ * model_reset initializes; copies of the data alone are states. Nothing is allocated by a
+ * model.
  *
  * The FMI 3.0 layer (fmi3_glue.c) sits on the same functions: fmi3GetFloat64 and
  * fmi3SetFloat64 are model_get_real and model_check_real / model_set_real, fmi3GetInt32 and
@@ -80,6 +85,7 @@ typedef enum {
  * n_real + n_integer - 1. */
 typedef struct {
     size_t data_size;        /* sizeof(ModelData) */
+    size_t scratch_size;     /* bytes the model keeps after its data, out of FMU states */
     int n_real, n_integer;   /* Real and Integer variables held (the derivatives apart) */
     int n_state;             /* continuous states x, Model Exchange's nx */
     int n_event_indicator;   /* Model Exchange's event indicators (model_get_event_indicators) */

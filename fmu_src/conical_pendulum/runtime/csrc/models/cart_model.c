@@ -30,8 +30,8 @@ struct ModelData {
     double input_rates[2][2];
 };
 
-const ModelSizes model_sizes = {sizeof(ModelData), CP_NREAL, CP_VR_DERIVATIVE - CP_NREAL, N_STATE,
-                                0, CP_VR_STATE, CP_VR_DERIVATIVE};
+const ModelSizes model_sizes = {sizeof(ModelData), 0, CP_NREAL, CP_VR_DERIVATIVE - CP_NREAL,
+                                N_STATE, 0, CP_VR_STATE, CP_VR_DERIVATIVE};
 
 static const char *const tolerance_name = "tolerance (from setupExperiment)";
 

@@ -26,8 +26,7 @@ struct ModelData {
     double tolerance;             /* the experiment's; replaces rtol's start value when > 0 */
     double stop_time;             /* the experiment's (INFINITY: none): no step goes beyond */
     cp_flight flight;             /* the integration carried across communication points */
-    cp_matrices matrices;         /* the implicit solver's Jacobian and factors */
-    double work[CP_STEP_WORK_SIZE];  /* scratch of a step */
+    cp_jacobian_record jacobian;  /* the implicit solver's Jacobian, as a state keeps it */
     double dx[CP_NSTATE];         /* Model Exchange: x' at x when dx_valid */
     int dx_valid, outputs_valid;
     /* the inputs' first and second time derivatives as the master set them (0: held); the
@@ -43,8 +42,19 @@ struct ModelData {
     int hoist_warned;             /* a winch speed changed in continuous-time mode was warned of */
 };
 
-const ModelSizes model_sizes = {sizeof(ModelData), CP_NREAL, CP_VR_DERIVATIVE - CP_NREAL,
-                                CP_NSTATE, CP_NWATCHED, CP_VR_STATE, CP_VR_DERIVATIVE};
+/* What an instance keeps beside its data and out of its FMU states (fmu_model.h's scratch):
+ * the implicit solver's matrices, which a step makes again from the data's record where they
+ * are not its (cosim.h), and a step's scratch. */
+typedef struct {
+    cp_matrices matrices;
+    double work[CP_STEP_WORK_SIZE];
+} Scratch;
+
+#define SCRATCH(m) ((Scratch *)((m) + 1))
+
+const ModelSizes model_sizes = {sizeof(ModelData), sizeof(Scratch), CP_NREAL,
+                                CP_VR_DERIVATIVE - CP_NREAL, CP_NSTATE, CP_NWATCHED, CP_VR_STATE,
+                                CP_VR_DERIVATIVE};
 
 #define X(m) ((m)->r + CP_VR_STATE)
 #define Y(m) ((m)->r + CP_VR_OUTPUT)
@@ -182,7 +192,7 @@ static ModelStatus derivatives(ModelData *m, double time, char *message, size_t 
 
 void model_reset(ModelData *m)
 {
-    memset(m, 0, sizeof *m);
+    memset(m, 0, sizeof *m + sizeof(Scratch));
     memcpy(m->r, cp_real_start, sizeof cp_real_start);
     m->solver = CP_SOLVER_START;
     m->max_steps = CP_MAX_STEPS_START;
@@ -584,7 +594,8 @@ ModelStatus model_do_step_early(ModelData *m, double t, double dt, int early_ret
     cp_failure failure;
     double reached = t;
     int status = cp_cosim_advance(&settings, m->r, (const double(*)[2])m->input_rates, X(m), Y(m),
-                                  t, dt, m->stop_time, &m->flight, &m->matrices, m->work, STATS(m),
+                                  t, dt, m->stop_time, &m->flight, &m->jacobian,
+                                  &SCRATCH(m)->matrices, SCRATCH(m)->work, STATS(m),
                                   ROPE_EVENTS(m), &failure,
                                   early_return_allowed ? &reached : NULL);
     if (last_successful_time) *last_successful_time = status == CP_OK ? t + dt : reached;
@@ -678,16 +689,14 @@ static const char *flight_invalid(const ModelData *m, char *message, size_t size
     return NULL;
 }
 
-/* NULL if the implicit solver's matrices can be used (cosim.h's cp_matrices, solvers.h's
- * CP_NEWTON_SIZE): the flags 0 or 1, the spectral radius a number >= 0, J finite where it is
- * valid; where the factors are valid (of a valid J), they are finite, on the structure J has
- * (cp_newton_structure), for a step size > 0, and their pivots are rows at or below their own
- * within the factored system (their own past it); or the message. */
-static const char *matrices_invalid(const ModelData *m, char *message, size_t size)
+/* NULL if the implicit solver's record can be taken (cosim.h's cp_jacobian_record): the flags
+ * 0 or 1, factors only of a Jacobian, the spectral radius a number >= 0; where the Jacobian is
+ * valid, the state and the core's p it was evaluated at finite; where the factors are, their
+ * step size finite and > 0; or the message. The matrices are made again from it, never taken. */
+static const char *jacobian_invalid(const ModelData *m, char *message, size_t size)
 {
-    const cp_newton *nw = &m->matrices.newton;
-    const double *block = m->matrices.block;
-    const int n = CP_NSTATE;
+    const cp_jacobian_record *record = &m->jacobian;
+    const cp_newton *nw = &record->newton;
     const struct { const char *name; int value; } flags[] = {
         {"jac_valid", nw->jac_valid}, {"current_jac", nw->current_jac}, {"lu_valid", nw->lu_valid}};
     for (size_t k = 0; k < sizeof flags / sizeof flags[0]; k++)
@@ -701,38 +710,19 @@ static const char *matrices_invalid(const ModelData *m, char *message, size_t si
                  nw->reserved, nw->lu_valid, nw->jac_valid, nw->rho);
         return message;
     }
-    const int checked = nw->lu_valid ? 4 * n * n : nw->jac_valid ? n * n : 0;
-    for (int k = 0; k < checked; k++)
-        if (!isfinite(block[k])) {
-            snprintf(message, size, "Jacobian: entry %d of its matrices is %.17g: must be finite",
-                     k, block[k]);
-            return message;
-        }
-    if (!nw->lu_valid) return NULL;
-    const double *pivots = block + 4 * n * n, *velocity = pivots + 2 * n, *slot = velocity + n;
-    const double h = slot[n];
-    double own_velocity[CP_NSTATE], own_slot[CP_NSTATE];
-    const int r = cp_newton_structure(n, block, own_velocity, own_slot);
-    for (int k = 0; k < n; k++)
-        if (velocity[k] != own_velocity[k] || slot[k] != own_slot[k]) {
-            snprintf(message, size, "Jacobian: the factors' structure at state %d (velocity %.17g, "
-                     "slot %.17g) is not its Jacobian's (%.17g, %.17g)",
-                     k, velocity[k], slot[k], own_velocity[k], own_slot[k]);
-            return message;
-        }
-    if (!(isfinite(h) && h > 0)) {
-        snprintf(message, size, "Jacobian: the factors' step size is %.17g: must be > 0", h);
+    if (nw->lu_valid && !(isfinite(nw->h) && nw->h > 0)) {
+        snprintf(message, size, "Jacobian: the factors' step size is %.17g: must be > 0", nw->h);
         return message;
     }
-    for (int k = 0; k < 2 * n; k++) {
-        const double pivot = pivots[k];
-        const int row = k % n, last = row < r ? r - 1 : row;
-        if (!(pivot >= row && pivot <= last && pivot == floor(pivot))) {
-            snprintf(message, size, "Jacobian: pivot %d is %.17g: must be a row from %d to %d",
-                     k, pivot, row, last);
-            return message;
-        }
-    }
+    const struct { const char *what; const double *values; int count; } points[] = {
+        {"state", record->x, CP_NSTATE}, {"parameter", record->p, CP_PSIZE}};
+    for (size_t k = 0; nw->jac_valid && k < sizeof points / sizeof points[0]; k++)
+        for (int i = 0; i < points[k].count; i++)
+            if (!isfinite(points[k].values[i])) {
+                snprintf(message, size, "Jacobian: entry %d of the %s it was evaluated at is "
+                         "%.17g: must be finite", i, points[k].what, points[k].values[i]);
+                return message;
+            }
     return NULL;
 }
 
@@ -771,7 +761,7 @@ const char *model_invalid(const ModelData *m, char *message, size_t size)
     if (m->stop_time != INFINITY
         && cp_real_refusal("stop_time", m->stop_time, &cp_rules[CP_FINITE_RULE], "", message, size))
         return message;
-    if (flight_invalid(m, message, size) || matrices_invalid(m, message, size)) return message;
+    if (flight_invalid(m, message, size) || jacobian_invalid(m, message, size)) return message;
     char name[160];
     for (int k = 0; k < CP_NSTATE; k++)
         if (m->dx_valid && cp_real_refusal(cp_variable_name(CP_VR_DERIVATIVE + k), m->dx[k],
