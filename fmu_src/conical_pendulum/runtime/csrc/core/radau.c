@@ -1,5 +1,6 @@
 /* Radau IIA of order 5, the implicit solver: scipy's Radau (scipy/integrate/_ivp/radau.py,
- * after Hairer & Wanner's radau5) step for step, on the system's exact Jacobian.
+ * after Hairer & Wanner's radau5) step for step, on the system's exact Jacobian, up to
+ * COSTLY_JACOBIAN_DIM states; past them radau5's own choices for large systems (below).
  *
  * Each step solves the collocation system for the three stages by a simplified Newton
  * iteration, whose matrices (MU_REAL / h - J and MU_COMPLEX / h - J) are factored once and
@@ -40,13 +41,25 @@ static const double P[3][3] = {{10.048809399827414, -25.62959144707664, 15.58078
                                {0.33333333333333331, -2.6666666666666665, 3.3333333333333335}};
 
 #define NEWTON_MAXITER 6
-/* The Newton rate past which an accepted step's Jacobian is evaluated anew (after more than two
- * iterations): scipy's 1e-3 for small systems, radau5's advice of 0.1 (Hairer's WORK(3)) where
- * a Jacobian is costly, here its dim complex-step right-hand sides: past COSTLY_JACOBIAN_DIM
- * states (5 links). On the damped light chain of 10, 20 and 50 links (rtol 1e-6 to 1e-12) it
- * takes a half to a quarter of the Jacobians, for the same error. */
+/* Past COSTLY_JACOBIAN_DIM states (5 links), where a Jacobian costs dim complex-step
+ * right-hand sides and a factorization grows as dim^3, the solver takes radau5's advice for
+ * large systems rather than scipy's choices (kept below it, step for step):
+ * - the Newton rate past which an accepted step's Jacobian is evaluated anew (after more
+ *   than two iterations): 0.1 (Hairer's WORK(3) where Jacobians are costly), not 1e-3. On the
+ *   damped light chain of 10, 20 and 50 links (rtol 1e-6 to 1e-12) it takes a half to a
+ *   quarter of the Jacobians, for the same error;
+ * - the step size kept, and with it the factors, unless it would grow by KEEP_STEP_BELOW:
+ *   2 (WORK(5), WORK(6) = 1, 2 "for large full systems"), not 1.2;
+ * - no growth in the step after a rejected one (radau5's REJECT, which scipy leaves out):
+ *   on long light chains half the steps tried fail their Newton iteration, each failure
+ *   costing a Jacobian and two factorizations, and growing again at once fails again.
+ * The last two, on the 50-link chain at c = 1e2, rtol 1e-6: 307 -> 263 Jacobians, 1676 ->
+ * 1080 factorizations, 329 -> 201 rejected steps, the error 1.95e-6 -> 3.37e-6 rad
+ * (benchmarks/radau_levers.py). */
 #define COSTLY_JACOBIAN_DIM 20
-#define RECOMPUTE_RATE(dim) ((dim) > COSTLY_JACOBIAN_DIM ? 0.1 : 1e-3)
+#define LARGE(dim) ((dim) > COSTLY_JACOBIAN_DIM)
+#define RECOMPUTE_RATE(dim) (LARGE(dim) ? 0.1 : 1e-3)
+#define KEEP_STEP_BELOW(dim) (LARGE(dim) ? 2.0 : 1.2)
 #define MIN_FACTOR 0.2
 #define MAX_FACTOR 10.0
 
@@ -96,10 +109,10 @@ int cp_newton_structure(int n, const double *J, double *velocity, double *slot)
 /* shift I - J on the structure (velocity, slot; r the rest's size) into a, r x r, factored
  * in place by partial pivoting (LAPACK's getrf without blocking); and the solve of
  * (shift I - J) x = b in place, through the factors (scratch: r of type): for real and for
- * complex matrices alike (type, and its magnitude for the pivot's choice). The pivots past r
- * are their own rows. A zero pivot is left as it is: the solve gives inf, and the Newton
- * iteration fails on it. */
-#define LU_FUNCTIONS(factor_name, solve_name, type, magnitude)                              \
+ * complex matrices alike (type, its magnitude for the pivot's choice, and its row
+ * elimination). The pivots past r are their own rows. A zero pivot is left as it is: the
+ * solve gives inf, and the Newton iteration fails on it. */
+#define LU_FUNCTIONS(factor_name, solve_name, type, magnitude, eliminate)                   \
     static void factor_name(int n, int r, type shift, const double *J, const double *velocity, \
                             const double *slot, type *a, double *pivots)                     \
     {                                                                                        \
@@ -127,7 +140,7 @@ int cp_newton_structure(int n, const double *J, double *velocity, double *slot)
             if (a[k * r + k] == 0.0) continue;                                               \
             for (int i = k + 1; i < r; i++) {                                                \
                 type l = a[i * r + k] /= a[k * r + k];                                       \
-                for (int j = k + 1; j < r; j++) a[i * r + j] -= l * a[k * r + j];            \
+                eliminate(r - k - 1, l, a + i * r + k + 1, a + k * r + k + 1);               \
             }                                                                                \
         }                                                                                    \
     }                                                                                        \
@@ -160,8 +173,30 @@ int cp_newton_structure(int n, const double *J, double *velocity, double *slot)
             if (velocity[i] >= 0) b[i] = (b[i] + b[(int)velocity[i]]) / shift;               \
     }
 
-LU_FUNCTIONS(lu_real, solve_real, double, fabs)
-LU_FUNCTIONS(lu_complex, solve_complex, double complex, cabs)
+/* row -= l pivot_row over count entries: the factorization's inner loop, where its time goes.
+ * The rows never overlap (restrict), and the complex one multiplies as C does for finite
+ * numbers, part by part (C's operator adds a test for NaN parts that keeps the loop from
+ * being compiled tight): the same numbers, bit for bit, in some half the time. */
+static void eliminate_real(int count, double l, double *restrict row, const double *restrict pivot_row)
+{
+    for (int j = 0; j < count; j++) row[j] -= l * pivot_row[j];
+}
+
+static void eliminate_complex(int count, double complex l, double complex *row_z,
+                              const double complex *pivot_z)
+{
+    const double lr = creal(l), li = cimag(l);
+    double *restrict row = (double *)row_z;  /* a complex is its two parts (C99 6.2.5) */
+    const double *restrict pivot_row = (const double *)pivot_z;
+    for (int j = 0; j < count; j++) {
+        const double br = pivot_row[2 * j], bi = pivot_row[2 * j + 1];
+        row[2 * j] -= lr * br - li * bi;
+        row[2 * j + 1] -= lr * bi + li * br;
+    }
+}
+
+LU_FUNCTIONS(lu_real, solve_real, double, fabs, eliminate_real)
+LU_FUNCTIONS(lu_complex, solve_complex, double complex, cabs, eliminate_complex)
 
 /* The shifts of the two Newton matrices for the step size h. */
 static double real_shift(double h)
@@ -374,7 +409,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
     }
     if (!nw->jac_valid && (status = jacobian(sys, t, y, nw, &mx, m.err, m.y_new, stats)))
         return status;
-    int rejected = 0, n_iter = 0;
+    int rejected = 0, n_iter = 0, tried_longer = 0;  /* tried_longer: a step was rejected */
     double rate = -1.0, error_norm = 0.0, safety = 0.9, t_new, h;
     for (;;) {
         if (h_abs < min_step) return trial_failure ? trial_failure : CP_STEP_UNDERFLOW;
@@ -410,6 +445,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
             h_abs *= 0.5;
             nw->lu_valid = 0;
             stats->nreject++;
+            tried_longer = 1;
             continue;
         }
         for (int i = 0; i < n; i++) {
@@ -436,7 +472,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
             const double grow = predict_factor(h_abs, h_old, error_norm, err_old);
             h_abs *= isnan(error_norm) ? MIN_FACTOR : fmax(MIN_FACTOR, safety * grow);
             nw->lu_valid = 0;
-            rejected = 1;
+            rejected = tried_longer = 1;
             stats->nreject++;
             continue;
         }
@@ -444,7 +480,8 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
     }
     const int recompute_jac = n_iter > 2 && rate > RECOMPUTE_RATE(n);
     double grow = fmin(MAX_FACTOR, safety * predict_factor(h_abs, h_old, error_norm, err_old));
-    if (!recompute_jac && grow < 1.2) grow = 1.0;
+    if (LARGE(n) && tried_longer) grow = fmin(grow, 1.0);
+    if (!recompute_jac && grow < KEEP_STEP_BELOW(n)) grow = 1.0;
     else nw->lu_valid = 0;
     /* the step is taken: its start, end, x' there and dense output into the rows */
     memcpy(x0, y, size);
