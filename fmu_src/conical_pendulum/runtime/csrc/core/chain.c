@@ -135,12 +135,13 @@ static void bob_drag(Link *k, const cp_real *p, int i)
 }
 #endif
 
-/* Positions, velocities, joint axes, bias accelerations, and each link's inertia. */
-static void kinematics(const cp_real *x, const cp_real *p, Link *links)
+/* Positions, velocities, joint axes, bias accelerations, and each link's inertia, of the
+ * links from start on (those before it as links has them). */
+static void kinematics_from(const cp_real *x, const cp_real *p, Link *links, int start)
 {
     const int n = CP_NLINK;
     static const cp_real identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    for (int i = 0; i < n; i++) {
+    for (int i = start; i < n; i++) {
         Link *k = &links[i];
         const Link *parent = i ? &links[i - 1] : NULL;
         const cp_real *Rp = parent ? parent->R : identity;
@@ -217,6 +218,11 @@ static void kinematics(const cp_real *x, const cp_real *p, Link *links)
         if (cp_bob_drag[i] >= 0) bob_drag(k, p, i);
 #endif
     }
+}
+
+static void kinematics(const cp_real *x, const cp_real *p, Link *links)
+{
+    kinematics_from(x, p, links, 0);
 }
 
 /* The pivot's acceleration seen by the chain: its input (if any) plus g upwards. */
@@ -605,13 +611,17 @@ int cp_chain_rates_and_apparent_mass(cp_model *model, const cp_real *x, cp_real 
 }
 #endif
 
-/* Generalized forces that give the rates' rates ud (recursive Newton-Euler). */
-static void inverse_dynamics(const Link *links, const cp_real *p, const cp_real *ud, cp_real *tau)
+/* Generalized forces tau that give the rates' rates ud (recursive Newton-Euler), with each
+ * link's acceleration and its own force f = I a + b (without its children's) into acc and
+ * force: from the link start on; those before it as acc and force have them. */
+static void inverse_dynamics_from(const Link *links, const cp_real *p, const cp_real *ud, int start,
+                                  cp_real (*acc)[6], cp_real (*force)[6], cp_real *tau)
 {
     const int n = CP_NLINK;
-    cp_real a[6], f[CP_NLINK][6];
-    base_acceleration(p, 1, a);
-    for (int i = 0; i < n; i++) {
+    cp_real a[6], f[6];
+    if (start) memcpy(a, acc[start - 1], sizeof a);
+    else base_acceleration(p, 1, a);
+    for (int i = start; i < n; i++) {
         const Link *k = &links[i];
         cp_real ai[6], Eu[3];
         const cp_real u2[2] = {ud[i], ud[n + i]};
@@ -623,29 +633,218 @@ static void inverse_dynamics(const Link *links, const cp_real *p, const cp_real 
             for (int j = 0; j < 3; j++) ai[3 + j] -= k->R[j * 3 + 1] * ud[2 * n + cp_link_elastic[i]];
 #endif
         for (int r = 0; r < 6; r++) {
-            f[i][r] = k->b[r];
-            for (int c = 0; c < 6; c++) f[i][r] += k->I[r * 6 + c] * ai[c];
+            force[i][r] = k->b[r];
+            for (int c = 0; c < 6; c++) force[i][r] += k->I[r * 6 + c] * ai[c];
         }
+        memcpy(acc[i], ai, sizeof a);
         memcpy(a, ai, sizeof a);
     }
-    for (int i = n - 1; i >= 0; i--) {
+    for (int i = n - 1; i >= 0; i--) {  /* f: what joint i carries, its link's and below */
         const Link *k = &links[i];
+        if (i == n - 1) memcpy(f, force[i], sizeof f);
+        else {
+            cp_real t[3];  /* the child's carried to this joint, plus this link's own */
+            cross(links[i + 1].d, f + 3, t);
+            for (int j = 0; j < 3; j++) f[j] = force[i][j] + (f[j] + t[j]), f[3 + j] += force[i][3 + j];
+        }
         tau[i] = tau[n + i] = 0;
-        for (int j = 0; j < 3; j++) tau[i] += k->E[j * 2] * f[i][j], tau[n + i] += k->E[j * 2 + 1] * f[i][j];
+        for (int j = 0; j < 3; j++) tau[i] += k->E[j * 2] * f[j], tau[n + i] += k->E[j * 2 + 1] * f[j];
 #ifdef CP_NELASTIC
         if (cp_link_elastic[i] >= 0) {  /* the force along the slide, S^T f */
             cp_real *t = &tau[2 * n + cp_link_elastic[i]];
             *t = 0;
-            for (int j = 0; j < 3; j++) *t -= k->R[j * 3 + 1] * f[i][3 + j];
+            for (int j = 0; j < 3; j++) *t -= k->R[j * 3 + 1] * f[3 + j];
         }
 #endif
-        if (i) {
-            cp_real t[3];
-            cross(k->d, f[i] + 3, t);
-            for (int j = 0; j < 3; j++) f[i - 1][j] += f[i][j] + t[j], f[i - 1][3 + j] += f[i][3 + j];
-        }
     }
 }
+
+static void inverse_dynamics(const Link *links, const cp_real *p, const cp_real *ud, cp_real *tau)
+{
+    cp_real acc[CP_NLINK][6], force[CP_NLINK][6];
+    inverse_dynamics_from(links, p, ud, 0, acc, force, tau);
+}
+
+#if CP_COMPLEX_STEP == 1
+/* The Jacobian J = df/dx of the recursive formulation, for directional.c's cp_jacobian (this
+ * complex-step copy only). M u' = F is r(x, u') = 0 with r the generalized forces inverse
+ * dynamics needs for u' (its recursive Newton-Euler, every option's force among them) plus the
+ * joints' damping and the elastic ropes' pull: a column is u'_j = -M^-1 dr/dx_j at u' fixed,
+ * dr/dx_j by a complex step through kinematics and inverse dynamics from the link x_j moves
+ * on (the links before it as they were), M^-1 by the articulated-body factorization the
+ * right-hand side made, with neither velocity terms nor gravity. Some n^2 / 2 links' worth
+ * of a complex-step right-hand side's work instead of n^2 twice over (a column of it per
+ * state): tests/test_directional.py holds it to the columns of cp_directional. */
+
+/* What a solve with M needs of a link's articulated-body factorization, real. */
+typedef struct {
+    double E[6], U[12], Dinv[4], d[3];
+#ifdef CP_NELASTIC
+    double ey[3], Up[6], Dp;  /* its slide's, where its bob hangs from an elastic rope */
+#endif
+} Factored;
+
+static void factored_of(const Link *links, Factored *out)
+{
+    for (int i = 0; i < CP_NLINK; i++) {
+        const Link *k = &links[i];
+        Factored *f = &out[i];
+        for (int j = 0; j < 6; j++) f->E[j] = creal(k->E[j]);
+        for (int j = 0; j < 12; j++) f->U[j] = creal(k->U[j]);
+        for (int j = 0; j < 4; j++) f->Dinv[j] = creal(k->Dinv[j]);
+        for (int j = 0; j < 3; j++) f->d[j] = creal(k->d[j]);
+#ifdef CP_NELASTIC
+        for (int j = 0; j < 3; j++) f->ey[j] = creal(k->R[j * 3 + 1]);
+        for (int j = 0; j < 6; j++) f->Up[j] = creal(k->Up[j]);
+        f->Dp = creal(k->Dp);
+#endif
+    }
+}
+
+static void real_cross(const double *a, const double *b, double *out)
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* ud = M^-1 tau (CP_NDOF values each): articulate's and accelerate's passes on the factored
+ * links, their forces tau alone. */
+static void solve_mass(const Factored *links, const double *tau, double *ud)
+{
+    const int n = CP_NLINK;
+    double pA[6] = {0, 0, 0, 0, 0, 0}, uu[CP_NLINK][2], a[6] = {0, 0, 0, 0, 0, 0};
+#ifdef CP_NELASTIC
+    double up[CP_NLINK];
+#endif
+    for (int i = n - 1; i >= 0; i--) {  /* pA: what the links below carry to joint i */
+        const Factored *k = &links[i];
+#ifdef CP_NELASTIC
+        const int e = cp_link_elastic[i];
+        if (e >= 0) {
+            up[i] = tau[2 * n + e] + k->ey[0] * pA[3] + k->ey[1] * pA[4] + k->ey[2] * pA[5];
+            for (int r = 0; r < 6; r++) pA[r] += k->Up[r] * up[i] / k->Dp;
+        }
+#endif
+        for (int r = 0; r < 2; r++)
+            uu[i][r] = tau[r * n + i] - (k->E[r] * pA[0] + k->E[2 + r] * pA[1] + k->E[4 + r] * pA[2]);
+        if (!i) break;
+        double pa[6], t[3];
+        for (int r = 0; r < 6; r++) {
+            const double UD0 = k->U[r * 2] * k->Dinv[0] + k->U[r * 2 + 1] * k->Dinv[2];
+            const double UD1 = k->U[r * 2] * k->Dinv[1] + k->U[r * 2 + 1] * k->Dinv[3];
+            pa[r] = pA[r] + UD0 * uu[i][0] + UD1 * uu[i][1];
+        }
+        real_cross(k->d, pa + 3, t);
+        for (int j = 0; j < 3; j++) pA[j] = pa[j] + t[j], pA[3 + j] = pa[3 + j];
+    }
+    for (int i = 0; i < n; i++) {
+        const Factored *k = &links[i];
+        double t[3], rhs[2];
+        real_cross(k->d, a, t);
+        for (int j = 0; j < 3; j++) a[3 + j] -= t[j];
+        for (int r = 0; r < 2; r++) {
+            rhs[r] = uu[i][r];
+            for (int j = 0; j < 6; j++) rhs[r] -= k->U[j * 2 + r] * a[j];
+        }
+        const double u0 = k->Dinv[0] * rhs[0] + k->Dinv[1] * rhs[1];
+        const double u1 = k->Dinv[2] * rhs[0] + k->Dinv[3] * rhs[1];
+        for (int j = 0; j < 3; j++) a[j] += k->E[j * 2] * u0 + k->E[j * 2 + 1] * u1;
+        ud[i] = u0, ud[n + i] = u1;
+#ifdef CP_NELASTIC
+        const int e = cp_link_elastic[i];
+        if (e >= 0) {
+            double rdd = up[i];
+            for (int j = 0; j < 6; j++) rdd -= k->Up[j] * a[j];
+            rdd /= k->Dp;
+            for (int j = 0; j < 3; j++) a[3 + j] -= k->ey[j] * rdd;
+            ud[2 * n + e] = rdd;
+        }
+#endif
+    }
+}
+
+/* The first link a state moves: its joint's angles and rates, its slide's reach and rate, its
+ * rope's length; -1 for a state nothing depends on (a book). */
+static int first_link_moved(int state)
+{
+    const int n = CP_NLINK;
+    int k = state < 2 * CP_NDOF ? state % CP_NDOF : -1;
+    if (k >= 0 && k < 2 * n) return k % n;
+#ifdef CP_NELASTIC
+    if (k >= 2 * n) return cp_rope_link[cp_elastic_rope[k - 2 * n]];
+#endif
+#ifdef CP_NROPE
+    for (int r = 0; r < CP_NROPE; r++)
+        if (cp_rope_state[r] == state) return cp_rope_link[r];
+#endif
+    return -1;
+}
+
+/* J (CP_NSTATE^2, row-major) at (x, p), p the core's (CP_PSIZE), step the complex step's size;
+ * CP_OK, or the right-hand side's status there, its model's pivot ratio and bad dof in
+ * *model_out. */
+static int chain_jacobian(const double *x, const double *p, double step, double *J,
+                          cp_model *model_out)
+{
+    const int n = CP_NLINK, N = CP_NSTATE;
+    cp_real xc[CP_NSTATE], pc[CP_PSIZE], rates[CP_NSTATE], ud[CP_NDOF], tau[CP_NDOF];
+    cp_real acc[CP_NLINK][6], force[CP_NLINK][6];
+    for (int k = 0; k < N; k++) xc[k] = x[k], rates[k] = 0.0;
+    for (int k = 0; k < CP_PSIZE; k++) pc[k] = p[k];
+    cp_rope_law(xc, pc);
+    cp_model model = {pc, 1.0, -1};
+    Link links[CP_NLINK];
+    Factored factored[CP_NLINK];
+    int status = articulate(&model, xc, links);
+    if (!status) status = accelerate(&model, xc, links, rates);
+    model_out->pivot_ratio = model.pivot_ratio;
+    model_out->bad_dof = model.bad_dof;
+    if (status) return status;
+    factored_of(links, factored);
+    memcpy(ud, rates + CP_NDOF, sizeof ud);
+    inverse_dynamics_from(links, pc, ud, 0, acc, force, tau);  /* every link's, at x */
+    memset(J, 0, (size_t)N * N * sizeof(double));
+    for (int k = 0; k < CP_NDOF; k++) J[k * N + CP_NDOF + k] = 1.0;  /* q' = u */
+    for (int first = n - 1; first >= 0; first--)  /* the links from first on made anew */
+        for (int j = 0; j < N; j++) {
+            if (first_link_moved(j) != first) continue;
+            double dr[CP_NDOF], column[CP_NDOF];
+            xc[j] = x[j] + step * _Complex_I;
+            cp_rope_law(xc, pc);
+            kinematics_from(xc, pc, links, first);
+            inverse_dynamics_from(links, pc, ud, first, acc, force, tau);
+            for (int k = 0; k < CP_NDOF; k++) {
+                cp_real r = tau[k];
+#ifdef CP_DAMPING_INDEX
+                if (k < 2 * n) r += pc[CP_DAMPING_INDEX + k % n] * xc[CP_NDOF + k];
+#endif
+#ifdef CP_NELASTIC
+                if (k >= 2 * n) r += pc[cp_elastic_law[k - 2 * n]];
+#endif
+                dr[k] = -cimag(r) / step;
+            }
+            solve_mass(factored, dr, column);
+            for (int k = 0; k < CP_NDOF; k++) {
+                J[(CP_NDOF + k) * N + j] = column[k];
+                if (!isfinite(column[k])) {
+                    model_out->bad_dof = k;
+                    return CP_NONFINITE;
+                }
+            }
+#ifdef CP_NWORK
+            cp_real dx[CP_NSTATE], dW[CP_NWORK];  /* the books' rates along the column */
+            for (int k = 0; k < N; k++) dx[k] = rates[k];
+            for (int k = 0; k < CP_NDOF; k++)
+                dx[k] = xc[CP_NDOF + k], dx[CP_NDOF + k] = ud[k] + step * column[k] * _Complex_I;
+            work_rates(xc, pc, links, dx, dW);
+            for (int w = 0; w < CP_NWORK; w++) J[(2 * CP_NDOF + w) * N + j] = cimag(dW[w]) / step;
+#endif
+            xc[j] = x[j];
+        }
+    return CP_OK;
+}
+#endif
 
 void cp_mass_forcing(const cp_real *x, const cp_real *p, cp_real *M, cp_real *F)
 {

@@ -88,6 +88,11 @@ cdef extern from "cosim.h":
     const cp_watch *cp_held_watch(void *model, cp_watch *watch) noexcept nogil
     int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failure) noexcept nogil
 
+cdef extern from "directional.h":
+    int cp_directional(const double *x, const double *p, const double *dx_seed,
+                       const double *dp_seed, double *d_derivatives, double *d_outputs,
+                       double *pivot_ratio, int *bad_dof) noexcept nogil
+
 cdef extern from "fmu_model.h":
     ctypedef struct ModelData:
         pass
@@ -255,8 +260,8 @@ def outputs(x_in, p_in, hoist_acc=None):
 
 
 def jacobian(x_in, p_in, hoist_acc=None):
-    """J = df/dx at state x as a new (NSTATE, NSTATE) array, exact (complex step, the
-    implicit solver's own); raises CoreError where M is singular."""
+    """J = df/dx at state x as a new (NSTATE, NSTATE) array, exact (directional.h's
+    cp_jacobian, the implicit solver's own); raises CoreError where M is singular."""
     cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
     cdef const double[::1] p = _core_p(p_in, hoist_acc)
     out = np.empty((CP_NSTATE, CP_NSTATE))
@@ -267,6 +272,26 @@ def jacobian(x_in, p_in, hoist_acc=None):
         status = cp_held_jac(&model, 0.0, &x[0], &J[0, 0])
     if status:
         raise CoreError(status, model.bad_dof, model.pivot_ratio)
+    return out
+
+
+def directional(x_in, p_in, seed_in, hoist_acc=None):
+    """(df/dx) seed at state x as a new array, by one complex step of the whole right-hand
+    side (what the FMUs' directional derivatives take): the independent check of jacobian,
+    which the recursive formulation computes otherwise."""
+    cdef const double[::1] x = _vector(x_in, CP_NSTATE, "state")
+    cdef const double[::1] p = _core_p(p_in, hoist_acc)
+    cdef const double[::1] seed = _vector(seed_in, CP_NSTATE, "seed")
+    cdef const double[::1] no_dp = np.zeros(CP_PSIZE)
+    out = np.empty(CP_NSTATE)
+    cdef double[::1] d = out
+    cdef double pivot_ratio = 1.0
+    cdef int bad_dof = -1, status
+    with nogil:
+        status = cp_directional(&x[0], &p[0], &seed[0], &no_dp[0], &d[0], NULL, &pivot_ratio,
+                                &bad_dof)
+    if status:
+        raise CoreError(status, bad_dof, pivot_ratio)
     return out
 
 

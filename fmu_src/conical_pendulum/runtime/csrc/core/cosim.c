@@ -65,21 +65,11 @@ static int interpolated_rhs(void *ctx, double t, const double *x, double *dx)
     return cp_rhs(model_at(ctx, t), x, dx);
 }
 
-/* J = df/dx of the model at (x, its p), exact: a column per state by complex step
- * (directional.h); a singular mass matrix is reported as cp_rhs reports it. */
+/* J = df/dx of the model at (x, its p), exact (directional.h's cp_jacobian); a singular mass
+ * matrix is reported as cp_rhs reports it. */
 static int model_jacobian(cp_model *model, const double *x, double *J)
 {
-    static const double no_dp[CP_PSIZE + 1];
-    double seed[CP_NSTATE] = {0}, column[CP_NSTATE];
-    for (int j = 0; j < CP_NSTATE; j++) {
-        seed[j] = 1.0;
-        int status = cp_directional(x, model->p, seed, no_dp, column, NULL, &model->pivot_ratio,
-                                    &model->bad_dof);
-        seed[j] = 0.0;
-        if (status) return status;
-        for (int i = 0; i < CP_NSTATE; i++) J[i * CP_NSTATE + j] = column[i];
-    }
-    return CP_OK;
+    return cp_jacobian(x, model->p, J, &model->pivot_ratio, &model->bad_dof);
 }
 
 int cp_held_jac(void *ctx, double t, const double *x, double *J)

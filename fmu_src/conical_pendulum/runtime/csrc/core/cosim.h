@@ -138,7 +138,7 @@ int cp_ropes_hold(const double *x, const double *y, double t, cp_failure *failur
  * has them, whatever t. */
 int cp_held_rhs(void *ctx, double t, const double *x, double *dx);
 
-/* Its exact Jacobian (cp_jac_fn), a column per state by complex step (directional.h). */
+/* Its exact Jacobian (cp_jac_fn): directional.h's cp_jacobian. */
 int cp_held_jac(void *ctx, double t, const double *x, double *J);
 
 /* Its elastic ropes' switches as the watch of an integration of it (model a cp_model; solvers.h's

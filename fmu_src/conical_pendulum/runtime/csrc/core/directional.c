@@ -57,3 +57,25 @@ int cp_directional(const double *x, const double *p, const double *dx_seed,
 #endif
     return CP_OK;
 }
+
+int cp_jacobian(const double *x, const double *p, double *J, double *pivot_ratio, int *bad_dof)
+{
+#if CP_RECURSIVE
+    cp_model model = {NULL, 1.0, -1};
+    const int status = chain_jacobian(x, p, CP_COMPLEX_STEP_SIZE, J, &model);
+    *pivot_ratio = model.pivot_ratio;
+    *bad_dof = model.bad_dof;
+    return status;
+#else
+    static const double no_dp[CP_PSIZE + 1];
+    double seed[CP_NSTATE] = {0}, column[CP_NSTATE];
+    for (int j = 0; j < CP_NSTATE; j++) {
+        seed[j] = 1.0;
+        int status = cp_directional(x, p, seed, no_dp, column, NULL, pivot_ratio, bad_dof);
+        seed[j] = 0.0;
+        if (status) return status;
+        for (int i = 0; i < CP_NSTATE; i++) J[i * CP_NSTATE + j] = column[i];
+    }
+    return CP_OK;
+#endif
+}

@@ -13,6 +13,13 @@ int cp_directional(const double *x, const double *p, const double *dx_seed,
                    const double *dp_seed, double *d_derivatives, double *d_outputs,
                    double *pivot_ratio, int *bad_dof);
 
+/* J = df/dx at (x, p) (CP_NSTATE x CP_NSTATE, row-major), p of the core's size: the implicit
+ * solver's. In the expanded formulation a column per state by cp_directional; in the
+ * recursive one each column from inverse dynamics and the articulated-body factorization
+ * (chain.c's chain_jacobian), the same numbers to rounding at some a quarter of the cost.
+ * Returns as cp_directional does. */
+int cp_jacobian(const double *x, const double *p, double *J, double *pivot_ratio, int *bad_dof);
+
 /* The second derivative in s of the outputs along the curve (x, p) + s v + s^2 w / 2 at
  * s = 0, y''[v, v] + y' w (CP_NOUTPUT values into d2_outputs; p, vp and wp of the core's
  * size, CP_PSIZE): with v = (x', u') and
