@@ -21,8 +21,10 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model
 
 from conical_pendulum.analysis.fmpy_runs import logging_callbacks
+from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.runtime.rules import SOLVERS, BadValue, check_value
 from fmu_helpers import Instance
+from test_stiff import light_chain
 
 DISCARD, ERROR, FATAL = 2, 3, 4
 STEP = 1 / 60
@@ -403,6 +405,15 @@ def test_radau_matrices_are_made_again_bit_for_bit_where_a_state_is_restored(bac
     assert stepped(other) == straight
     for instance in (fmu, twin, other):
         instance.close()
+
+
+def test_a_state_grows_with_the_chain_not_with_its_jacobian():
+    """What a state holds of the model is O(n): the 20-link chain's (80 states) is smaller
+    than one 80 x 80 matrix, where the Jacobian and its two factors took four (258,648 bytes)."""
+    core = load_core(light_chain(20))
+    states = len(core.STATE_NAMES)
+    assert states >= 80
+    assert len(core.Model().data) < 8 * states**2
 
 
 def test_a_co_simulation_state_is_no_model_exchange_state(native_seed_fmu):
