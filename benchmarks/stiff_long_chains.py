@@ -30,9 +30,11 @@ a cable or a hanging hose modelled as a damped chain. Two measurements (issue 55
    parent's x then the link's own z (the joint's Rx(beta) Rz(alpha), docs/model.md), each link
    a body of the cylinder and its bob. Timed: Pinocchio's aba and computeABADerivatives from
    Python; this core's right-hand side in a C loop (seconds_per_call) and from Python
-   (core.rhs), its Jacobian from Python (core.jacobian: what the pythonfmu FMU's Radau calls,
-   a complex-step right-hand side per state) and the native FMU's full d(derivatives)/d(states)
-   by fmi2GetDirectionalDerivative, one call per state, from C (benchmarks/directional_host.c).
+   (core.rhs), its Jacobian from Python (core.jacobian: what both FMUs' Radau calls,
+   directional.h's cp_jacobian: in the recursive formulation inverse dynamics stepped from
+   the link each state moves, and M^-1 by the articulated-body factorization) and the native
+   FMU's full d(derivatives)/d(states) by fmi2GetDirectionalDerivative, one call per state
+   (a complex-step right-hand side each), from C (benchmarks/directional_host.c).
    Pinocchio's chain is checked to be this one: its accelerations and its derivatives (with
    the damping's -c M^-1 added to dq''/dv) against core.rhs and core.jacobian, at a random
    state (the largest difference, relative to the largest entry, in the CSV's "check").
@@ -239,12 +241,11 @@ def runs(links_list, damping_list, tols, budget, out):
                         "factorizations": counts.get("factorizations", ""),
                         "outcome": why,
                     }
-                    if solver.startswith("FMU") and counts:  # one complex-step right-hand side per state
-                        row["jacobian_rhs"] = int(counts["jacobians"]) * len(core.STATE_NAMES)
-                    rows.append(row)
+                    rows.append(row)  # the FMU's Jacobians are no right-hand sides (cp_jacobian)
+                    by_differences = f" (+{row['jacobian_rhs']} for J)" if row["jacobian_rhs"] != "" else ""
                     print(
                         f"{links:4} links c = {c:<6g} {solver:20} rtol {tol:<6g} {seconds:8.3f} s "
-                        f"error {row['error_rad']:.2g} rad  rhs {row['rhs']} (+{row['jacobian_rhs']} for J) "
+                        f"error {row['error_rad']:.2g} rad  rhs {row['rhs']}{by_differences} "
                         f"J {row['jacobians']} LU {row['factorizations']}  {why}",
                         flush=True,
                     )
