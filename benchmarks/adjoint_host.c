@@ -89,7 +89,7 @@ int main(int argc, char **argv)
     long calls = atol(argv[4]), repeats = atol(argv[5]);
     n_known = n_state + n_input;
     memcpy(knowns + n_state, inputs, n_input * sizeof inputs[0]);
-    ModelData *m = calloc(1, model_sizes.data_size);
+    ModelData *m = calloc(1, model_sizes.data_size + model_sizes.scratch_size);
     if (!m) return 1;
     model_reset(m);
     for (size_t k = 0; k < n_input; k++) model_set_real(m, inputs[k], 0.5);

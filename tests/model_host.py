@@ -24,6 +24,7 @@ GLUES = {name for layer in LAYER_SOURCES.values() for name in layer}  # both FMI
 class ModelSizes(ctypes.Structure):
     _fields_ = [
         ("data_size", ctypes.c_size_t),
+        ("scratch_size", ctypes.c_size_t),
         ("n_real", ctypes.c_int),
         ("n_integer", ctypes.c_int),
         ("n_state", ctypes.c_int),
@@ -65,7 +66,8 @@ class Model:
         self.md = description(fmu)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.name = {v.valueReference: v.name for v in self.md.modelVariables}
-        self.data = (ctypes.c_double * math.ceil(self.sizes.data_size / 8))()
+        # the data and, after it, the model's own scratch (fmu_model.h)
+        self.data = (ctypes.c_double * math.ceil((self.sizes.data_size + self.sizes.scratch_size) / 8))()
         self.message = ctypes.create_string_buffer(4096)
         lib.model_set_states.restype = ctypes.c_char_p
         lib.model_reset(self.data)
