@@ -16,8 +16,6 @@ commit: this script is run in a worktree of each, one after the other on a quiet
 from __future__ import annotations
 
 import argparse
-import csv
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -26,8 +24,8 @@ import numpy as np
 
 from conical_pendulum.builder.compiler import load_core
 from radau_levers import light_chain
+from results_csv import RESULTS, append_rows, checkout_commit
 
-ROOT = Path(__file__).resolve().parent.parent
 SOLVER_RUNS = ((50, 1e2, 1e-6), (50, 1e2, 1e-8), (50, 1e4, 1e-6))
 
 
@@ -70,22 +68,15 @@ def solver_row(links: int, c: float, rtol: float) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--links", type=lambda s: [int(v) for v in s.split(",")], default=[20, 50, 100])
-    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "jacobian_cost.csv")
+    parser.add_argument("--out", type=Path, default=RESULTS / "jacobian_cost.csv")
     args = parser.parse_args()
-    commit = subprocess.run(
-        ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=False
-    ).stdout.strip()
-    rows = [jacobian_row(links) for links in args.links] + [solver_row(*run) for run in SOLVER_RUNS]
+    commit = checkout_commit()
+    rows = []
+    for row in [jacobian_row(links) for links in args.links] + [solver_row(*run) for run in SOLVER_RUNS]:
+        rows.append({"commit": commit} | row)
+        print(rows[-1], flush=True)
     fields = ["commit", "what", "links", "jacobian_ms", "rhs_us", "c", "rtol", "seconds"]
-    fields += ["njev", "nlu", "nfev", "naccept", "nreject"]
-    new = not args.out.exists()
-    with args.out.open("a", newline="") as file:
-        writer = csv.DictWriter(file, fieldnames=fields)
-        if new:
-            writer.writeheader()
-        for row in rows:
-            writer.writerow({"commit": commit} | row)
-            print({"commit": commit} | row, flush=True)
+    append_rows(args.out, rows, fields + ["njev", "nlu", "nfev", "naccept", "nreject"])
     print(f"appended {len(rows)} rows to {args.out}", file=sys.stderr)
 
 

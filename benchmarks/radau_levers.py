@@ -16,8 +16,6 @@ build's own and repeat exactly, the times are the best of three on the machine a
 from __future__ import annotations
 
 import argparse
-import csv
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -26,8 +24,8 @@ import numpy as np
 
 from conical_pendulum import Link, Scene
 from conical_pendulum.builder.compiler import load_core
+from results_csv import RESULTS, append_rows, checkout_commit
 
-ROOT = Path(__file__).resolve().parent.parent
 REFERENCE_RTOL = 1e-12
 
 
@@ -46,11 +44,9 @@ def main() -> None:
     parser.add_argument("--damping", type=numbers, default=[1e2, 1e4])
     parser.add_argument("--rtol", type=numbers, default=[1e-6, 1e-8])
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "radau_levers.csv")
+    parser.add_argument("--out", type=Path, default=RESULTS / "radau_levers.csv")
     args = parser.parse_args()
-    commit = subprocess.run(
-        ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=False
-    ).stdout.strip()
+    commit = checkout_commit()
     rows = []
     for links in args.links:
         scene = light_chain(links)
@@ -83,12 +79,7 @@ def main() -> None:
                 }
                 rows.append(row)
                 print(row, flush=True)
-    new = not args.out.exists()
-    with args.out.open("a", newline="") as file:
-        writer = csv.DictWriter(file, fieldnames=list(rows[0]))
-        if new:
-            writer.writeheader()
-        writer.writerows(rows)
+    append_rows(args.out, rows)
     print(f"appended {len(rows)} rows to {args.out}", file=sys.stderr)
 
 

@@ -12,39 +12,32 @@ commit's name.
 from __future__ import annotations
 
 import argparse
-import csv
-import subprocess
 from pathlib import Path
 
 from conical_pendulum.builder.compiler import load_core
 from radau_levers import light_chain
-
-ROOT = Path(__file__).resolve().parent.parent
+from results_csv import RESULTS, append_rows, checkout_commit
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--links", type=lambda s: [int(v) for v in s.split(",")], default=[3, 20, 100])
-    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "state_size.csv")
+    parser.add_argument("--out", type=Path, default=RESULTS / "state_size.csv")
     args = parser.parse_args()
-    commit = subprocess.run(
-        ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=False
-    ).stdout.strip()
-    new = not args.out.exists()
-    with args.out.open("a", newline="") as file:
-        writer = csv.DictWriter(file, fieldnames=["commit", "links", "states", "model_data_bytes"])
-        if new:
-            writer.writeheader()
-        for links in args.links:
-            core = load_core(light_chain(links))
-            row = {
+    commit = checkout_commit()
+    rows = []
+    for links in args.links:
+        core = load_core(light_chain(links))
+        rows.append(
+            {
                 "commit": commit,
                 "links": links,
                 "states": len(core.STATE_NAMES),
                 "model_data_bytes": len(core.Model().data),
             }
-            writer.writerow(row)
-            print(row, flush=True)
+        )
+        print(rows[-1], flush=True)
+    append_rows(args.out, rows)
 
 
 if __name__ == "__main__":
