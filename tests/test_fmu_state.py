@@ -373,7 +373,7 @@ RECORD_CASES = [
         "NaN where it was evaluated",
         "jacobian_x",
         math.nan,
-        "Jacobian: entry 0 of the state it was evaluated at is nan: must be finite",
+        "Jacobian evaluated at alpha0 = nan: must be finite",
     ),
 ]
 

@@ -674,7 +674,7 @@ static void inverse_dynamics(const Link *links, const cp_real *p, const cp_real 
  * on (the links before it as they were), M^-1 by the articulated-body factorization the
  * right-hand side made, with neither velocity terms nor gravity. Some n^2 / 2 links' worth
  * of a complex-step right-hand side's work instead of n^2 twice over (a column of it per
- * state): tests/test_directional.py holds it to the columns of cp_directional. */
+ * state): tests/test_jacobian.py holds it to the columns of cp_directional. */
 
 /* What a solve with M needs of a link's articulated-body factorization, real. */
 typedef struct {

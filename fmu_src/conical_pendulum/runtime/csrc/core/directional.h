@@ -16,7 +16,7 @@ int cp_directional(const double *x, const double *p, const double *dx_seed,
 /* J = df/dx at (x, p) (CP_NSTATE x CP_NSTATE, row-major), p of the core's size: the implicit
  * solver's. In the expanded formulation a column per state by cp_directional; in the
  * recursive one each column from inverse dynamics and the articulated-body factorization
- * (chain.c's chain_jacobian), the same numbers to rounding at some a quarter of the cost.
+ * (chain.c's chain_jacobian), the same numbers to rounding at some half the cost.
  * Returns as cp_directional does. */
 int cp_jacobian(const double *x, const double *p, double *J, double *pivot_ratio, int *bad_dof);
 

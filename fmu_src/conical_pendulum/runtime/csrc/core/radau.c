@@ -65,7 +65,7 @@ static const double P[3][3] = {{10.048809399827414, -25.62959144707664, 15.58078
 
 /* The matrices block (CP_NEWTON_SIZE): J, the real factors, the complex factors (two doubles
  * an entry), the two pivot vectors (whole numbers) and the structure the factors are on
- * (cp_newton_structure's velocity and slot); the step size they are for is the cp_newton's. */
+ * (newton_structure's velocity and slot); the step size they are for is the cp_newton's. */
 typedef struct {
     double *J, *lu_real;
     double complex *lu_complex;
@@ -86,7 +86,12 @@ static matrices carve_matrices(int n, double *block, cp_newton *nw)
     return mx;
 }
 
-int cp_newton_structure(int n, const double *J, double *velocity, double *slot)
+/* The structure of the Newton systems, read off the Jacobian J (dim n) of x' = f(x): state i
+ * is a position when x_i' = x_v (its row of J a single 1 at v != i) and v is no position
+ * (decided in turn); velocity[i] = v for a position, -1 for the others, which slot numbers
+ * 0, 1, ... in order (-1 for a position). Read once per Jacobian: half the states of a
+ * mechanical system are positions, whose rows the factors and the power iteration skip. */
+static void newton_structure(int n, const double *J, double *velocity, double *slot)
 {
     for (int i = 0; i < n; i++) {  /* rows that are a single 1 off the diagonal */
         int one = -1, others = 0;
@@ -103,7 +108,6 @@ int cp_newton_structure(int n, const double *J, double *velocity, double *slot)
     }
     int r = 0;
     for (int i = 0; i < n; i++) slot[i] = velocity[i] >= 0 ? -1 : r++;
-    return r;
 }
 
 /* shift I - J on the structure (velocity, slot; r the rest's size) into a, r x r, factored
@@ -116,6 +120,7 @@ int cp_newton_structure(int n, const double *J, double *velocity, double *slot)
     static void factor_name(int n, int r, type shift, const double *J, const double *velocity, \
                             const double *slot, type *a, double *pivots)                     \
     {                                                                                        \
+        const type inverse = 1.0 / shift;  /* one division, not one an entry */               \
         for (int i = 0; i < n; i++) {                                                        \
             const int row = (int)slot[i];                                                    \
             if (row < 0) continue;                                                           \
@@ -124,7 +129,7 @@ int cp_newton_structure(int n, const double *J, double *velocity, double *slot)
             a[row * r + row] += shift;                                                       \
             for (int j = 0; j < n; j++)  /* a position's column, through a_j = b_v / shift */ \
                 if (velocity[j] >= 0 && J[i * n + j] != 0.0)                                 \
-                    a[row * r + (int)slot[(int)velocity[j]]] -= J[i * n + j] / shift;        \
+                    a[row * r + (int)slot[(int)velocity[j]]] -= J[i * n + j] * inverse;      \
         }                                                                                    \
         for (int k = r; k < n; k++) pivots[k] = k;                                           \
         for (int k = 0; k < r; k++) {                                                        \
@@ -150,10 +155,10 @@ int cp_newton_structure(int n, const double *J, double *velocity, double *slot)
     {                                                                                        \
         for (int i = 0; i < n; i++) {  /* the rest's right-hand side, the positions' r_j in */ \
             if (slot[i] < 0) continue;                                                       \
-            type s = b[i];                                                                   \
+            type s = 0.0;  /* the positions' part, divided by shift once */                  \
             for (int j = 0; r < n && j < n; j++)                                             \
-                if (velocity[j] >= 0 && J[i * n + j] != 0.0) s += J[i * n + j] * b[j] / shift; \
-            c[(int)slot[i]] = s;                                                             \
+                if (velocity[j] >= 0 && J[i * n + j] != 0.0) s += J[i * n + j] * b[j];       \
+            c[(int)slot[i]] = b[i] + s / shift;                                              \
         }                                                                                    \
         for (int k = 0; k < r; k++) {                                                        \
             int p = (int)pivots[k];                                                          \
@@ -233,15 +238,18 @@ static void solve_with_complex(int n, const matrices *mx, double complex *b, dou
 
 /* The largest |eigenvalue| of J, estimated by twenty power iterations from a fixed start
  * (growth over the last ten): the automatic choice's measure of how stiff the scene is. */
-static double spectral_radius(int n, const double *J, double *v, double *w)
+static double spectral_radius(int n, const matrices *mx, double *v, double *w)
 {
+    const double *J = mx->J;
     double log_growth = 0.0;
     for (int i = 0; i < n; i++) v[i] = 1.0 + 0.01 * i;
     for (int k = 0; k < 20; k++) {
         double norm = 0.0;
         for (int i = 0; i < n; i++) {
             double s = 0.0;
-            for (int j = 0; j < n; j++) s += J[i * n + j] * v[j];
+            if (mx->velocity[i] >= 0) s = v[(int)mx->velocity[i]];  /* J's row a single 1 */
+            else
+                for (int j = 0; j < n; j++) s += J[i * n + j] * v[j];
             w[i] = s;
             norm += s * s;
         }
@@ -284,7 +292,9 @@ static int jacobian(const cp_system *sys, double t, const double *x, cp_newton *
     nw->jac_valid = status == CP_OK;
     nw->current_jac = nw->jac_valid;
     nw->lu_valid = 0;
-    if (status == CP_OK) nw->rho = spectral_radius(sys->dim, mx->J, v, w);
+    if (status != CP_OK) return status;
+    newton_structure(sys->dim, mx->J, mx->velocity, mx->slot);
+    nw->rho = spectral_radius(sys->dim, mx, v, w);
     return status;
 }
 
@@ -370,7 +380,7 @@ static int collocation(const cp_system *sys, double t, const double *y, double h
 
 static void factor(int n, double h, const matrices *mx, cp_newton *nw, cp_stats *stats)
 {
-    const int r = cp_newton_structure(n, mx->J, mx->velocity, mx->slot);
+    const int r = rest_size(n, mx);
     *mx->h = h;
     lu_real(n, r, real_shift(h), mx->J, mx->velocity, mx->slot, mx->lu_real, mx->pivots_real);
     lu_complex(n, r, complex_shift(h), mx->J, mx->velocity, mx->slot, mx->lu_complex,
@@ -383,6 +393,7 @@ void cp_newton_refactor(int n, cp_newton *nw, double *block)
 {
     const matrices mx = carve_matrices(n, block, nw);
     cp_stats uncounted = {0, 0, 0, 0, 0, 0};  /* no step's work: the step counted it */
+    newton_structure(n, mx.J, mx.velocity, mx.slot);
     factor(n, nw->h, &mx, nw, &uncounted);
 }
 

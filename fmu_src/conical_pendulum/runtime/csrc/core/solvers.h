@@ -84,8 +84,8 @@ double cp_stiffness_bound(int method);
 
 /* The implicit solver's matrices, kept between steps and across communication points: flags
  * here (in an FMU's state), the numbers in a block of CP_NEWTON_SIZE(dim) doubles beside it (J,
- * the real and complex factors, their pivots as whole numbers and the structure they are on as
- * cp_newton_structure's velocity and slot; not in an FMU's state: cosim.h). */
+ * the real and complex factors, their pivots as whole numbers and the structure they are on,
+ * radau.c's; not in an FMU's state: cosim.h). */
 typedef struct {
     int jac_valid;    /* the block's J is a Jacobian of the system */
     int current_jac;  /* ... evaluated at the start of the step in flight */
@@ -99,13 +99,6 @@ typedef struct {
 /* The factors of the block's J (dim n) for the step size nw->h made again, as the step that
  * made them made them (bit for bit), and nw->lu_valid set: a block restored from its J. */
 void cp_newton_refactor(int n, cp_newton *nw, double *block);
-
-/* The structure of the Newton systems, read off the Jacobian J (dim n) of x' = f(x): state i
- * is a position when x_i' = x_v (its row of J a single 1 at v != i) and v is no position
- * (decided in turn); velocity[i] = v for a position, -1 for the others, which slot numbers
- * 0, 1, ... in order (-1 for a position). Returns the others' count, the size of the systems
- * Radau factors (radau.c): half the states of a mechanical system. */
-int cp_newton_structure(int n, const double *J, double *velocity, double *slot);
 
 static inline int cp_all_finite(int n, const double *v)
 {

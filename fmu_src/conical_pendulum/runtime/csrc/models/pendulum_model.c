@@ -714,15 +714,15 @@ static const char *jacobian_invalid(const ModelData *m, char *message, size_t si
         snprintf(message, size, "Jacobian: the factors' step size is %.17g: must be > 0", nw->h);
         return message;
     }
-    const struct { const char *what; const double *values; int count; } points[] = {
-        {"state", record->x, CP_NSTATE}, {"parameter", record->p, CP_PSIZE}};
-    for (size_t k = 0; nw->jac_valid && k < sizeof points / sizeof points[0]; k++)
-        for (int i = 0; i < points[k].count; i++)
-            if (!isfinite(points[k].values[i])) {
-                snprintf(message, size, "Jacobian: entry %d of the %s it was evaluated at is "
-                         "%.17g: must be finite", i, points[k].what, points[k].values[i]);
-                return message;
-            }
+    char name[160];
+    for (int i = 0; nw->jac_valid && i < CP_NSTATE + CP_PSIZE; i++) {
+        if (i < CP_NSTATE)
+            snprintf(name, sizeof name, "Jacobian evaluated at %s", cp_variable_name(CP_VR_STATE + i));
+        else
+            snprintf(name, sizeof name, "Jacobian evaluated at the core's p[%d]", i - CP_NSTATE);
+        const double value = i < CP_NSTATE ? record->x[i] : record->p[i - CP_NSTATE];
+        if (cp_real_refusal(name, value, &cp_rules[CP_FINITE_RULE], "", message, size)) return message;
+    }
     return NULL;
 }
 
