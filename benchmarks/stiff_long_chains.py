@@ -12,13 +12,14 @@ a cable or a hanging hose modelled as a damped chain. Two measurements (issue 55
    rtol = atol from 1e-4 to 1e-8, through fmpy.simulate_fmu on the scene's native FMI 2.0 FMU:
    - its Co-Simulation with the default solver (`auto`: DOP853, Radau while the scene is
      stiff), its statistics n_rhs, n_jacobians and n_factorizations read at the end;
+   - the same with solver = bdf (the core's BDF, orders 1 to 5);
    - fmpy's CVode (BDF, dense direct solver, Jacobians by CVODE's difference quotients, atol =
      rtol x nominal) on the same FMU's Model Exchange interface. fmpy does not report CVODE's
      counts, but its SUNDIALS library does: they are read here through ctypes from the
      solver's cvode_mem (CVodeGetNumRhsEvals, CVodeGetNumLinRhsEvals: the right-hand sides of
      the difference-quotient Jacobians, CVodeGetNumJacEvals, CVodeGetNumLinSolvSetups: each
      setup factors I - gamma J anew, with or without a new Jacobian).
-   The two runs of a tolerance follow each other, so their wall times share the machine's load
+   The runs of a tolerance follow each other, so their wall times share the machine's load
    (take ratios within one run). A run is stopped after --budget seconds of wall time (the
    time it reached is reported). The error is the largest of the angles (alpha_i, beta_i, in
    rad) at the outputs against the core's Radau at rtol = atol = 1e-12 (integrate_grid), whose
@@ -51,6 +52,7 @@ import subprocess
 import tempfile
 import time
 import zipfile
+from functools import partial
 from pathlib import Path
 from typing import ClassVar
 
@@ -62,6 +64,7 @@ from fmpy import read_model_description
 from conical_pendulum.builder.compiler import load_core
 from conical_pendulum.builder.fmu import build_fmu
 from conical_pendulum.builder.packaging.native import fmi_headers
+from conical_pendulum.runtime.rules import SOLVERS
 from conical_pendulum.scene import Link, Scene
 from results_csv import RESULTS, write_rows
 
@@ -118,16 +121,17 @@ def outcome(result, budget, seconds):
     return "finished"
 
 
-def fmu_run(path, start, names, tol, budget):
-    """The Co-Simulation with the FMU's default solver: (angles, counts, seconds, outcome)."""
+def fmu_run(path, start, names, tol, budget, solver=None):
+    """The Co-Simulation with the FMU's default solver (or solver): (angles, counts, seconds, outcome)."""
     stop = Budget(budget)
+    chosen = {} if solver is None else {"solver": SOLVERS.index(solver)}
     begin = time.perf_counter()
     try:
         r = fmpy.simulate_fmu(
             str(path),
             stop_time=STOP,
             output_interval=INTERVAL,
-            start_values={**start, "rtol": tol, "atol": tol},
+            start_values={**start, **chosen, "rtol": tol, "atol": tol},
             output=[*names, "n_rhs", "n_jacobians", "n_factorizations"],
             step_finished=stop,
         )
@@ -226,7 +230,7 @@ def runs(links_list, damping_list, tols, budget, out):
             reference, seconds = reference_angles(scene, start, core)
             print(f"{links} links, c = {c:g}: reference (core Radau 1e-12) in {seconds:.1f} s", flush=True)
             for tol in tols:
-                for solver, run in (("FMU auto (default)", fmu_run), ("fmpy CVode (ME)", cvode_run)):
+                for solver, run in RUNS:
                     states, counts, seconds, why = run(path, start, names, tol, budget)
                     row = {
                         "links": links,
@@ -250,6 +254,13 @@ def runs(links_list, damping_list, tols, budget, out):
                         flush=True,
                     )
     return rows
+
+
+RUNS = (
+    ("FMU auto (default)", fmu_run),
+    ("FMU bdf", partial(fmu_run, solver="bdf")),
+    ("fmpy CVode (ME)", cvode_run),
+)
 
 
 def as_accurate(rows):
@@ -278,10 +289,10 @@ def as_accurate(rows):
 
 def print_table(rows):
     print(
-        "| links | c | rtol | FMU auto: error, time, RHS / J / LU | CVode same rtol: error, time, RHS (+J) / J / LU "
+        "| links | c | FMU solver | rtol | FMU: error, time, RHS / J / LU | CVode same rtol: error, time, RHS (+J) / J / LU "
         "| FMU / CVode | CVode as accurate | FMU / that |"
     )
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
 
     def cell(r):
         if r["outcome"] != "finished":
@@ -297,11 +308,11 @@ def print_table(rows):
             f"rtol {best['rtol']:g}: {best['error_rad']:.2g} rad, {best['seconds']:.3g} s" if best else "none"
         )
         print(
-            f"| {fmu['links']} | {fmu['c']:g} | {fmu['rtol']:g} | {cell(fmu)} | {cell(same)} "
+            f"| {fmu['links']} | {fmu['c']:g} | {fmu['solver'][4:]} | {fmu['rtol']:g} | {cell(fmu)} | {cell(same)} "
             f"| {fmu['seconds'] / same['seconds']:.2f} | {rival} | "
             f"{fmu['seconds'] / best['seconds']:.2f} |"
             if best
-            else f"| {fmu['links']} | {fmu['c']:g} | {fmu['rtol']:g} | {cell(fmu)} | {cell(same)} "
+            else f"| {fmu['links']} | {fmu['c']:g} | {fmu['solver'][4:]} | {fmu['rtol']:g} | {cell(fmu)} | {cell(same)} "
             f"| {fmu['seconds'] / same['seconds']:.2f} | {rival} | |"
         )
 
@@ -317,7 +328,7 @@ def plot(rows):
     links = sorted({n for n, _ in rungs})
     fig, axes = plt.subplots(len(cs), len(links), figsize=(4.2 * len(links), 3.6 * len(cs)), squeeze=False)
     for (n, c), ax in ((rung, axes[cs.index(rung[1])][links.index(rung[0])]) for rung in rungs):
-        for solver, style in (("FMU auto (default)", "o-"), ("fmpy CVode (ME)", "s--")):
+        for solver, style in (("FMU auto (default)", "o-"), ("FMU bdf", "^-"), ("fmpy CVode (ME)", "s--")):
             mine = [
                 r
                 for r in rows
@@ -334,7 +345,8 @@ def plot(rows):
         ax.set_ylabel("largest angle error [rad]", fontsize=8)
         ax.legend(fontsize=7)
     fig.suptitle(
-        "Damped light chains: the FMU's default solver against fmpy's CVode, rtol 1e-4 .. 1e-8", fontsize=10
+        "Damped light chains: the FMU's default solver and its BDF against fmpy's CVode, rtol 1e-4 .. 1e-8",
+        fontsize=10,
     )
     fig.tight_layout()
     path = RESULTS / "stiff_long_chains.png"

@@ -27,7 +27,7 @@ from fmu_helpers import Instance, Instance3
 SEED = Scene.uniform(3)
 COUPLED = Scene.uniform(3, coupling=True)  # a_pivot inputs
 START = {"alpha0": 0.6, "delta1": 0.4}
-METHODS = {1: "rk45", 2: "dop853", 3: "radau", 4: "auto"}  # the FMU's solver values
+METHODS = {1: "rk45", 2: "dop853", 3: "radau", 4: "auto", 5: "bdf"}  # the FMU's solver values
 FMUS = [
     pytest.param(("native", 2), id="native-fmi2"),
     pytest.param(("native", 3), id="native-fmi3"),
@@ -86,16 +86,25 @@ def coupled_core():
 # --- the interpolants ----------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("method, scipy_name", [("rk45", "RK45"), ("dop853", "DOP853")])
+@pytest.mark.parametrize("method, scipy_name", [("rk45", "RK45"), ("dop853", "DOP853"), ("bdf", "BDF")])
 @pytest.mark.parametrize("tol", [1e-5, 1e-9])
 def test_the_interpolants_are_scipys_dense_output_on_the_same_steps(core, method, scipy_name, tol):
     """Many times inside each step: the core's interpolant (DOP853's order 7, RK45's
-    Dormand-Prince extension) where scipy's dense_output is, to rounding."""
+    Dormand-Prince extension, BDF's polynomial through its differences) where scipy's
+    dense_output is, to rounding (BDF on the core's exact Jacobian, as the core's)."""
     x0, p = SEED.initial_state(START), np.array(SEED.parameters())
     times = np.linspace(0.0, 3.0, 3001)
     states, _ = core.integrate_grid(x0, p, times, tol, tol, method=method)
+    jacobian = {"jac": lambda t, x: core.jacobian(x, p)} if method == "bdf" else {}
     sol = solve_ivp(
-        lambda t, x: core.rhs(x, p), (0.0, 3.0), x0, method=scipy_name, rtol=tol, atol=tol, dense_output=True
+        lambda t, x: core.rhs(x, p),
+        (0.0, 3.0),
+        x0,
+        method=scipy_name,
+        rtol=tol,
+        atol=tol,
+        dense_output=True,
+        **jacobian,
     )
     assert len(sol.t) < len(times) / 10  # several times in every step
     np.testing.assert_allclose(states, sol.sol(times).T, rtol=0, atol=1e-3 * tol)
@@ -105,7 +114,7 @@ def test_the_interpolants_are_scipys_dense_output_on_the_same_steps(core, method
 
 
 @pytest.mark.parametrize("kind", FMUS)
-@pytest.mark.parametrize("solver", [1, 2, 3, 4])
+@pytest.mark.parametrize("solver", [1, 2, 3, 4, 5])
 @pytest.mark.parametrize("interval, steps", [(1 / 60, 300), (1e-3, 2000)])
 def test_the_states_at_the_points_are_the_uninterrupted_runs(built_fmu, core, kind, solver, interval, steps):
     """Bit for bit, and at the same cost: the same steps, the points from their dense output."""
@@ -118,7 +127,7 @@ def test_the_states_at_the_points_are_the_uninterrupted_runs(built_fmu, core, ki
     grid, nfev = core.integrate_grid(x0, p, times, tol, tol, method=METHODS[solver])
     np.testing.assert_array_equal(states, grid)
     assert rhs[-1] == nfev
-    if METHODS[solver] != "radau":  # Radau's order-5 steps on the seed at 1e-8: about 1/60 s
+    if METHODS[solver] not in ("radau", "bdf"):  # the implicit steps on the seed at 1e-8: about 1/60 s
         assert np.count_nonzero(np.diff(rhs) == 0) > steps / 2  # most points cost nothing
 
 
@@ -253,7 +262,7 @@ print(json.dumps(seen))
 
 
 @pytest.mark.parametrize("kind", EVERY_FMU)
-@pytest.mark.parametrize("solver", [0, 1, 2, 3, 4])
+@pytest.mark.parametrize("solver", [0, 1, 2, 3, 4, 5])
 def test_a_state_saved_inside_a_step_continues_bit_for_bit_in_another_process(
     built_fmu, core, kind, solver, tmp_path
 ):

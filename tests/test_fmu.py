@@ -139,7 +139,11 @@ def test_state_restores_bit_identically(seed_fmu):
     "name, value, message",
     BAD_VALUES
     + [
-        ("solver", 7, "solver = 7: choose 0 to 4 (0 = rk4, 1 = rk45, 2 = dop853, 3 = radau, 4 = auto)"),
+        (
+            "solver",
+            7,
+            "solver = 7: choose 0 to 5 (0 = rk4, 1 = rk45, 2 = dop853, 3 = radau, 4 = auto, 5 = bdf)",
+        ),
     ],
 )
 def test_bad_input_is_refused_and_named(seed_fmu, name, value, message):

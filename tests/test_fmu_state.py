@@ -97,7 +97,7 @@ class NativeState:
         flight = after_r + 32  # cosim.h's cp_flight, its cp_step after live, reserved, t_point
         n_elastic = sum(v.name.startswith("taut_margin") for v in instance.md.modelVariables)
         # cosim.h's cp_jacobian_record, after the flight's rows, t_inputs, inputs and ropes' watch
-        record = flight + 88 + 8 * (10 * n_state + 1 + 3 * (n_input + 1) + 3 * (n_elastic + 1))
+        record = flight + 96 + 8 * (10 * n_state + 1 + 3 * (n_input + 1) + 3 * (n_elastic + 1))
         self.offsets = {name: at for name, at, _ in self.OWN} | {
             "solver": after_r,
             "max_steps": after_r + 4,
@@ -115,9 +115,10 @@ class NativeState:
             "next": flight + 52,
             "stiff_steps": flight + 56,
             "h_old": flight + 64,
-            "rows": flight + 88,
+            "rows": flight + 96,
             "jac_valid": record,
             "lu_valid": record + 8,
+            "factors_method": record + 12,
             "rho": record + 16,
             "factors_h": record + 24,
             "jacobian_x": record + 32,  # the state it was evaluated at, then the core's p
@@ -136,6 +137,7 @@ class NativeState:
             "stiff_steps": "i",
             "jac_valid": "i",
             "lu_valid": "i",
+            "factors_method": "i",
         }
         # every byte means something: the solvers' matrices and scratch are the instance's own
         self.meaningful = np.arange(size)
@@ -269,8 +271,9 @@ CASES = [
     ("negative step", "h", -1.0, None, "h = -1.0: the solver's carried step cannot be negative"),
     ("NaN step", "h", math.nan, None, "h = nan: must be finite"),
     ("no FMI state", "mode", 6, None, "{}"),
-    ("unknown solver", "solver", 5, None, "solver = {}: choose 0 to"),
-    ("unknown step method", "method", 7, None, "step in flight: method = 7: must be from 1 to 3"),
+    ("unknown solver", "solver", 6, None, "solver = {}: choose 0 to"),
+    ("unknown step method", "method", 7, None, "step in flight: method = 7: must be from 1 to 5"),
+    ("a step of the automatic choice", "method", 4, None, "step in flight: method = 4: the automatic"),
     ("unknown next method", "next", 0, None, "step in flight: next = 0: must be from 2 to 3"),
     ("negative stiffness count", "stiff_steps", -1, None, "step in flight: stiff_steps = -1: must be from 0"),
     ("NaN old step", "h_old", math.nan, None, "step in flight: h_old = nan: must be finite"),
@@ -280,14 +283,14 @@ CASES = [
         "lu_valid",
         1,
         None,
-        "Jacobian: reserved = 0, lu_valid = 1 with jac_valid = 0",
+        "Jacobian: method = 0, lu_valid = 1 with jac_valid = 0",
     ),
     (
         "NaN spectral radius",
         "rho",
         math.nan,
         None,
-        "Jacobian: reserved = 0, lu_valid = 0 with jac_valid = 0, rho = nan",
+        "Jacobian: method = 0, lu_valid = 0 with jac_valid = 0, rho = nan",
     ),
     ("rtol 0", "rtol", 0.0, None, None),
     ("max_steps 0", "max_steps", 0, None, "max_steps = 0: must be at least 1"),
@@ -357,9 +360,9 @@ def refused_and_unchanged(backend, fmu, twin, state, bad, message):
     twin.close()
 
 
-def radau_pair(path):
-    """Two instances a few Radau steps into the seed scenario, its factors in use."""
-    start = {"alpha0": 0.6, "delta1": 0.4, "solver": SOLVERS.index("radau")}
+def radau_pair(path, solver="radau"):
+    """Two instances a few steps of an implicit solver into the seed scenario, its factors in use."""
+    start = {"alpha0": 0.6, "delta1": 0.4, "solver": SOLVERS.index(solver)}
     fmu, twin = (Instance(path, name=name, start_values=start) for name in ("instance", "twin"))
     for _ in range(STEPS_BEFORE):
         fmu.step(STEP)
@@ -369,6 +372,7 @@ def radau_pair(path):
 
 RECORD_CASES = [
     ("NaN step size", "factors_h", math.nan, "Jacobian: the factors' step size is nan: must be > 0"),
+    ("factors of no solver", "factors_method", 7, "Jacobian: method = 7, lu_valid = 1 with jac_valid = 1"),
     (
         "NaN where it was evaluated",
         "jacobian_x",
@@ -388,10 +392,11 @@ def test_a_jacobian_record_that_cannot_be_remade_is_refused(backend, path, what,
     refused_and_unchanged(backend, fmu, twin, state, state.with_field(field, value), message)
 
 
-def test_radau_matrices_are_made_again_bit_for_bit_where_a_state_is_restored(backend, path):
+@pytest.mark.parametrize("solver", ["radau", "bdf"])
+def test_implicit_matrices_are_made_again_bit_for_bit_where_a_state_is_restored(backend, path, solver):
     """The matrices stay out of the state: a state restored in another instance, and in its
     own after it went on, steps as the instance it was taken from, statistics and all."""
-    fmu, twin = radau_pair(path)
+    fmu, twin = radau_pair(path, solver)
     data, t = serialized_state(fmu), fmu.time
     assert codec(backend, fmu, data).get("lu_valid") == 1
     straight = stepped(fmu)

@@ -400,7 +400,11 @@ def test_fmu_state_get_set_and_serialize_replay_bit_for_bit_and_corrupt_bytes_ar
     "name, value, message",
     BAD_VALUES
     + [
-        ("solver", 5, "solver = 5: choose 0 to 4 (0 = rk4, 1 = rk45, 2 = dop853, 3 = radau, 4 = auto)"),
+        (
+            "solver",
+            6,
+            "solver = 6: choose 0 to 5 (0 = rk4, 1 = rk45, 2 = dop853, 3 = radau, 4 = auto, 5 = bdf)",
+        ),
     ],
 )
 def test_a_bad_value_is_an_error_and_the_instance_goes_on(built_fmu, fmi_version, name, value, message):

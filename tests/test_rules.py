@@ -90,7 +90,7 @@ def test_native_reference_slave_and_scene_refuse_the_same_values(resources):
         ("rtol", 0.0, 1e-6),
         ("atol", -1.0, 1e-9),
         ("max_step", -0.1, 0.0),
-        ("solver", 5, 0),
+        ("solver", len(SOLVERS), 0),
         ("max_steps", 0, 1),
     ],
 )

@@ -136,7 +136,7 @@ def test_fmi3_sets_the_enumeration_as_int64_only(fmus):
         fmu.setInt64([vr["solver"]], [2])
         for call in (
             lambda: fmu.setInt64([vr["max_steps"]], [5]),
-            lambda: fmu.setInt64([vr["solver"]], [5]),
+            lambda: fmu.setInt64([vr["solver"]], [6]),
             lambda: fmu.setInt64([vr["solver"]], [2**40]),
             lambda: fmu.setInt32([vr["solver"]], [1]),
         ):
@@ -149,7 +149,7 @@ def test_fmi3_sets_the_enumeration_as_int64_only(fmus):
         errors = [text for status, text in instance.messages if status == ERROR]
         assert errors == [
             f"fmi3SetInt64: value reference {vr['max_steps']} is not an Int64 variable",
-            "solver = 5: choose 0 to 4 (0 = rk4, 1 = rk45, 2 = dop853, 3 = radau, 4 = auto)",
+            "solver = 6: choose 0 to 5 (0 = rk4, 1 = rk45, 2 = dop853, 3 = radau, 4 = auto, 5 = bdf)",
             f"fmi3SetInt64: solver = {2**40}: out of range",
             f"fmi3SetInt32: value reference {vr['solver']} is not an Int32 variable",
             f"fmi3GetInt32: value reference {vr['solver']} is not an Int32 variable",

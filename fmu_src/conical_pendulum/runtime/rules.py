@@ -14,7 +14,7 @@ import numbers
 import sys
 from dataclasses import dataclass
 
-# The FMU's `solver`, an enumeration: its item's value is its index, solvers.h's CP_RK4..CP_AUTO;
+# The FMU's `solver`, an enumeration: its item's value is its index, solvers.h's CP_RK4..CP_BDF;
 # every FMU has all of them, in the compiled core.
 SOLVER_TEXTS = {
     "rk4": "RK4 (fixed step)",
@@ -22,6 +22,7 @@ SOLVER_TEXTS = {
     "dop853": "DOP853",
     "radau": "Radau IIA order 5 (implicit, for stiff scenes)",
     "auto": "automatic: DOP853, Radau while the scene is stiff",
+    "bdf": "BDF orders 1 to 5 (implicit, for large stiff scenes at loose tolerances)",
 }
 SOLVERS = tuple(SOLVER_TEXTS)
 

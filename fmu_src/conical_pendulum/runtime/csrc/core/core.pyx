@@ -29,9 +29,9 @@ cdef extern from "solvers.h":
     ctypedef struct cp_stats:
         long long nfev, naccept, nreject, njev, nlu, nswitch
     ctypedef struct cp_newton:
-        int jac_valid, current_jac, lu_valid, reserved
+        int jac_valid, current_jac, lu_valid, method
         double rho, h
-    int CP_RK4, CP_RK45, CP_DOP853, CP_RADAU, CP_AUTO
+    int CP_RK4, CP_RK45, CP_DOP853, CP_RADAU, CP_AUTO, CP_BDF
     int CP_WORK_SIZE(int dim)
     int CP_NEWTON_SIZE(int dim)
     int cp_unworkable(int method, double t, double dt, double max_step, long long max_steps)
@@ -151,7 +151,9 @@ OUTPUT_NAMES = tuple(CP_OUTPUT_NAMES.decode().split())
 TOO_MANY_STEPS, STEP_UNDERFLOW, BAD_STEP = CP_TOO_MANY_STEPS, CP_STEP_UNDERFLOW, CP_BAD_STEP
 MAX_STEP_UNRESOLVED, STIFF = CP_MAX_STEP_UNRESOLVED, CP_STIFF
 SINGULAR, NONFINITE = CP_SINGULAR, CP_NONFINITE
-METHODS = {"rk4": CP_RK4, "rk45": CP_RK45, "dop853": CP_DOP853, "radau": CP_RADAU, "auto": CP_AUTO}
+METHODS = {
+    "rk4": CP_RK4, "rk45": CP_RK45, "dop853": CP_DOP853, "radau": CP_RADAU, "auto": CP_AUTO, "bdf": CP_BDF
+}
 STATUS = {cp_status_codes[k]: cp_status_message(cp_status_codes[k]).decode()  # status.h's list
           for k in range(CP_NSTATUS)}
 
@@ -298,7 +300,7 @@ def directional(x_in, p_in, seed_in, hoist_acc=None):
 def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
                    double max_step=0.0, long long max_steps=10**7, str method="dop853",
                    dict counts=None):
-    """States at every time, by the core's DOP853 (or method="rk45", "radau", "auto") with
+    """States at every time, by the core's DOP853 (or method="rk45", "radau", "bdf", "auto") with
     dense output: (array, nfev).
 
     One integration over the whole grid, as solve_ivp(method="DOP853", t_eval=times)
@@ -306,8 +308,8 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     FMUs' do (cosim.h's cp_held_watch); counts (a dict), when given, receives every count
     (nfev, naccept, nreject, njev, nlu, nswitch: the automatic choice's switches). Raises CoreError or RuntimeError on failure.
     """
-    if method not in ("rk45", "dop853", "radau", "auto"):
-        raise ValueError(f"method: 'rk45', 'dop853', 'radau' or 'auto', not {method!r}")
+    if method not in ("rk45", "dop853", "radau", "bdf", "auto"):
+        raise ValueError(f"method: 'rk45', 'dop853', 'radau', 'bdf' or 'auto', not {method!r}")
     cdef int solver = METHODS[method]
     cdef const double[::1] p = _core_p(p_in, None)
     cdef const double[::1] times = np.ascontiguousarray(times_in, dtype=float)
@@ -319,7 +321,7 @@ def integrate_grid(x0, p_in, times_in, double rtol=1e-10, double atol=1e-10,
     cdef double[::1] work = np.zeros(CP_WORK_SIZE(CP_NSTATE))
     cdef double[::1] matrices = np.zeros(CP_NEWTON_SIZE(CP_NSTATE))
     cdef cp_newton newton
-    newton.jac_valid = newton.current_jac = newton.lu_valid = newton.reserved = 0
+    newton.jac_valid = newton.current_jac = newton.lu_valid = newton.method = 0
     newton.rho = newton.h = 0.0
     cdef cp_model model
     cdef cp_system system

@@ -10,12 +10,7 @@
  * whose right-hand side is not finite fails the iteration, which halves the step, as scipy's
  * does.
  *
- * The Newton matrices shift I - J are factored on the system's structure (radau5's treatment
- * of second-order systems): where J says x_i' = x_v (a position i, its row of J a single 1 at
- * its velocity v), the equation shift a_i - b_v = r_i gives a_i = (r_i + b_v) / shift, and the
- * rest of the system, without the positions, is solved alone: a mechanical system's matrices
- * are half as large, a factorization an eighth of the work, a solve a quarter. The answer is
- * the full system's to rounding; a system without positions is factored whole, as before. */
+ * The Newton matrices are newton.c's, factored on the system's structure. */
 #include <complex.h>
 #include <float.h>
 #include <math.h>
@@ -41,8 +36,7 @@ static const double P[3][3] = {{10.048809399827414, -25.62959144707664, 15.58078
                                {0.33333333333333331, -2.6666666666666665, 3.3333333333333335}};
 
 #define NEWTON_MAXITER 6
-/* Past COSTLY_JACOBIAN_DIM states (5 links), where a Jacobian costs dim complex-step
- * right-hand sides and a factorization grows as dim^3, the solver takes radau5's advice for
+/* Past COSTLY_JACOBIAN_DIM states (solver_common.h) the solver takes radau5's advice for
  * large systems rather than scipy's choices (kept below it, step for step):
  * - the Newton rate past which an accepted step's Jacobian is evaluated anew (after more
  *   than two iterations): 0.1 (Hairer's WORK(3) where Jacobians are costly), not 1e-3. On the
@@ -56,152 +50,10 @@ static const double P[3][3] = {{10.048809399827414, -25.62959144707664, 15.58078
  * The last two, on the 50-link chain at c = 1e2, rtol 1e-6: 307 -> 263 Jacobians, 1676 ->
  * 1080 factorizations, 329 -> 201 rejected steps, the error 1.95e-6 -> 3.37e-6 rad
  * (benchmarks/radau_levers.py). */
-#define COSTLY_JACOBIAN_DIM 20
-#define LARGE(dim) ((dim) > COSTLY_JACOBIAN_DIM)
 #define RECOMPUTE_RATE(dim) (LARGE(dim) ? 0.1 : 1e-3)
 #define KEEP_STEP_BELOW(dim) (LARGE(dim) ? 2.0 : 1.2)
 #define MIN_FACTOR 0.2
 #define MAX_FACTOR 10.0
-
-/* The matrices block (CP_NEWTON_SIZE): J, the real factors, the complex factors (two doubles
- * an entry), the two pivot vectors (whole numbers) and the structure the factors are on
- * (newton_structure's velocity and slot); the step size they are for is the cp_newton's. */
-typedef struct {
-    double *J, *lu_real;
-    double complex *lu_complex;
-    double *pivots_real, *pivots_complex, *velocity, *slot, *h;
-} matrices;
-
-static matrices carve_matrices(int n, double *block, cp_newton *nw)
-{
-    matrices mx;
-    mx.J = block;
-    mx.lu_real = block + n * n;
-    mx.lu_complex = (double complex *)(block + 2 * n * n);
-    mx.pivots_real = block + 4 * n * n;
-    mx.pivots_complex = mx.pivots_real + n;
-    mx.velocity = mx.pivots_complex + n;
-    mx.slot = mx.velocity + n;
-    mx.h = &nw->h;
-    return mx;
-}
-
-/* The structure of the Newton systems, read off the Jacobian J (dim n) of x' = f(x): state i
- * is a position when x_i' = x_v (its row of J a single 1 at v != i) and v is no position
- * (decided in turn); velocity[i] = v for a position, -1 for the others, which slot numbers
- * 0, 1, ... in order (-1 for a position). Read once per Jacobian: half the states of a
- * mechanical system are positions, whose rows the factors and the power iteration skip. */
-static void newton_structure(int n, const double *J, double *velocity, double *slot)
-{
-    for (int i = 0; i < n; i++) {  /* rows that are a single 1 off the diagonal */
-        int one = -1, others = 0;
-        for (int j = 0; j < n && others == 0; j++) {
-            const double entry = J[i * n + j];
-            if (entry == 1.0 && one < 0 && j != i) one = j;
-            else if (entry != 0.0) others = 1;
-        }
-        velocity[i] = others ? -1 : one;
-    }
-    for (int i = 0; i < n; i++) {  /* a position's velocity must stay in the rest: in turn, */
-        const int v = (int)velocity[i];  /* those before i decided, those after i candidates */
-        if (v >= 0 && velocity[v] >= 0) velocity[i] = -1;
-    }
-    int r = 0;
-    for (int i = 0; i < n; i++) slot[i] = velocity[i] >= 0 ? -1 : r++;
-}
-
-/* shift I - J on the structure (velocity, slot; r the rest's size) into a, r x r, factored
- * in place by partial pivoting (LAPACK's getrf without blocking); and the solve of
- * (shift I - J) x = b in place, through the factors (scratch: r of type): for real and for
- * complex matrices alike (type, its magnitude for the pivot's choice, and its row
- * elimination). The pivots past r are their own rows. A zero pivot is left as it is: the
- * solve gives inf, and the Newton iteration fails on it. */
-#define LU_FUNCTIONS(factor_name, solve_name, type, magnitude, eliminate)                   \
-    static void factor_name(int n, int r, type shift, const double *J, const double *velocity, \
-                            const double *slot, type *a, double *pivots)                     \
-    {                                                                                        \
-        const type inverse = 1.0 / shift;  /* one division, not one an entry */               \
-        for (int i = 0; i < n; i++) {                                                        \
-            const int row = (int)slot[i];                                                    \
-            if (row < 0) continue;                                                           \
-            for (int j = 0; j < n; j++)                                                      \
-                if (slot[j] >= 0) a[row * r + (int)slot[j]] = -J[i * n + j];                 \
-            a[row * r + row] += shift;                                                       \
-            for (int j = 0; j < n; j++)  /* a position's column, through a_j = b_v / shift */ \
-                if (velocity[j] >= 0 && J[i * n + j] != 0.0)                                 \
-                    a[row * r + (int)slot[(int)velocity[j]]] -= J[i * n + j] * inverse;      \
-        }                                                                                    \
-        for (int k = r; k < n; k++) pivots[k] = k;                                           \
-        for (int k = 0; k < r; k++) {                                                        \
-            int p = k;                                                                       \
-            for (int i = k + 1; i < r; i++)                                                  \
-                if (magnitude(a[i * r + k]) > magnitude(a[p * r + k])) p = i;                \
-            pivots[k] = p;                                                                   \
-            for (int j = 0; p != k && j < r; j++) {                                          \
-                type s = a[k * r + j];                                                       \
-                a[k * r + j] = a[p * r + j];                                                 \
-                a[p * r + j] = s;                                                            \
-            }                                                                                \
-            if (a[k * r + k] == 0.0) continue;                                               \
-            for (int i = k + 1; i < r; i++) {                                                \
-                type l = a[i * r + k] /= a[k * r + k];                                       \
-                eliminate(r - k - 1, l, a + i * r + k + 1, a + k * r + k + 1);               \
-            }                                                                                \
-        }                                                                                    \
-    }                                                                                        \
-    static void solve_name(int n, int r, type shift, const double *J, const double *velocity, \
-                           const double *slot, const type *a, const double *pivots, type *b,  \
-                           type *c)                                                          \
-    {                                                                                        \
-        for (int i = 0; i < n; i++) {  /* the rest's right-hand side, the positions' r_j in */ \
-            if (slot[i] < 0) continue;                                                       \
-            type s = 0.0;  /* the positions' part, divided by shift once */                  \
-            for (int j = 0; r < n && j < n; j++)                                             \
-                if (velocity[j] >= 0 && J[i * n + j] != 0.0) s += J[i * n + j] * b[j];       \
-            c[(int)slot[i]] = b[i] + s / shift;                                              \
-        }                                                                                    \
-        for (int k = 0; k < r; k++) {                                                        \
-            int p = (int)pivots[k];                                                          \
-            type s = c[k];                                                                   \
-            c[k] = c[p];                                                                     \
-            c[p] = s;                                                                        \
-        }                                                                                    \
-        for (int i = 1; i < r; i++)                                                          \
-            for (int j = 0; j < i; j++) c[i] -= a[i * r + j] * c[j];                         \
-        for (int i = r - 1; i >= 0; i--) {                                                   \
-            for (int j = i + 1; j < r; j++) c[i] -= a[i * r + j] * c[j];                     \
-            c[i] /= a[i * r + i];                                                            \
-        }                                                                                    \
-        for (int i = 0; i < n; i++)                                                          \
-            if (slot[i] >= 0) b[i] = c[(int)slot[i]];                                        \
-        for (int i = 0; i < n; i++)                                                          \
-            if (velocity[i] >= 0) b[i] = (b[i] + b[(int)velocity[i]]) / shift;               \
-    }
-
-/* row -= l pivot_row over count entries: the factorization's inner loop, where its time goes.
- * The rows never overlap (restrict), and the complex one multiplies as C does for finite
- * numbers, part by part (C's operator adds a test for NaN parts that keeps the loop from
- * being compiled tight): the same numbers, bit for bit, in some half the time. */
-static void eliminate_real(int count, double l, double *restrict row, const double *restrict pivot_row)
-{
-    for (int j = 0; j < count; j++) row[j] -= l * pivot_row[j];
-}
-
-static void eliminate_complex(int count, double complex l, double complex *row_z,
-                              const double complex *pivot_z)
-{
-    const double lr = creal(l), li = cimag(l);
-    double *restrict row = (double *)row_z;  /* a complex is its two parts (C99 6.2.5) */
-    const double *restrict pivot_row = (const double *)pivot_z;
-    for (int j = 0; j < count; j++) {
-        const double br = pivot_row[2 * j], bi = pivot_row[2 * j + 1];
-        row[2 * j] -= lr * br - li * bi;
-        row[2 * j + 1] -= lr * bi + li * br;
-    }
-}
-
-LU_FUNCTIONS(lu_real, solve_real, double, fabs, eliminate_real)
-LU_FUNCTIONS(lu_complex, solve_complex, double complex, cabs, eliminate_complex)
 
 /* The shifts of the two Newton matrices for the step size h. */
 static double real_shift(double h)
@@ -214,51 +66,26 @@ static double complex complex_shift(double h)
     return (MU_COMPLEX_RE + MU_COMPLEX_IM * I) / h;
 }
 
-/* The size of the Newton systems the factors are on: the states that are no position. */
-static int rest_size(int n, const matrices *mx)
+void cp_radau_factor(int n, double h, const cp_matrix_view *mx, cp_newton *nw, cp_stats *stats)
 {
-    int r = 0;
-    for (int i = 0; i < n; i++) r += mx->slot[i] >= 0;
-    return r;
+    *mx->h = h;
+    cp_factor_real(n, real_shift(h), mx);
+    cp_factor_complex(n, complex_shift(h), mx);
+    stats->nlu += 2;
+    nw->lu_valid = 1;
+    nw->method = CP_RADAU;
 }
 
 /* b = (MU_REAL / h - J)^-1 b and b = (MU_COMPLEX / h - J)^-1 b, through the kept factors, for
  * the h they were made for (scratch: 2 n doubles). */
-static void solve_with_real(int n, const matrices *mx, double *b, double *scratch)
+static void solve_with_real(int n, const cp_matrix_view *mx, double *b, double *scratch)
 {
-    solve_real(n, rest_size(n, mx), real_shift(*mx->h), mx->J, mx->velocity, mx->slot, mx->lu_real,
-               mx->pivots_real, b, scratch);
+    cp_solve_with_real(n, real_shift(*mx->h), mx, b, scratch);
 }
 
-static void solve_with_complex(int n, const matrices *mx, double complex *b, double *scratch)
+static void solve_with_complex(int n, const cp_matrix_view *mx, double complex *b, double *scratch)
 {
-    solve_complex(n, rest_size(n, mx), complex_shift(*mx->h), mx->J, mx->velocity, mx->slot,
-                  mx->lu_complex, mx->pivots_complex, b, (double complex *)scratch);
-}
-
-/* The largest |eigenvalue| of J, estimated by twenty power iterations from a fixed start
- * (growth over the last ten): the automatic choice's measure of how stiff the scene is. */
-static double spectral_radius(int n, const matrices *mx, double *v, double *w)
-{
-    const double *J = mx->J;
-    double log_growth = 0.0;
-    for (int i = 0; i < n; i++) v[i] = 1.0 + 0.01 * i;
-    for (int k = 0; k < 20; k++) {
-        double norm = 0.0;
-        for (int i = 0; i < n; i++) {
-            double s = 0.0;
-            if (mx->velocity[i] >= 0) s = v[(int)mx->velocity[i]];  /* J's row a single 1 */
-            else
-                for (int j = 0; j < n; j++) s += J[i * n + j] * v[j];
-            w[i] = s;
-            norm += s * s;
-        }
-        norm = sqrt(norm);
-        if (!(norm > 0.0) || !isfinite(norm)) return norm > 0.0 ? INFINITY : 0.0;
-        if (k >= 10) log_growth += log(norm);
-        for (int i = 0; i < n; i++) v[i] = w[i] / norm;
-    }
-    return exp(log_growth / 10);
+    cp_solve_with_complex(n, complex_shift(*mx->h), mx, b, scratch);
 }
 
 /* Working memory, carved from the caller's work array (CP_CARVED_ROWS rows). */
@@ -281,21 +108,6 @@ static radau_memory carve(int n, double *work)
     m.tmp = m.err + n;
     m.fc = (double complex *)(m.tmp + n);  /* 2 rows */
     return m;
-}
-
-/* J at (t, x), its factors forgotten, its spectral radius estimated (v, w: scratch). */
-static int jacobian(const cp_system *sys, double t, const double *x, cp_newton *nw,
-                    const matrices *mx, double *v, double *w, cp_stats *stats)
-{
-    stats->njev++;
-    int status = sys->jac(sys->ctx, t, x, mx->J);
-    nw->jac_valid = status == CP_OK;
-    nw->current_jac = nw->jac_valid;
-    nw->lu_valid = 0;
-    if (status != CP_OK) return status;
-    newton_structure(sys->dim, mx->J, mx->velocity, mx->slot);
-    nw->rho = spectral_radius(sys->dim, mx, v, w);
-    return status;
 }
 
 /* scipy's predict_factor; a previous step is none where h_old <= 0 or err_old <= 0. */
@@ -322,7 +134,7 @@ static double rms3(int n, const double *v, const double *scale)
  * whose right-hand side cannot be had there (cp_trial_rejects, or a non-finite value) ends
  * the iteration unconverged; *trial_failure keeps that status. */
 static int collocation(const cp_system *sys, double t, const double *y, double h, radau_memory *m,
-                       double tol, const matrices *mx, cp_stats *stats, int *converged,
+                       double tol, const cp_matrix_view *mx, cp_stats *stats, int *converged,
                        int *n_iter, double *rate, int *trial_failure)
 {
     const int n = sys->dim;
@@ -362,39 +174,19 @@ static int collocation(const cp_system *sys, double t, const double *y, double h
         }
         const double dW_norm = rms3(n, m->dW, m->scale);
         if (dW_norm_old >= 0) *rate = dW_norm / dW_norm_old;
-        if (*rate >= 0 && (*rate >= 1 || pow(*rate, NEWTON_MAXITER - k) / (1 - *rate) * dW_norm > tol))
-            break;
+        if (cp_newton_gives_up(*rate, NEWTON_MAXITER - k, dW_norm, tol)) break;
         if (!isfinite(dW_norm)) break;  /* a singular factor: scipy's comparisons fail alike */
         for (int i = 0; i < 3 * n; i++) m->W[i] += m->dW[i];
         for (int s = 0; s < 3; s++)
             for (int i = 0; i < n; i++)
                 m->Z[s * n + i] = T[s][0] * m->W[i] + T[s][1] * m->W[n + i] + T[s][2] * m->W[2 * n + i];
-        if (dW_norm == 0 || (*rate >= 0 && *rate / (1 - *rate) * dW_norm < tol)) {
+        if (cp_newton_converged(*rate, dW_norm, tol)) {
             *converged = 1;
             break;
         }
         dW_norm_old = dW_norm;
     }
     return CP_OK;
-}
-
-static void factor(int n, double h, const matrices *mx, cp_newton *nw, cp_stats *stats)
-{
-    const int r = rest_size(n, mx);
-    *mx->h = h;
-    lu_real(n, r, real_shift(h), mx->J, mx->velocity, mx->slot, mx->lu_real, mx->pivots_real);
-    lu_complex(n, r, complex_shift(h), mx->J, mx->velocity, mx->slot, mx->lu_complex,
-               mx->pivots_complex);
-    stats->nlu += 2;
-    nw->lu_valid = 1;
-}
-
-void cp_newton_refactor(int n, cp_newton *nw, double *block)
-{
-    const matrices mx = carve_matrices(n, block, nw);
-    cp_stats uncounted = {0, 0, 0, 0, 0, 0};  /* no step's work: the step counted it */
-    newton_structure(n, mx.J, mx.velocity, mx.slot);
-    factor(n, nw->h, &mx, nw, &uncounted);
 }
 
 int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *nw,
@@ -405,7 +197,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
     const size_t size = n * sizeof(double);
     double *x0 = rows + CP_ROW_X0 * n, *x1 = rows + CP_ROW_X1 * n, *f1 = rows + CP_ROW_F1 * n;
     double *Q = rows + CP_ROW_DENSE * n;
-    const matrices mx = carve_matrices(n, block, nw);
+    const cp_matrix_view mx = cp_carve_matrices(n, block, nw);
     radau_memory m = carve(n, work);
     const double t = step->t1, *y = x1, *f = f1;
     const double newton_tol = fmax(10 * DBL_EPSILON / rtol, fmin(0.03, sqrt(rtol)));
@@ -418,7 +210,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
         h_abs = h_abs > max_step ? max_step : min_step;
         h_old = err_old = 0.0;
     }
-    if (!nw->jac_valid && (status = jacobian(sys, t, y, nw, &mx, m.err, m.y_new, stats)))
+    if (!nw->jac_valid && (status = cp_new_jacobian(sys, t, y, nw, &mx, m.err, m.y_new, stats)))
         return status;
     int rejected = 0, n_iter = 0, tried_longer = 0;  /* tried_longer: a step was rejected */
     double rate = -1.0, error_norm = 0.0, safety = 0.9, t_new, h;
@@ -445,12 +237,12 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
         for (int i = 0; i < n; i++) m.scale[i] = atol + fabs(y[i]) * rtol;
         int converged = 0;
         for (;;) {
-            if (!nw->lu_valid) factor(n, h, &mx, nw, stats);
+            if (!nw->lu_valid || nw->method != CP_RADAU) cp_radau_factor(n, h, &mx, nw, stats);
             status = collocation(sys, t, y, h, &m, newton_tol, &mx, stats, &converged, &n_iter,
                                  &rate, &trial_failure);
             if (status) return status;
             if (converged || nw->current_jac) break;
-            if ((status = jacobian(sys, t, y, nw, &mx, m.err, m.y_new, stats))) return status;
+            if ((status = cp_new_jacobian(sys, t, y, nw, &mx, m.err, m.y_new, stats))) return status;
         }
         if (!converged) {
             h_abs *= 0.5;
@@ -513,7 +305,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
         return status;
     }
     step->fsal = 1;
-    if (recompute_jac) return jacobian(sys, t_new, x1, nw, &mx, m.err, m.y_new, stats);
+    if (recompute_jac) return cp_new_jacobian(sys, t_new, x1, nw, &mx, m.err, m.y_new, stats);
     nw->current_jac = 0;
     return CP_OK;
 }

@@ -3,6 +3,7 @@
 #ifndef CP_SOLVER_COMMON_H
 #define CP_SOLVER_COMMON_H
 
+#include <complex.h>
 #include <math.h>
 
 #include "solvers.h"
@@ -35,13 +36,65 @@ static inline double cp_rms(int n, const double *v, const double *scale)
     return sqrt(s / n);
 }
 
-/* One accepted step of Radau IIA (radau.c) from the end of the step in flight, none ending
- * after t_end, its stages' and error's memory carved from work (CP_CARVED_ROWS rows); the
- * rows become the new step's (x0, x1, x' at x1, the dense output's 3 rows of Q). nw and
- * block: the Jacobian and its factors, kept between steps (cp_newton). */
+/* scipy's tests of a simplified Newton iteration (Radau's and BDF's), after its increment's
+ * norm and its rate of convergence (the norm over the last one's; < 0: none yet): it will not
+ * reach tol in the iterations left, or it has reached it. */
+static inline int cp_newton_gives_up(double rate, int iterations_left, double norm, double tol)
+{
+    return rate >= 0 && (rate >= 1 || pow(rate, iterations_left) / (1 - rate) * norm > tol);
+}
+
+static inline int cp_newton_converged(double rate, double norm, double tol)
+{
+    return norm == 0 || (rate >= 0 && rate / (1 - rate) * norm < tol);
+}
+
+/* The implicit solvers' view of the matrices block (CP_NEWTON_SIZE, newton.c): J, the real
+ * factors, the complex factors (two doubles an entry), the two pivot vectors (whole numbers)
+ * and the structure the factors are on; the step size they are for is the cp_newton's. */
+typedef struct {
+    double *J, *lu_real;
+    double complex *lu_complex;
+    double *pivots_real, *pivots_complex, *velocity, *slot, *h;
+} cp_matrix_view;
+
+cp_matrix_view cp_carve_matrices(int n, double *block, cp_newton *nw);
+
+/* J at (t, x) into the block, its structure read, its factors forgotten, its spectral radius
+ * estimated (v, w: scratch of n): the status of the system's Jacobian. */
+int cp_new_jacobian(const cp_system *sys, double t, const double *x, cp_newton *nw,
+                    const cp_matrix_view *mx, double *v, double *w, cp_stats *stats);
+
+/* shift I - J factored on J's structure (the real or the complex factors), and
+ * b = (shift I - J)^-1 b through them, shift the one they were made with (scratch: n). */
+void cp_factor_real(int n, double shift, const cp_matrix_view *mx);
+void cp_factor_complex(int n, double complex shift, const cp_matrix_view *mx);
+void cp_solve_with_real(int n, double shift, const cp_matrix_view *mx, double *b, double *scratch);
+void cp_solve_with_complex(int n, double complex shift, const cp_matrix_view *mx,
+                           double complex *b, double *scratch);
+
+/* One accepted step of Radau IIA (radau.c) or of the BDF (bdf.c) from the end of the step in
+ * flight, none ending after t_end, their memory carved from work (CP_CARVED_ROWS rows); the
+ * rows become the new step's (Radau: x0, x1, x' at x1, the dense output's 3 rows of Q; BDF:
+ * x0, x1 and its differences). nw and block: the Jacobian and its factors, kept between
+ * steps (cp_newton). */
 int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *nw,
                   double *block, double t_end, double rtol, double atol, double max_step,
                   long long max_steps, long long *attempts, double *work, cp_stats *stats);
+int cp_bdf_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *nw,
+                double *block, double t_end, double rtol, double atol, double max_step,
+                long long max_steps, long long *attempts, double *work, cp_stats *stats);
+
+/* Each method's factors of the block's J for its step size h (Radau: its real and complex
+ * matrices; BDF: I - h J, h its step over its leading coefficient), nw->lu_valid set. */
+void cp_radau_factor(int n, double h, const cp_matrix_view *mx, cp_newton *nw, cp_stats *stats);
+void cp_bdf_factor(int n, double h, const cp_matrix_view *mx, cp_newton *nw, cp_stats *stats);
+
+/* Past COSTLY_JACOBIAN_DIM states (5 links) a Jacobian costs dim complex-step right-hand sides
+ * (in the recursive formulation some half as many) and a factorization grows as dim^3: the
+ * implicit solvers take the advice for large systems there (radau.c, bdf.c). */
+#define COSTLY_JACOBIAN_DIM 20
+#define LARGE(dim) ((dim) > COSTLY_JACOBIAN_DIM)
 
 /* Rows of dim doubles a solver's step carves from the work array (the rest keeps cp_dense_grid's
  * step in flight). */

@@ -274,13 +274,14 @@ void cp_step_begin(cp_step *step, double *rows, int dim, double t, const double 
     step->method = step->next = CP_DOP853;
     step->stiff_steps = step->calm_steps = 0;
     step->h_old = step->err_old = step->stiffness = 0.0;
+    step->order = step->equal_steps = 0;
     memcpy(rows + CP_ROW_X1 * dim, x, dim * sizeof(double));
 }
 
 /* The order of a method's error estimator, which its first step's choice assumes. */
 static int estimator_order(int method)
 {
-    return method == CP_RK45 ? 4 : method == CP_RADAU ? 3 : 7;
+    return method == CP_RK45 ? 4 : method == CP_RADAU ? 3 : method == CP_BDF ? 1 : 7;
 }
 
 /* The watch's rows after the solver's and cp_dense_grid's: the step before the one taken,
@@ -433,9 +434,10 @@ static int take(int method, int use, const cp_system *sys, cp_step *step, double
                 long long *attempts, double *work, estimate *stiffness, cp_stats *stats)
 {
     int n = sys->dim, status;
-    if (use == CP_RADAU) {
-        status = cp_radau_step(sys, step, rows, newton, matrices, t_limit, rtol, atol, max_step,
-                               max_steps, attempts, work, stats);
+    if (use == CP_RADAU || use == CP_BDF) {
+        status = (use == CP_RADAU ? cp_radau_step : cp_bdf_step)(
+            sys, step, rows, newton, matrices, t_limit, rtol, atol, max_step, max_steps,
+            attempts, work, stats);
         if (status) return status;
         return cp_all_finite(n, rows + CP_ROW_X1 * n) ? CP_OK : CP_NONFINITE;
     }
@@ -530,6 +532,17 @@ void cp_step_state(const cp_step *step, const double *rows, int dim, double t, d
     const double *x0 = rows + CP_ROW_X0 * dim, *dense = rows + CP_ROW_DENSE * dim;
     if (t == step->t1) {
         memcpy(x, rows + CP_ROW_X1 * dim, dim * sizeof(double));
+        return;
+    }
+    if (step->method == CP_BDF) {  /* BdfDenseOutput._call_impl: D[0] + sum D[j] prod x_m */
+        const double h = step->h_old;
+        double p[7], prod = 1.0;
+        for (int m = 0; m < step->order; m++) p[m] = prod *= (t - (step->t1 - h * m)) / (h * (1 + m));
+        for (int i = 0; i < dim; i++) {
+            double y = 0.0;
+            for (int j = 1; j <= step->order; j++) y += dense[(j - 1) * dim + i] * p[j - 1];
+            x[i] = y + rows[CP_ROW_X1 * dim + i];
+        }
         return;
     }
     double h = step->t1 - step->t0, s = (t - step->t0) / h;

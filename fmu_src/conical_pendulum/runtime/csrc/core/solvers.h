@@ -70,7 +70,7 @@ typedef struct {
  * cap, 4.6e-7 with it). Until
  * it switches, a DOP853 step past CP_AUTO_BOUND that would answer a point from its
  * interpolant is taken again to end on the point. */
-enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2, CP_RADAU = 3, CP_AUTO = 4 };
+enum { CP_RK4 = 0, CP_RK45 = 1, CP_DOP853 = 2, CP_RADAU = 3, CP_AUTO = 4, CP_BDF = 5 };
 #define CP_STIFF_BOUND 6.1  /* Hairer's dop853: its stability region ends near 6 */
 #define CP_AUTO_BOUND 1.5   /* a quarter of that */
 #define CP_CALM_BOUND 0.75  /* half again: Radau hands back only what DOP853 takes with room */
@@ -89,8 +89,8 @@ double cp_stiffness_bound(int method);
 typedef struct {
     int jac_valid;    /* the block's J is a Jacobian of the system */
     int current_jac;  /* ... evaluated at the start of the step in flight */
-    int lu_valid;     /* the factors are J's, for the step size h */
-    int reserved;     /* 0 (the padding, named so that a state's bytes are all defined) */
+    int lu_valid;     /* the factors are J's, for the step size h of method */
+    int method;       /* the method whose factors the block holds: CP_RADAU or CP_BDF (0: none) */
     double rho;       /* J's spectral radius, estimated when J was evaluated */
     double h;         /* the step size the factors are for (lu_valid) */
 } cp_newton;
@@ -162,12 +162,15 @@ struct cp_step {
     int next;       /* CP_AUTO: the method of the next step (CP_DOP853 or CP_RADAU) */
     int stiff_steps, calm_steps;  /* the stiffness test's counts (looks_stiff; Radau: calm steps) */
     double h_old, err_old;  /* Radau: the step size proposed before the last step and its
-                               error norm (0: none) */
+                               error norm (0: none); BDF: the step size its differences are
+                               for, and the last step's error norm */
     double stiffness;  /* the last step's h |lambda| (explicit: Hairer's estimate; Radau: h rho(J)) */
+    int order, equal_steps;  /* BDF: the formula's order, the steps since the size changed */
 };
 
 /* The rows: x at t0 and t1, x' at t1, then the interpolant's coefficients (DOP853's 7 rows of
- * F, RK45's 4 rows of Q, Radau's 3 rows of Q, as scipy's dense outputs hold them). */
+ * F, RK45's 4 rows of Q, Radau's 3 rows of Q, BDF's differences D[1..7], as scipy's dense
+ * outputs hold them). */
 enum { CP_ROW_X0, CP_ROW_X1, CP_ROW_F1, CP_ROW_DENSE, CP_FLIGHT_ROWS = CP_ROW_DENSE + 7 };
 
 /* An integration that starts at (t, x), with the step size h proposed (<= 0: to be chosen). */

@@ -642,14 +642,21 @@ static const char *flight_invalid(const ModelData *m, char *message, size_t size
         return message;
     }
     const struct { const char *name; int value, low, high; } counts[] = {
-        {"method", step->method, CP_RK45, CP_RADAU}, {"next", step->next, CP_DOP853, CP_RADAU},
-        {"stiff_steps", step->stiff_steps, 0, INT_MAX}, {"calm_steps", step->calm_steps, 0, INT_MAX}};
+        {"method", step->method, CP_RK45, CP_BDF}, {"next", step->next, CP_DOP853, CP_RADAU},
+        {"stiff_steps", step->stiff_steps, 0, INT_MAX}, {"calm_steps", step->calm_steps, 0, INT_MAX},
+        {"order", step->order, step->method == CP_BDF, step->method == CP_BDF ? 5 : 0},
+        {"equal_steps", step->equal_steps, 0, step->method == CP_BDF ? INT_MAX : 0}};
     for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++)
         if (counts[k].value < counts[k].low || counts[k].value > counts[k].high) {
             snprintf(message, size, "step in flight: %s = %d: must be from %d to %d",
                      counts[k].name, counts[k].value, counts[k].low, counts[k].high);
             return message;
         }
+    if (step->method == CP_AUTO) {
+        snprintf(message, size, "step in flight: method = %d: the automatic choice makes no step "
+                 "of its own", CP_AUTO);
+        return message;
+    }
     const struct { const char *name; double value; } sizes[] = {
         {"h_old", step->h_old}, {"err_old", step->err_old}, {"stiffness", step->stiffness}};
     for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
@@ -658,7 +665,8 @@ static const char *flight_invalid(const ModelData *m, char *message, size_t size
         if (cp_real_refusal(name, sizes[k].value, &cp_rules[CP_STEP_RULE], "", message, size))
             return message;
     }
-    const int dense_rows = step->method == CP_DOP853 ? 7 : step->method == CP_RK45 ? 4 : 3;
+    const int dense_rows = step->method == CP_DOP853 || step->method == CP_BDF ? 7
+                           : step->method == CP_RK45 ? 4 : 3;
     char name[64];
     for (int row = 0; row < CP_FLIGHT_ROWS; row++) {
         const int used = row < CP_ROW_F1 || (row == CP_ROW_F1 && step->fsal)
@@ -704,10 +712,12 @@ static const char *jacobian_invalid(const ModelData *m, char *message, size_t si
             snprintf(message, size, "Jacobian: %s = %d: must be 0 or 1", flags[k].name, flags[k].value);
             return message;
         }
-    if (nw->reserved != 0 || (nw->lu_valid && !nw->jac_valid) || !(nw->rho >= 0)) {
-        snprintf(message, size, "Jacobian: reserved = %d, lu_valid = %d with jac_valid = %d, "
-                 "rho = %.17g: reserved must be 0, factors need a Jacobian, rho must be >= 0",
-                 nw->reserved, nw->lu_valid, nw->jac_valid, nw->rho);
+    const int known = nw->method == 0 || nw->method == CP_RADAU || nw->method == CP_BDF;
+    if (!known || (nw->lu_valid && (!nw->jac_valid || nw->method == 0)) || !(nw->rho >= 0)) {
+        snprintf(message, size, "Jacobian: method = %d, lu_valid = %d with jac_valid = %d, "
+                 "rho = %.17g: the factors' method must be 0 (none), %d (radau) or %d (bdf), "
+                 "factors need a Jacobian and a method, rho must be >= 0",
+                 nw->method, nw->lu_valid, nw->jac_valid, nw->rho, CP_RADAU, CP_BDF);
         return message;
     }
     if (nw->lu_valid && !(isfinite(nw->h) && nw->h > 0)) {
