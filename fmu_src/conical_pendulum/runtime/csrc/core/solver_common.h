@@ -60,6 +60,10 @@ typedef struct {
 
 cp_matrix_view cp_carve_matrices(int n, double *block, cp_newton *nw);
 
+/* The view of a block whose J was put there from outside (a restored state's), its
+ * structure read as a new Jacobian's is. */
+cp_matrix_view cp_matrices_of_jacobian(int n, double *block, cp_newton *nw);
+
 /* J at (t, x) into the block, its structure read, its factors forgotten, its spectral radius
  * estimated (v, w: scratch of n): the status of the system's Jacobian. */
 int cp_new_jacobian(const cp_system *sys, double t, const double *x, cp_newton *nw,

@@ -278,6 +278,13 @@ void cp_step_begin(cp_step *step, double *rows, int dim, double t, const double 
     memcpy(rows + CP_ROW_X1 * dim, x, dim * sizeof(double));
 }
 
+void cp_newton_refactor(int n, cp_newton *nw, double *block)
+{
+    const cp_matrix_view mx = cp_matrices_of_jacobian(n, block, nw);
+    cp_stats uncounted = {0, 0, 0, 0, 0, 0};  /* no step's work: the step counted it */
+    (nw->method == CP_BDF ? cp_bdf_factor : cp_radau_factor)(n, nw->h, &mx, nw, &uncounted);
+}
+
 /* The order of a method's error estimator, which its first step's choice assumes. */
 static int estimator_order(int method)
 {
