@@ -183,7 +183,8 @@ def bounce_stretch(t, m=100.0, length=10.0, h=0.2, stiffness=1e6):
 # The drop and the bounce as an FMU runs them: 100 kg under 10 m of EA = 1e6 N, a master at 50 Hz
 BOUNCING = Scene(links=(elastic(),), outputs=("energy",))
 AT_REST = {"alpha0": 0.0, "beta0": 0.0}
-CS_SOLVERS = {"rk45": 1, "dop853": 2, "radau": 3, "auto": 4, "bdf": 5}
+# BDF (5) is left out: at these tolerances it stalls at a snap (docs/fmu.md, its solver's entry)
+CS_SOLVERS = {"rk45": 1, "dop853": 2, "radau": 3, "auto": 4}
 
 
 @pytest.mark.parametrize("backend, fmi_version", [("pythonfmu", 2), ("native", 2), ("native", 3)])
