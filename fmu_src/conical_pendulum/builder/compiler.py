@@ -28,23 +28,10 @@ from ..errors import UserError
 from ..scene import Scene
 from .core.cache import LIMITED_API, cache_root
 from .fmi.contract import CSRC, CSRC_FILES
-from .models.pendulum import DEFAULT_SETTINGS, core_config, core_config_key
+from .models.pendulum import CORE_SOURCES, DEFAULT_SETTINGS, MODEL_SOURCES, core_config, core_config_key
 
 HERE = Path(__file__).parent  # builder/
 CORE_CSRC = CSRC / "core"  # the model's numerics: the compiled core's C, and the native FMU's
-# The C compiled into the core: its numerics, then the model behind fmu_model.h.
-CORE_SOURCES = (
-    "model.c",
-    "dynamics.c",
-    "solvers.c",
-    "newton.c",
-    "radau.c",
-    "bdf.c",
-    "diagnosis.c",
-    "cosim.c",
-    "chain.c",
-)
-MODEL_SOURCES = ("rules.c", "variable_table.c", "pendulum_model.c")
 MODEL_FILES = ("fmu_model.h", "variable_table.h", "variable_table.c", "pendulum_model.c")  # not in core/
 # The model compiled again in complex arithmetic, which pendulum_model.c links to.
 # directional.c (first derivatives by complex step) gives the implicit solver's exact

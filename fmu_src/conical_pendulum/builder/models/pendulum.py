@@ -46,23 +46,26 @@ def _config(data: dict, records: list[Variable]) -> list[str]:
     ).splitlines()
 
 
+# The C both the compiled core and the native FMU build: the model's numerics
+# (runtime/csrc/core), then the model behind fmu_model.h. The native FMU adds the
+# derivatives' complex-step copies; the compiled core adds them too, at its own -O levels
+# (builder/compiler.py).
+CORE_SOURCES = (
+    "model.c",
+    "dynamics.c",
+    "solvers.c",
+    "newton.c",
+    "radau.c",
+    "bdf.c",
+    "diagnosis.c",
+    "cosim.c",
+    "chain.c",
+)
+MODEL_SOURCES = ("rules.c", "variable_table.c", "pendulum_model.c")
+
 PENDULUM = NativeModel(
     MODEL_NAME,
-    (
-        "model.c",
-        "dynamics.c",
-        "chain.c",
-        "solvers.c",
-        "newton.c",
-        "radau.c",
-        "bdf.c",
-        "diagnosis.c",
-        "cosim.c",
-        "directional.c",
-        "second_directional.c",
-        "rules.c",
-    )
-    + ("variable_table.c", "pendulum_model.c"),
+    CORE_SOURCES + ("directional.c", "second_directional.c") + MODEL_SOURCES,
     ("model.h", "real.h", "dynamics.h", "chain.h", "solvers.h", "solver_common.h", "tableaus.h")
     + ("status.h", "diagnosis.h")
     + ("cosim.h", "directional.h", "model_copy.h", "rules.h", "variable_table.h"),
