@@ -16,7 +16,6 @@
  * differences D[1..7] (D[0] = x at t1) in the dense output's 7 rows; step->h_old is the step
  * size they are for, step->order the formula's order, step->equal_steps the steps taken since
  * the step size last changed. The dense output is scipy's BdfDenseOutput. */
-#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -32,8 +31,7 @@
  * links at c = 1e2: rtol 1e-6 196 -> 134 Jacobians, 1e-8 341 -> 165, the error unchanged
  * to the digit that matters (benchmarks/stiff_long_chains.py). Below it, scipy's. */
 #define NEWTON_MAXITER(dim) (LARGE(dim) ? 10 : 4)
-#define NEWTON_TOL(dim, rtol) \
-    (LARGE(dim) ? 0.03 : fmax(10 * DBL_EPSILON / (rtol), fmin(0.03, sqrt(rtol))))
+#define NEWTON_TOL(dim, rtol) (LARGE(dim) ? 0.03 : cp_scipy_newton_tol(rtol))
 
 /* scipy's coefficients, computed as it computes them: kappa (the NDF's), gamma_k = sum 1/j,
  * alpha_k = (1 - kappa_k) gamma_k and the error constants kappa_k gamma_k + 1 / (k + 1). */

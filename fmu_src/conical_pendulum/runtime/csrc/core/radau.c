@@ -12,7 +12,6 @@
  *
  * The Newton matrices are newton.c's, factored on the system's structure. */
 #include <complex.h>
-#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -200,7 +199,7 @@ int cp_radau_step(const cp_system *sys, cp_step *step, double *rows, cp_newton *
     const cp_matrix_view mx = cp_carve_matrices(n, block, nw);
     radau_memory m = carve(n, work);
     const double t = step->t1, *y = x1, *f = f1;
-    const double newton_tol = fmax(10 * DBL_EPSILON / rtol, fmin(0.03, sqrt(rtol)));
+    const double newton_tol = cp_scipy_newton_tol(rtol);
     const double min_step = 10 * fabs(nextafter(t, INFINITY) - t);
     const int has_sol = step->method == CP_RADAU && step->t0 < step->t1;
     double h_abs = step->h, h_old = step->h_old, err_old = step->err_old;

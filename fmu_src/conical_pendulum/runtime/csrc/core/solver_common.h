@@ -4,6 +4,7 @@
 #define CP_SOLVER_COMMON_H
 
 #include <complex.h>
+#include <float.h>
 #include <math.h>
 
 #include "solvers.h"
@@ -34,6 +35,13 @@ static inline double cp_rms(int n, const double *v, const double *scale)
         s += r * r;
     }
     return sqrt(s / n);
+}
+
+/* scipy's tolerance for the simplified Newton iteration of its implicit solvers (Radau, BDF),
+ * in the norm of the error test. */
+static inline double cp_scipy_newton_tol(double rtol)
+{
+    return fmax(10 * DBL_EPSILON / rtol, fmin(0.03, sqrt(rtol)));
 }
 
 /* scipy's tests of a simplified Newton iteration (Radau's and BDF's), after its increment's
